@@ -1,0 +1,183 @@
+//! @file
+//! InMemoryTransport: a pair of connected endpoints exchanging datagrams through fixed-capacity
+//! queues, for deterministic tests and simulation without sockets. Single-threaded; an optional
+//! responder answers synchronously inside `send` (an emulated sbRIO in the same thread).
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cstddef>
+#include <cstring>
+#include <span>
+#include <type_traits>
+#include <utility>
+
+#include "endohaptics/io/transport.hpp"
+
+namespace endohaptics::io {
+
+//! Bounded FIFO of datagrams of at most MaxDatagram bytes; when full, the oldest is overwritten
+//! (and counted), as a kernel socket buffer drops on overflow.
+template <std::size_t MaxDatagram = 128, std::size_t Capacity = 16>
+class DatagramQueue {
+  static_assert(MaxDatagram > 0 && Capacity > 0);
+
+ public:
+  //! Queues a copy. Longer datagrams are truncated to MaxDatagram and counted.
+  void push(std::span<const std::byte> datagram) noexcept {
+    if (size_ == Capacity) {
+      head_ = (head_ + 1) % Capacity;
+      --size_;
+      ++overflowed_;
+    }
+    Slot& slot = slots_[(head_ + size_) % Capacity];
+    slot.size = std::min(datagram.size(), MaxDatagram);
+    slot.truncated = datagram.size() > MaxDatagram;
+    if (slot.size) std::memcpy(slot.bytes.data(), datagram.data(), slot.size);
+    ++size_;
+  }
+
+  //! Pops the oldest into `out`; returns its length (0 and false when empty).
+  bool pop(std::span<std::byte> out, std::size_t& size, bool& truncated) noexcept {
+    if (size_ == 0) return false;
+    const Slot& slot = slots_[head_];
+    truncated = slot.truncated || slot.size > out.size();
+    size = std::min(slot.size, out.size());
+    if (size) std::memcpy(out.data(), slot.bytes.data(), size);
+    head_ = (head_ + 1) % Capacity;
+    --size_;
+    return true;
+  }
+
+  [[nodiscard]] std::size_t size() const noexcept { return size_; }
+  [[nodiscard]] std::size_t overflowed() const noexcept { return overflowed_; }
+  void clear() noexcept { head_ = size_ = 0; }
+
+ private:
+  struct Slot {
+    std::array<std::byte, MaxDatagram> bytes{};
+    std::size_t size = 0;
+    bool truncated = false;
+  };
+  std::array<Slot, Capacity> slots_{};
+  std::size_t head_ = 0;
+  std::size_t size_ = 0;
+  std::size_t overflowed_ = 0;
+};
+
+//! One endpoint: sends into `tx`, receives from `rx` (the peer's tx). Single-threaded.
+template <std::size_t MaxDatagram = 128, std::size_t Capacity = 16>
+class InMemoryTransport {
+ public:
+  using Queue = DatagramQueue<MaxDatagram, Capacity>;
+
+  InMemoryTransport(Queue& tx, Queue& rx) noexcept : tx_(&tx), rx_(&rx) {}
+
+  TransportStatus send(std::span<const std::byte> datagram) noexcept {
+    if (closed_) return TransportStatus::error;
+    tx_->push(datagram);
+    return TransportStatus::ok;
+  }
+
+  //! Returns the newest queued datagram, discarding older ones. Never waits: an empty queue is a
+  //! timeout at once (simulated time is the caller's business).
+  ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds) noexcept {
+    ReceiveResult result;
+    if (closed_) {
+      result.status = TransportStatus::error;
+      return result;
+    }
+    std::size_t size = 0;
+    bool truncated = false;
+    bool any = false;
+    while (rx_->pop(buffer, size, truncated)) {
+      if (any) ++result.dropped;
+      any = true;
+    }
+    if (!any) return result;  // timeout
+    result.size = size;
+    result.status = truncated ? TransportStatus::truncated : TransportStatus::ok;
+    return result;
+  }
+
+  //! Simulates a dead socket: every call fails until reopened.
+  void close() noexcept { closed_ = true; }
+  void reopen() noexcept { closed_ = false; }
+
+ private:
+  Queue* tx_;
+  Queue* rx_;
+  bool closed_ = false;
+};
+
+//! Two connected endpoints owning their queues: `a` and `b`. Not movable (endpoints point in).
+template <std::size_t MaxDatagram = 128, std::size_t Capacity = 16>
+class InMemoryLink {
+ public:
+  using Endpoint = InMemoryTransport<MaxDatagram, Capacity>;
+  using Queue = typename Endpoint::Queue;
+
+  InMemoryLink() noexcept : a_(a_to_b_, b_to_a_), b_(b_to_a_, a_to_b_) {}
+  InMemoryLink(const InMemoryLink&) = delete;
+  InMemoryLink& operator=(const InMemoryLink&) = delete;
+
+  Endpoint& a() noexcept { return a_; }
+  Endpoint& b() noexcept { return b_; }
+  //! Datagrams sent by a and not yet received by b (and the reverse).
+  Queue& a_to_b() noexcept { return a_to_b_; }
+  Queue& b_to_a() noexcept { return b_to_a_; }
+
+ private:
+  Queue a_to_b_;
+  Queue b_to_a_;
+  Endpoint a_;
+  Endpoint b_;
+};
+
+//! An endpoint whose peer answers synchronously: `send` hands the datagram to
+//! `responder(datagram, reply)` where `reply` is a Transport-like sink (`reply.send(bytes)`).
+//! This is how tests put an emulated sbRIO behind a TeleopLoop in one thread.
+template <typename Responder, std::size_t MaxDatagram = 128, std::size_t Capacity = 16>
+class RespondingTransport {
+ public:
+  using Queue = DatagramQueue<MaxDatagram, Capacity>;
+
+  explicit RespondingTransport(Responder responder) noexcept(
+      std::is_nothrow_move_constructible_v<Responder>)
+      : responder_(std::move(responder)) {}
+
+  TransportStatus send(std::span<const std::byte> datagram) noexcept {
+    if (closed_) return TransportStatus::error;
+    Reply reply{&replies_};
+    responder_(datagram, reply);
+    return TransportStatus::ok;
+  }
+
+  ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds timeout) noexcept {
+    InMemoryTransport<MaxDatagram, Capacity> view(unused_, replies_);
+    if (closed_) view.close();
+    return view.receive(buffer, timeout);
+  }
+
+  Responder& responder() noexcept { return responder_; }
+  void close() noexcept { closed_ = true; }
+  void reopen() noexcept { closed_ = false; }
+
+  //! What the responder writes its answers into.
+  struct Reply {
+    Queue* queue;
+    TransportStatus send(std::span<const std::byte> datagram) noexcept {
+      queue->push(datagram);
+      return TransportStatus::ok;
+    }
+  };
+
+ private:
+  Responder responder_;
+  Queue replies_;
+  Queue unused_;
+  bool closed_ = false;
+};
+
+}  // namespace endohaptics::io

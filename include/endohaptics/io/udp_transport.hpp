@@ -1,0 +1,137 @@
+//! @file
+//! UdpTransport: the PC side of the sbRIO link (worksheet 3.3.1) on a connected UDP socket set up
+//! with Boost.Asio; receive waits with nanosecond resolution (ppoll), then drains the socket so
+//! only the newest datagram is returned (the sbRIO's queue-of-one, worksheet 3.1.3). POSIX only.
+#pragma once
+
+#include <poll.h>
+#include <sys/socket.h>
+
+#include <algorithm>
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/ip/address.hpp>
+#include <boost/asio/ip/udp.hpp>
+#include <cerrno>
+#include <chrono>
+#include <cstdint>
+#include <ctime>
+#include <span>
+#include <string>
+
+#include "endohaptics/core/error.hpp"
+#include "endohaptics/io/transport.hpp"
+
+namespace endohaptics::io {
+
+//! Where to bind and whom to talk to. Defaults: the 2016 rig's sbRIO (worksheet appendix B).
+struct UdpConfig {
+  std::string local_address = "0.0.0.0";
+  std::uint16_t local_port = 0;  //!< 0: any free port
+  std::string remote_address = "169.254.4.42";
+  std::uint16_t remote_port = 61556;
+  int receive_buffer_bytes = 0;  //!< SO_RCVBUF; 0 keeps the system default
+};
+
+class UdpTransport {
+ public:
+  //! Opens, binds and connects the socket. Throws Error naming the address on failure.
+  explicit UdpTransport(const UdpConfig& config) : socket_(io_) {
+    namespace ip = boost::asio::ip;
+    boost::system::error_code ec;
+    const ip::address local = ip::make_address(config.local_address, ec);
+    if (ec) throw Error("UdpTransport: invalid local address '" + config.local_address + "'");
+    socket_.open(local.is_v6() ? ip::udp::v6() : ip::udp::v4(), ec);
+    if (ec) throw Error("UdpTransport: cannot open a UDP socket: " + ec.message());
+    if (config.receive_buffer_bytes > 0) {
+      socket_.set_option(boost::asio::socket_base::receive_buffer_size(config.receive_buffer_bytes),
+                         ec);
+    }
+    socket_.bind(ip::udp::endpoint(local, config.local_port), ec);
+    if (ec) {
+      throw Error("UdpTransport: cannot bind " + config.local_address + ":" +
+                  std::to_string(config.local_port) + ": " + ec.message());
+    }
+    connect(config.remote_address, config.remote_port);
+  }
+
+  //! (Re)connects to the peer. Connected, the kernel drops datagrams from anyone else and
+  //! reports ICMP "port unreachable" (peer not running) as an error on the next call.
+  //! Throws Error naming the address on failure.
+  void connect(const std::string& address, std::uint16_t port) {
+    namespace ip = boost::asio::ip;
+    boost::system::error_code ec;
+    const ip::address remote = ip::make_address(address, ec);
+    if (ec) throw Error("UdpTransport: invalid remote address '" + address + "'");
+    socket_.connect(ip::udp::endpoint(remote, port), ec);
+    if (ec) {
+      throw Error("UdpTransport: cannot reach " + address + ":" + std::to_string(port) + ": " +
+                  ec.message());
+    }
+  }
+
+  UdpTransport(const UdpTransport&) = delete;
+  UdpTransport& operator=(const UdpTransport&) = delete;
+
+  TransportStatus send(std::span<const std::byte> datagram) noexcept {
+    for (;;) {
+      const ssize_t n = ::send(socket_.native_handle(), datagram.data(), datagram.size(),
+                               MSG_DONTWAIT | MSG_NOSIGNAL);
+      if (n >= 0) return TransportStatus::ok;
+      if (errno == EINTR) continue;
+      // Full send buffer: UDP may drop, like the wire would. Anything else is an error
+      // (ECONNREFUSED from an earlier ICMP: the peer is not listening).
+      return errno == EAGAIN || errno == EWOULDBLOCK ? TransportStatus::ok : TransportStatus::error;
+    }
+  }
+
+  //! Waits up to `timeout` for a datagram, then drains the socket and returns the newest.
+  ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds timeout) noexcept {
+    ReceiveResult result;
+    const int fd = socket_.native_handle();
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    for (;;) {
+      const auto left = std::max(deadline - std::chrono::steady_clock::now(),
+                                 std::chrono::steady_clock::duration::zero());
+      const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(left).count();
+      timespec ts{static_cast<std::time_t>(ns / 1'000'000'000),
+                  static_cast<long>(ns % 1'000'000'000)};
+      pollfd pfd{fd, POLLIN, 0};
+      const int ready = ::ppoll(&pfd, 1, &ts, nullptr);
+      if (ready > 0) break;
+      if (ready == 0) return result;  // timeout
+      if (errno != EINTR) {
+        result.status = TransportStatus::error;
+        return result;
+      }
+    }
+    bool any = false;
+    for (;;) {
+      const ssize_t n = ::recv(fd, buffer.data(), buffer.size(), MSG_DONTWAIT | MSG_TRUNC);
+      if (n < 0) {
+        if (errno == EINTR) continue;
+        if (errno == EAGAIN || errno == EWOULDBLOCK) break;
+        if (!any) result.status = TransportStatus::error;
+        return result;
+      }
+      if (any) ++result.dropped;
+      any = true;
+      const auto size = static_cast<std::size_t>(n);  // MSG_TRUNC: the real datagram length
+      result.status = size > buffer.size() ? TransportStatus::truncated : TransportStatus::ok;
+      result.size = std::min(size, buffer.size());
+    }
+    return result;
+  }
+
+  //! The bound local endpoint (useful with local_port = 0).
+  [[nodiscard]] boost::asio::ip::udp::endpoint local_endpoint() const {
+    return socket_.local_endpoint();
+  }
+
+ private:
+  boost::asio::io_context io_;
+  boost::asio::ip::udp::socket socket_;
+};
+
+static_assert(Transport<UdpTransport>);
+
+}  // namespace endohaptics::io

@@ -1,0 +1,223 @@
+#include <doctest/doctest.h>
+
+#include <array>
+#include <chrono>
+#include <endohaptics/io/fault_injecting_transport.hpp>
+#include <endohaptics/io/in_memory_transport.hpp>
+#include <endohaptics/io/udp_transport.hpp>
+#include <thread>
+
+namespace io = endohaptics::io;
+using io::TransportStatus;
+using namespace std::chrono_literals;
+
+namespace {
+
+template <std::size_t N>
+std::array<std::byte, N> pattern(unsigned char first) {
+  std::array<std::byte, N> a{};
+  for (std::size_t i = 0; i < N; ++i) a[i] = std::byte{static_cast<unsigned char>(first + i)};
+  return a;
+}
+
+}  // namespace
+
+static_assert(io::Transport<io::InMemoryTransport<>>);
+static_assert(io::Transport<io::FaultInjectingTransport<io::InMemoryTransport<>>>);
+
+TEST_CASE("in-memory link: delivery, newest-only draining, truncation, closing") {
+  io::InMemoryLink<64, 8> link;
+  std::array<std::byte, 64> buffer{};
+
+  CHECK(link.b().receive(buffer, 1ms).status == TransportStatus::timeout);
+
+  const auto p1 = pattern<17>(1), p2 = pattern<17>(50), p3 = pattern<17>(100);
+  REQUIRE(link.a().send(p1) == TransportStatus::ok);
+  auto r = link.b().receive(buffer, 1ms);
+  REQUIRE(r.status == TransportStatus::ok);
+  CHECK(r.size == 17);
+  CHECK(r.dropped == 0);
+  CHECK(std::equal(p1.begin(), p1.end(), buffer.begin()));
+
+  (void)link.a().send(p1);
+  (void)link.a().send(p2);
+  (void)link.a().send(p3);
+  r = link.b().receive(buffer, 1ms);
+  CHECK(r.status == TransportStatus::ok);
+  CHECK(r.dropped == 2);  // queue of one: only the newest counts
+  CHECK(std::equal(p3.begin(), p3.end(), buffer.begin()));
+
+  std::array<std::byte, 8> small{};
+  (void)link.a().send(p1);
+  r = link.b().receive(small, 1ms);
+  CHECK(r.status == TransportStatus::truncated);
+  CHECK(r.size == 8);
+
+  for (int i = 0; i < 10; ++i) (void)link.a().send(p1);  // capacity 8
+  CHECK(link.a_to_b().overflowed() == 2);
+
+  link.b().close();
+  CHECK(link.b().receive(buffer, 1ms).status == TransportStatus::error);
+  CHECK(link.b().send(p1) == TransportStatus::error);
+  link.b().reopen();
+  CHECK(link.b().receive(buffer, 1ms).status == TransportStatus::ok);
+}
+
+TEST_CASE("responding transport answers inside send") {
+  auto echo_plus_one = [](std::span<const std::byte> in, auto& reply) {
+    std::array<std::byte, 32> out{};
+    for (std::size_t i = 0; i < in.size(); ++i) out[i] = in[i] ^ std::byte{0xFF};
+    (void)reply.send(std::span<const std::byte>(out.data(), in.size()));
+  };
+  io::RespondingTransport<decltype(echo_plus_one)> transport(echo_plus_one);
+  static_assert(io::Transport<decltype(transport)>);
+  const auto p = pattern<5>(0);
+  REQUIRE(transport.send(p) == TransportStatus::ok);
+  std::array<std::byte, 32> buffer{};
+  const auto r = transport.receive(buffer, 0ns);
+  REQUIRE(r.status == TransportStatus::ok);
+  CHECK(r.size == 5);
+  CHECK(buffer[0] == std::byte{0xFF});
+  CHECK(buffer[4] == std::byte{0xFB});
+}
+
+TEST_CASE("fault injection: each fault at rate 1 happens every time and is counted exactly") {
+  io::InMemoryLink<64, 8> link;
+  std::array<std::byte, 64> buffer{};
+  const auto p = pattern<17>(3);
+
+  SUBCASE("no faults: transparent") {
+    io::FaultInjectingTransport receiver(link.b(), {}, 1);
+    for (int i = 0; i < 100; ++i) {
+      (void)link.a().send(p);
+      const auto r = receiver.receive(buffer, 0ns);
+      REQUIRE(r.status == TransportStatus::ok);
+      REQUIRE(std::equal(p.begin(), p.end(), buffer.begin()));
+    }
+    CHECK(receiver.counters().corrupted == 0);
+  }
+  SUBCASE("drop on receive") {
+    io::FaultInjectingTransport receiver(link.b(), {.drop_receive = 1.0}, 1);
+    for (int i = 0; i < 100; ++i) {
+      (void)link.a().send(p);
+      REQUIRE(receiver.receive(buffer, 0ns).status == TransportStatus::timeout);
+    }
+    CHECK(receiver.counters().dropped_receive == 100);
+  }
+  SUBCASE("drop on send and duplicate") {
+    io::FaultInjectingTransport dropper(link.a(), {.drop_send = 1.0}, 1);
+    for (int i = 0; i < 10; ++i) (void)dropper.send(p);
+    CHECK(link.a_to_b().size() == 0);
+    CHECK(dropper.counters().dropped_send == 10);
+    io::FaultInjectingTransport duplicator(link.a(), {.duplicate = 1.0}, 1);
+    (void)duplicator.send(p);
+    CHECK(link.a_to_b().size() == 2);
+    CHECK(duplicator.counters().duplicated == 1);
+  }
+  SUBCASE("corruption flips bits, truncation shortens") {
+    io::FaultInjectingTransport receiver(link.b(), {.corrupt = 1.0, .truncate = 1.0}, 7);
+    for (int i = 0; i < 50; ++i) {
+      (void)link.a().send(p);
+      const auto r = receiver.receive(buffer, 0ns);
+      REQUIRE(r.status == TransportStatus::ok);
+      REQUIRE(r.size < p.size());
+    }
+    CHECK(receiver.counters().corrupted == 50);
+    CHECK(receiver.counters().truncated == 50);
+  }
+  SUBCASE("delay: held back, delivered at the next receive that finds nothing") {
+    io::FaultInjectingTransport receiver(link.b(), {.delay = 1.0}, 1);
+    (void)link.a().send(p);
+    CHECK(receiver.receive(buffer, 0ns).status == TransportStatus::timeout);
+    const auto r = receiver.receive(buffer, 0ns);  // nothing new: the late one arrives
+    CHECK(r.status == TransportStatus::ok);
+    CHECK(std::equal(p.begin(), p.end(), buffer.begin()));
+    CHECK(receiver.counters().delayed == 1);
+  }
+  SUBCASE("reorder: an older datagram overtakes a newer one") {
+    io::FaultInjectingTransport receiver(link.b(), {.delay = 1.0, .reorder = 1.0}, 1);
+    const auto older = pattern<17>(10), newer = pattern<17>(90);
+    (void)link.a().send(older);
+    CHECK(receiver.receive(buffer, 0ns).status == TransportStatus::timeout);  // held
+    (void)link.a().send(newer);
+    auto r = receiver.receive(buffer, 0ns);
+    REQUIRE(r.status == TransportStatus::ok);
+    CHECK(buffer[0] == older[0]);  // the stale one comes first
+    r = receiver.receive(buffer, 0ns);
+    REQUIRE(r.status == TransportStatus::ok);
+    CHECK(buffer[0] == newer[0]);
+    CHECK(receiver.counters().reordered == 1);
+  }
+}
+
+TEST_CASE("fault injection is deterministic for a seed and validates its rates") {
+  auto run = [](std::uint64_t seed) {
+    io::InMemoryLink<64, 8> link;
+    io::FaultInjectingTransport receiver(link.b(), {.drop_receive = 0.3, .corrupt = 0.2}, seed);
+    std::array<std::byte, 64> buffer{};
+    std::uint64_t signature = 0;
+    for (int i = 0; i < 1000; ++i) {
+      (void)link.a().send(pattern<17>(static_cast<unsigned char>(i)));
+      const auto r = receiver.receive(buffer, 0ns);
+      signature = signature * 31 + static_cast<std::uint64_t>(r.status) * 7 +
+                  std::to_integer<std::uint64_t>(buffer[5]);
+    }
+    return std::pair(signature, receiver.counters().dropped_receive);
+  };
+  CHECK(run(42) == run(42));
+  CHECK(run(42) != run(43));
+  const auto [sig, dropped] = run(42);
+  CHECK(dropped > 250);  // binomial(1000, 0.3): 300 +- 14.5 (sd); 250 is 3.4 sd below
+  CHECK(dropped < 350);
+  io::InMemoryLink<64, 8> link;
+  CHECK_THROWS_AS(io::FaultInjectingTransport(link.b(), {.corrupt = 1.5}, 1), endohaptics::Error);
+  CHECK_THROWS_AS(io::FaultInjectingTransport(link.b(), {.delay = -0.1}, 1), endohaptics::Error);
+}
+
+TEST_CASE("UDP transport on loopback: send, timed receive, drain to newest, truncation") {
+  io::UdpTransport a2({.local_address = "127.0.0.1", .remote_address = "127.0.0.1"});
+  io::UdpTransport b2({.local_address = "127.0.0.1",
+                       .remote_address = "127.0.0.1",
+                       .remote_port = a2.local_endpoint().port()});
+  a2.connect("127.0.0.1", b2.local_endpoint().port());
+  std::array<std::byte, 64> buffer{};
+  CHECK(b2.receive(buffer, 2ms).status == TransportStatus::timeout);
+
+  const auto p = pattern<49>(1);
+  REQUIRE(a2.send(p) == TransportStatus::ok);
+  auto r = b2.receive(buffer, 100ms);
+  REQUIRE(r.status == TransportStatus::ok);
+  CHECK(r.size == 49);
+  CHECK(std::equal(p.begin(), p.end(), buffer.begin()));
+
+  for (unsigned char i = 0; i < 5; ++i) REQUIRE(a2.send(pattern<49>(i)) == TransportStatus::ok);
+  std::this_thread::sleep_for(5ms);
+  r = b2.receive(buffer, 100ms);
+  REQUIRE(r.status == TransportStatus::ok);
+  CHECK(r.dropped == 4);
+  CHECK(buffer[0] == std::byte{4});  // the newest
+
+  REQUIRE(a2.send(pattern<49>(0)) == TransportStatus::ok);
+  std::array<std::byte, 17> small{};
+  r = b2.receive(small, 100ms);
+  CHECK(r.status == TransportStatus::truncated);
+}
+
+TEST_CASE("UDP transport: a peer that is not listening is reported, not hidden") {
+  std::uint16_t dead_port = 0;
+  {
+    io::UdpTransport gone({.local_address = "127.0.0.1", .remote_address = "127.0.0.1"});
+    dead_port = gone.local_endpoint().port();
+  }  // closed: nothing listens on dead_port any more
+  io::UdpTransport pc(
+      {.local_address = "127.0.0.1", .remote_address = "127.0.0.1", .remote_port = dead_port});
+  std::array<std::byte, 64> buffer{};
+  (void)pc.send(pattern<17>(0));
+  // Loopback answers with ICMP port unreachable: the next receive sees ECONNREFUSED.
+  const auto r = pc.receive(buffer, 50ms);
+  CHECK(r.status == TransportStatus::error);
+  CHECK_THROWS_AS(io::UdpTransport({.local_address = "not-an-address"}), endohaptics::Error);
+  const auto taken = pc.local_endpoint().port();
+  CHECK_THROWS_WITH_AS(io::UdpTransport({.local_address = "127.0.0.1", .local_port = taken}),
+                       doctest::Contains("cannot bind"), endohaptics::Error);
+}
