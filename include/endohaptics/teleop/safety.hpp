@@ -1,0 +1,190 @@
+//! @file
+//! Safety for the teleoperation loop: the link watchdog (worksheet 3.3.1: more than 10
+//! consecutive receive deadlines missed = link lost), the safe-state policy, the force ramp after
+//! recovery, and the setpoint rate limiter. Units: rad, rad/s, N, s. See docs/architecture.md.
+#pragma once
+
+#include <Eigen/Core>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+#include "endohaptics/core/error.hpp"
+
+namespace endohaptics::teleop {
+
+//! What the robot does while the link is lost. The stylus force is zero in every case.
+enum class SafeStatePolicy : std::uint8_t {
+  hold_position,   //!< keep sending the last setpoint, motors enabled: the tool freezes
+  disable_motors,  //!< send enable mask 0: the sbRIO releases the motors
+  zero_force,      //!< keep following the operator, only the force feedback stops
+};
+
+[[nodiscard]] constexpr std::string_view to_string(SafeStatePolicy p) noexcept {
+  switch (p) {
+    case SafeStatePolicy::hold_position:
+      return "hold-position";
+    case SafeStatePolicy::disable_motors:
+      return "disable-motors";
+    case SafeStatePolicy::zero_force:
+      return "zero-force";
+  }
+  return "unknown policy";
+}
+
+//! Link state as the watchdog sees it.
+enum class LinkState : std::uint8_t {
+  waiting,     //!< no valid state packet yet: motors stay disabled, no force
+  up,          //!< the last exchange succeeded
+  degraded,    //!< 1..max consecutive misses: last estimate held, still "up" for the robot
+  lost,        //!< more than max consecutive misses: safe state
+  recovering,  //!< valid packets again after a loss: force ramps back in
+};
+
+[[nodiscard]] constexpr std::string_view to_string(LinkState s) noexcept {
+  switch (s) {
+    case LinkState::waiting:
+      return "waiting";
+    case LinkState::up:
+      return "up";
+    case LinkState::degraded:
+      return "degraded";
+    case LinkState::lost:
+      return "lost";
+    case LinkState::recovering:
+      return "recovering";
+  }
+  return "unknown";
+}
+
+struct SafetyConfig {
+  int max_consecutive_misses = 10;  //!< link lost when misses exceed this (2016: "superior to 10")
+  SafeStatePolicy policy = SafeStatePolicy::hold_position;
+  double force_ramp_time = 0.5;     //!< s, force scale 0 -> 1 after recovery (and at start)
+  double max_setpoint_rate = 4.0;   //!< rad/s per joint (motor side); the tool cannot go faster
+  double max_stylus_force = 3.0;    //!< N, last guard before the device (Touch peak: 3.3 N)
+  std::uint8_t enable_mask = 0x0F;  //!< motors to enable while the link is usable
+
+  //! Throws Error naming the field and value.
+  void validate() const {
+    auto fail = [](const std::string& what) { throw Error("SafetyConfig: " + what); };
+    if (max_consecutive_misses < 0) {
+      fail("max_consecutive_misses must be >= 0, got " + std::to_string(max_consecutive_misses));
+    }
+    if (!(force_ramp_time >= 0.0 && std::isfinite(force_ramp_time))) {
+      fail("force_ramp_time must be finite and >= 0 s, got " + std::to_string(force_ramp_time));
+    }
+    if (!(max_setpoint_rate > 0.0)) {  // +inf allowed: no rate limit
+      fail("max_setpoint_rate must be > 0 rad/s, got " + std::to_string(max_setpoint_rate));
+    }
+    if (!(max_stylus_force >= 0.0 && std::isfinite(max_stylus_force))) {
+      fail("max_stylus_force must be finite and >= 0 N, got " + std::to_string(max_stylus_force));
+    }
+  }
+};
+
+//! Consecutive-miss counter with link-lost and recovery events. `update` once per exchange.
+class Watchdog {
+ public:
+  explicit Watchdog(int max_consecutive_misses = 10) noexcept : max_(max_consecutive_misses) {}
+
+  //! `received`: a valid state packet arrived this tick. `ramp_done`: the force ramp finished.
+  LinkState update(bool received, bool ramp_done) noexcept {
+    if (received) {
+      misses_ = 0;
+      if (state_ == LinkState::lost) {
+        ++recoveries_;
+        state_ = LinkState::recovering;
+      } else if (state_ == LinkState::waiting) {
+        state_ = LinkState::recovering;  // first contact: ramp the force in too
+      } else if (state_ == LinkState::recovering) {
+        if (ramp_done) state_ = LinkState::up;
+      } else {
+        state_ = LinkState::up;
+      }
+      return state_;
+    }
+    ++misses_;
+    ++total_misses_;
+    if (state_ == LinkState::waiting || state_ == LinkState::lost) return state_;
+    if (misses_ > max_) {
+      state_ = LinkState::lost;
+      ++losses_;
+    } else if (state_ == LinkState::up) {
+      state_ = LinkState::degraded;
+    }
+    return state_;
+  }
+
+  [[nodiscard]] LinkState state() const noexcept { return state_; }
+  [[nodiscard]] int consecutive_misses() const noexcept { return misses_; }
+  [[nodiscard]] std::uint64_t total_misses() const noexcept { return total_misses_; }
+  [[nodiscard]] std::uint64_t link_losses() const noexcept { return losses_; }
+  [[nodiscard]] std::uint64_t recoveries() const noexcept { return recoveries_; }
+  //! True while the robot must be in its safe state.
+  [[nodiscard]] bool safe_state() const noexcept { return state_ == LinkState::lost; }
+  void reset() noexcept { *this = Watchdog(max_); }
+
+ private:
+  int max_;
+  int misses_ = 0;
+  LinkState state_ = LinkState::waiting;
+  std::uint64_t total_misses_ = 0;
+  std::uint64_t losses_ = 0;
+  std::uint64_t recoveries_ = 0;
+};
+
+//! Linear force scale 0 -> 1 over `ramp_time` seconds; restarted on every recovery.
+class ForceRamp {
+ public:
+  explicit ForceRamp(double ramp_time) noexcept : ramp_time_(ramp_time) {}
+  void restart() noexcept { scale_ = 0.0; }
+  void hold_at_zero() noexcept { scale_ = 0.0; }
+  //! Advances by dt seconds; returns the scale to apply this tick.
+  double advance(double dt) noexcept {
+    scale_ = ramp_time_ > 0.0 ? std::fmin(1.0, scale_ + dt / ramp_time_) : 1.0;
+    return scale_;
+  }
+  [[nodiscard]] double scale() const noexcept { return scale_; }
+  [[nodiscard]] bool done() const noexcept { return scale_ >= 1.0; }
+
+ private:
+  double ramp_time_;
+  double scale_ = 0.0;
+};
+
+//! Limits how fast each setpoint may move: |out - previous| <= max_rate * dt per joint.
+template <int N>
+class SetpointRateLimiter {
+ public:
+  using Vector = Eigen::Matrix<double, N, 1>;
+  explicit SetpointRateLimiter(double max_rate) noexcept : max_rate_(max_rate) {}
+
+  //! Starts from a known position (the robot's measured one), so the first step is bounded too.
+  void initialize(const Vector& from) noexcept {
+    previous_ = from;
+    initialized_ = true;
+  }
+  [[nodiscard]] bool initialized() const noexcept { return initialized_; }
+
+  //! Moves the previous output towards `desired`; returns true when it had to limit.
+  bool shape(const Vector& desired, double dt, Vector& out) noexcept {
+    if (!initialized_) initialize(desired);
+    const double step = max_rate_ * dt;
+    const Vector delta = (desired - previous_).cwiseMax(-step).cwiseMin(step);
+    const bool limited = ((desired - previous_) - delta).cwiseAbs().maxCoeff() > 0.0;
+    previous_ += delta;
+    out = previous_;
+    return limited;
+  }
+  [[nodiscard]] const Vector& previous() const noexcept { return previous_; }
+
+ private:
+  double max_rate_;
+  Vector previous_ = Vector::Zero();
+  bool initialized_ = false;
+};
+
+}  // namespace endohaptics::teleop

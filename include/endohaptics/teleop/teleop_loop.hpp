@@ -1,0 +1,344 @@
+//! @file
+//! TeleopLoop: the 2016 single-thread cycle (worksheet 3.3.1, figures 3.5/3.6 and 5.1) as a
+//! policy-based composition: read stylus -> map (eq. 5.9) -> encode -> send -> receive with
+//! deadline -> decode -> estimate force -> map force (eq. 5.8) -> command stylus, guarded by the
+//! watchdog and safe state. One `tick()` is noexcept and allocation-free.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <chrono>
+#include <concepts>
+#include <cstdint>
+#include <span>
+
+#include "endohaptics/io/transport.hpp"
+#include "endohaptics/protocol/packet_codec.hpp"
+#include "endohaptics/teleop/clock.hpp"
+#include "endohaptics/teleop/haptic_device.hpp"
+#include "endohaptics/teleop/loop_stats.hpp"
+#include "endohaptics/teleop/safety.hpp"
+
+namespace endohaptics::teleop {
+
+inline constexpr int loop_motors = 4;  //!< the EndoWrist: roll, pitch, clamp1, clamp2
+using MotorVector = Eigen::Matrix<double, loop_motors, 1>;
+using MotorState4 = protocol::MotorState<loop_motors>;
+
+//! Estimates the external joint forces (motor order) from the measured state and the setpoint
+//! that was sent. Returns true when `force` was written with finite values.
+template <typename E>
+concept JointForceEstimator = requires(E& estimator, const MotorState4& measured,
+                                       const MotorVector& setpoint, MotorVector& force) {
+  { estimator.estimate(measured, setpoint, force) }
+  noexcept->std::convertible_to<bool>;
+  { estimator.reset() }
+  noexcept;
+};
+
+//! Stylus position -> setpoints and joint forces -> stylus force (CylindricalMapper's shape).
+template <typename M>
+concept TeleopMapper = requires(M& mapper, const Eigen::Vector3d& position, MotorVector& setpoint,
+                                const MotorVector& joint_force, Eigen::Vector3d& stylus_force) {
+  { mapper.map_position(position, setpoint).ok() } -> std::convertible_to<bool>;
+  { mapper.map_position(position, setpoint).clamped_mask } -> std::convertible_to<std::uint8_t>;
+  { mapper.map_force(joint_force, stylus_force).ok() } -> std::convertible_to<bool>;
+  { mapper.map_force(joint_force, stylus_force).limited } -> std::convertible_to<bool>;
+};
+
+//! No estimation: zero force (useful to run position control only, and in tests).
+struct NoForceEstimator {
+  bool estimate(const MotorState4&, const MotorVector&, MotorVector& force) noexcept {
+    force.setZero();
+    return true;
+  }
+  void reset() noexcept {}
+};
+
+//! Overall outcome of a tick.
+enum class TickStatus : std::uint8_t {
+  ok = 0,        //!< fresh state, fresh estimate, force rendered
+  degraded,      //!< this exchange missed (timeout, bad packet, transport error): last force held
+  link_lost,     //!< safe state: zero force, robot per SafeStatePolicy
+  waiting,       //!< no valid state yet: motors disabled, zero force
+  device_error,  //!< the haptic device failed: zero force commanded, robot held
+};
+
+[[nodiscard]] constexpr std::string_view to_string(TickStatus s) noexcept {
+  switch (s) {
+    case TickStatus::ok:
+      return "ok";
+    case TickStatus::degraded:
+      return "degraded";
+    case TickStatus::link_lost:
+      return "link lost";
+    case TickStatus::waiting:
+      return "waiting";
+    case TickStatus::device_error:
+      return "device error";
+  }
+  return "unknown";
+}
+
+//! Everything a tick did, for logging and tests. Look at `status`.
+struct [[nodiscard]] TickResult {
+  TickStatus status = TickStatus::waiting;
+  LinkState link = LinkState::waiting;
+  TickOutcome exchange = TickOutcome::timeout;
+  protocol::CodecStatus decode = protocol::CodecStatus::ok;
+  io::TransportStatus transport = io::TransportStatus::ok;
+  DeviceStatus device = DeviceStatus::ok;
+  bool mapper_rejected = false;     //!< stylus sample non-finite: previous setpoint kept
+  bool estimator_rejected = false;  //!< estimator gave no finite force: force held/zeroed
+  std::uint8_t clamped_mask = 0;    //!< joints limited to their range by the mapper
+  bool rate_limited = false;        //!< setpoint change limited by max_setpoint_rate
+  bool force_limited = false;       //!< stylus force scaled down to a limit
+  int consecutive_misses = 0;
+  double force_scale = 0.0;                       //!< ramp factor applied to the force, 0..1
+  MotorVector setpoint = MotorVector::Zero();     //!< rad, what was sent (motor order)
+  std::uint8_t enable_mask = 0;                   //!< what was sent
+  MotorState4 measured{};                         //!< newest valid state (held on a miss)
+  MotorVector joint_force = MotorVector::Zero();  //!< estimate, motor order
+  Eigen::Vector3d stylus_force = Eigen::Vector3d::Zero();  //!< N, what the device was told
+  std::chrono::nanoseconds round_trip{0};
+
+  [[nodiscard]] bool ok() const noexcept { return status == TickStatus::ok; }
+};
+
+struct TeleopLoopConfig {
+  std::chrono::nanoseconds period = std::chrono::milliseconds(1);           //!< nominal
+  std::chrono::nanoseconds receive_timeout = std::chrono::milliseconds(1);  //!< 2016: 1 ms
+  SafetyConfig safety{};
+
+  void validate() const {
+    if (period.count() <= 0) throw Error("TeleopLoopConfig: period must be > 0");
+    if (receive_timeout.count() < 0) throw Error("TeleopLoopConfig: receive_timeout must be >= 0");
+    safety.validate();
+  }
+};
+
+template <io::Transport Transport, HapticDevice Device, JointForceEstimator Estimator,
+          TeleopMapper Mapper, Clock ClockT = SteadyClock>
+class TeleopLoop {
+ public:
+  using Codec = protocol::PacketCodec<loop_motors>;
+  using Config = TeleopLoopConfig;
+
+  //! All parts are owned by the caller and must outlive the loop. Throws Error on a bad config.
+  TeleopLoop(Transport& transport, Device& device, Estimator& estimator, Mapper& mapper,
+             ClockT& clock, const Config& config = Config{})
+      : transport_(&transport),
+        device_(&device),
+        estimator_(&estimator),
+        mapper_(&mapper),
+        clock_(&clock),
+        config_((config.validate(), config)),
+        watchdog_(config.safety.max_consecutive_misses),
+        ramp_(config.safety.force_ramp_time),
+        limiter_(config.safety.max_setpoint_rate),
+        stats_(config.period) {}
+
+  //! One cycle. Never throws, never allocates; the result says what happened.
+  TickResult tick() noexcept {
+    TickResult r;
+    const auto start = clock_->now();
+    stats_.record_tick_start(start);
+    const double dt = last_start_.count() > 0
+                          ? std::chrono::duration<double>(start - last_start_).count()
+                          : std::chrono::duration<double>(config_.period).count();
+    last_start_ = start;
+
+    // 1. Stylus -> desired setpoint (eq. 5.9, range-limited by the mapper).
+    StylusSample sample;
+    r.device = device_->read(sample);
+    if (r.device == DeviceStatus::ok) {
+      MotorVector mapped = desired_;
+      const auto m = mapper_->map_position(sample.position, mapped);
+      if (m.ok()) {
+        desired_ = mapped;
+        have_desired_ = true;
+        r.clamped_mask = m.clamped_mask;
+      } else {
+        r.mapper_rejected = true;
+      }
+    }
+
+    // 2. Setpoint to send: safe state, rate limit, enable mask.
+    const LinkState link_before = watchdog_.state();
+    const bool device_ok = r.device != DeviceStatus::error;
+    Codec::Setpoint out;
+    out.enable_mask = config_.safety.enable_mask;
+    if (link_before == LinkState::waiting || !have_desired_) {
+      out.enable_mask = 0;  // until the robot's position is known, nothing moves
+      out.position = have_desired_ ? desired_ : MotorVector::Zero();
+    } else if ((link_before == LinkState::lost &&
+                config_.safety.policy != SafeStatePolicy::zero_force) ||
+               !device_ok) {
+      out.position = limiter_.previous();  // hold
+      if (link_before == LinkState::lost &&
+          config_.safety.policy == SafeStatePolicy::disable_motors) {
+        out.enable_mask = 0;
+      }
+    } else {
+      r.rate_limited = limiter_.shape(desired_, dt, out.position);
+    }
+    r.setpoint = out.position;
+    r.enable_mask = out.enable_mask;
+
+    // 3. Exchange: send, then wait for the newest state until the deadline.
+    typename Codec::SetpointBytes tx{};
+    bool received = false;
+    std::size_t stale_dropped = 0;
+    if (Codec::encode_setpoint(out, tx) != protocol::CodecStatus::ok) {
+      r.transport = io::TransportStatus::error;  // cannot happen with finite, limited setpoints
+    } else {
+      const auto sent_at = clock_->now();
+      r.transport = transport_->send(tx);
+      if (r.transport == io::TransportStatus::ok) {
+        const io::ReceiveResult rx = transport_->receive(rx_buffer_, config_.receive_timeout);
+        stale_dropped = rx.dropped;
+        r.round_trip = clock_->now() - sent_at;
+        r.transport = rx.status;
+        if (rx.status == io::TransportStatus::ok) {
+          r.decode =
+              Codec::decode_state(std::span<const std::byte>(rx_buffer_.data(), rx.size), state_);
+          received = r.decode == protocol::CodecStatus::ok;
+          r.exchange = received ? TickOutcome::received : TickOutcome::decode_error;
+        } else if (rx.status == io::TransportStatus::truncated) {
+          r.decode = protocol::CodecStatus::wrong_size;
+          r.exchange = TickOutcome::decode_error;
+        } else {
+          r.exchange = rx.status == io::TransportStatus::timeout ? TickOutcome::timeout
+                                                                 : TickOutcome::transport_error;
+        }
+      } else {
+        r.exchange = TickOutcome::transport_error;
+      }
+    }
+    stats_.record_exchange(r.exchange, r.round_trip, stale_dropped);
+
+    // 4. Watchdog, first contact, recovery.
+    const LinkState link = watchdog_.update(received, ramp_.done());
+    if (received && (link_before == LinkState::waiting || link_before == LinkState::lost)) {
+      ramp_.restart();
+      if (link_before == LinkState::waiting) limiter_.initialize(state_.position);
+      estimator_->reset();
+    }
+    r.link = link;
+    r.consecutive_misses = watchdog_.consecutive_misses();
+    r.measured = state_;
+
+    // 5. Estimate on fresh data; hold the last estimate through short gaps.
+    if (received) {
+      MotorVector f;
+      if (estimator_->estimate(state_, out.position, f) && f.allFinite()) {
+        joint_force_ = f;
+      } else {
+        r.estimator_rejected = true;
+        joint_force_.setZero();
+      }
+    }
+    r.joint_force = joint_force_;
+
+    // 6. Force to render (eq. 5.8 in the mapper), scaled by the ramp, guarded.
+    Eigen::Vector3d force = Eigen::Vector3d::Zero();
+    const bool render = device_ok && (link == LinkState::up || link == LinkState::degraded ||
+                                      link == LinkState::recovering);
+    if (render) {
+      r.force_scale = ramp_.advance(dt);
+      const auto fm = mapper_->map_force(joint_force_, force);
+      if (!fm.ok()) force.setZero();
+      r.force_limited = fm.limited;
+      force *= r.force_scale;
+    } else {
+      ramp_.hold_at_zero();
+    }
+    const double norm = force.norm();
+    if (!std::isfinite(norm)) {
+      force.setZero();
+    } else if (norm > config_.safety.max_stylus_force) {
+      force *= config_.safety.max_stylus_force / norm;
+      r.force_limited = true;
+    }
+    r.stylus_force = force;
+    const DeviceStatus commanded = device_->command_force(force);
+    if (commanded == DeviceStatus::error) r.device = DeviceStatus::error;
+
+    // 7. Status.
+    if (r.device == DeviceStatus::error) {
+      r.status = TickStatus::device_error;
+    } else if (link == LinkState::waiting) {
+      r.status = TickStatus::waiting;
+    } else if (link == LinkState::lost) {
+      r.status = TickStatus::link_lost;
+    } else if (!received) {
+      r.status = TickStatus::degraded;
+    } else {
+      r.status = TickStatus::ok;
+    }
+    stats_.record_compute(clock_->now() - start - r.round_trip);
+    return r;
+  }
+
+  //! Runs ticks paced by absolute deadlines (start + k * period) until `stop()` returns true;
+  //! `on_tick(const TickResult&)` sees every result (keep it cheap). With `busy_wait_tail` > 0 the
+  //! last part of each wait spins on the clock instead of sleeping (lower jitter, one busy core).
+  //! A period of zero runs as fast as the link allows. Returns the number of ticks.
+  template <typename Stop, typename OnTick>
+  std::uint64_t run(
+      Stop&& stop, OnTick&& on_tick,
+      std::chrono::nanoseconds busy_wait_tail = std::chrono::nanoseconds(0)) noexcept {
+    std::uint64_t n = 0;
+    auto next = clock_->now();
+    while (!stop()) {
+      on_tick(tick());
+      ++n;
+      if (config_.period.count() == 0) continue;
+      next += config_.period;
+      const auto now = clock_->now();
+      if (now > next + config_.period) next = now;  // fell behind: do not try to catch up
+      if (busy_wait_tail.count() > 0) {
+        clock_->sleep_until(next - busy_wait_tail);
+        while (clock_->now() < next) {
+        }
+      } else {
+        clock_->sleep_until(next);
+      }
+    }
+    return n;
+  }
+
+  [[nodiscard]] const LoopStats& stats() const noexcept { return stats_; }
+  [[nodiscard]] const Watchdog& watchdog() const noexcept { return watchdog_; }
+  [[nodiscard]] const Config& config() const noexcept { return config_; }
+
+  //! Orderly stop: zero force on the device and one setpoint with all motors disabled.
+  void shutdown() noexcept {
+    (void)device_->command_force(Eigen::Vector3d::Zero());
+    Codec::Setpoint off;
+    off.position = limiter_.previous();
+    off.enable_mask = 0;
+    typename Codec::SetpointBytes tx{};
+    if (Codec::encode_setpoint(off, tx) == protocol::CodecStatus::ok) (void)transport_->send(tx);
+  }
+
+ private:
+  Transport* transport_;
+  Device* device_;
+  Estimator* estimator_;
+  Mapper* mapper_;
+  ClockT* clock_;
+  Config config_;
+  Watchdog watchdog_;
+  ForceRamp ramp_;
+  SetpointRateLimiter<loop_motors> limiter_;
+  LoopStats stats_;
+  MotorVector desired_ = MotorVector::Zero();
+  bool have_desired_ = false;
+  MotorState4 state_{};
+  MotorVector joint_force_ = MotorVector::Zero();
+  std::array<std::byte, 2 * Codec::state_packet_size> rx_buffer_{};  // room to detect long ones
+  std::chrono::nanoseconds last_start_{0};
+};
+
+}  // namespace endohaptics::teleop

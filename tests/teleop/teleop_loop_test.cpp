@@ -1,0 +1,326 @@
+#include <doctest/doctest.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <endohaptics/io/fault_injecting_transport.hpp>
+#include <endohaptics/io/in_memory_transport.hpp>
+#include <endohaptics/kinematics/cylindrical_mapper.hpp>
+#include <endohaptics/teleop/teleop_loop.hpp>
+#include <new>
+
+// Counting global allocator: every heap allocation in this test executable is counted.
+namespace {
+std::atomic<long> g_allocations{0};
+}
+void* operator new(std::size_t size) {
+  ++g_allocations;
+  if (void* p = std::malloc(size ? size : 1)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) { return operator new(size); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+
+namespace {
+
+namespace io = endohaptics::io;
+namespace tp = endohaptics::teleop;
+using Codec = endohaptics::protocol::PacketCodec<4>;
+using namespace std::chrono_literals;
+
+// A minimal emulated sbRIO for the loop's tests: enabled motors move 5 % of the way to their
+// setpoint per exchange; effort = 2 A/rad * (setpoint - position); replies with the state.
+struct FakeSbrio {
+  Codec::State state;
+  std::uint64_t requests = 0;
+  bool ever_enabled_before_contact = false;
+
+  template <typename Reply>
+  void operator()(std::span<const std::byte> in, Reply& reply) noexcept {
+    ++requests;
+    Codec::Setpoint sp;
+    if (Codec::decode_setpoint(in, sp) != endohaptics::protocol::CodecStatus::ok) return;
+    for (int i = 0; i < 4; ++i) {
+      if (sp.enable_mask & (1u << i)) {
+        const double step = 0.05 * (sp.position[i] - state.position[i]);
+        state.position[i] += step;
+        state.velocity[i] = step / 1e-3;
+        state.effort[i] = 2.0 * (sp.position[i] - state.position[i]);
+      } else {
+        state.velocity[i] = 0.0;
+        state.effort[i] = 0.0;
+      }
+    }
+    state.active_mask = sp.enable_mask;
+    Codec::StateBytes out{};
+    if (Codec::encode_state(state, out) == endohaptics::protocol::CodecStatus::ok) {
+      (void)reply.send(out);
+    }
+  }
+};
+
+// Stylus moving on a slow circle; remembers every force it was told to render.
+struct ScriptedDevice {
+  int t = 0;
+  bool fail = false;
+  Eigen::Vector3d last_force = Eigen::Vector3d::Zero();
+  double max_force = 0.0;
+  bool non_finite_force = false;
+  tp::DeviceStatus read(tp::StylusSample& s) noexcept {
+    if (fail) return tp::DeviceStatus::error;
+    const double a = 0.002 * t++;
+    s.position = Eigen::Vector3d(0.15 * std::sin(a), 0.15 * std::cos(a), 0.05 * std::sin(3 * a));
+    return tp::DeviceStatus::ok;
+  }
+  tp::DeviceStatus command_force(const Eigen::Vector3d& f) noexcept {
+    if (!f.allFinite()) non_finite_force = true;
+    max_force = std::max(max_force, f.norm());
+    last_force = f;
+    return fail ? tp::DeviceStatus::error : tp::DeviceStatus::ok;
+  }
+};
+
+// Force = 1 N/A of effort, in motor order; can be told to produce garbage.
+struct EffortEstimator {
+  bool produce_nan = false;
+  bool estimate(const tp::MotorState4& m, const tp::MotorVector&, tp::MotorVector& f) noexcept {
+    f = m.effort;
+    if (produce_nan) f[2] = std::numeric_limits<double>::quiet_NaN();
+    return true;
+  }
+  void reset() noexcept {}
+};
+
+using Responder = io::RespondingTransport<FakeSbrio>;
+using Faulty = io::FaultInjectingTransport<Responder>;
+using Mapper = endohaptics::kinematics::CylindricalMapper<>;
+using Loop = tp::TeleopLoop<Faulty, ScriptedDevice, EffortEstimator, Mapper, tp::ManualClock>;
+
+struct Rig {
+  Responder link{FakeSbrio{}};
+  Faulty faulty;
+  ScriptedDevice device;
+  EffortEstimator estimator;
+  Mapper mapper;
+  tp::ManualClock clock{1s};
+  Loop loop;
+  explicit Rig(const io::FaultRates& rates = {}, const tp::TeleopLoopConfig& config = {},
+               std::uint64_t seed = 1)
+      : faulty(link, rates, seed), loop(faulty, device, estimator, mapper, clock, config) {}
+
+  tp::TickResult tick() {
+    const auto r = loop.tick();
+    clock.advance(1ms);
+    return r;
+  }
+};
+
+// Invariants every tick must keep, whatever the link does.
+void check_invariants(const tp::TickResult& r, const Rig& rig, const tp::MotorVector& previous,
+                      bool previous_valid) {
+  REQUIRE(r.stylus_force.allFinite());
+  REQUIRE(r.stylus_force.norm() <= rig.loop.config().safety.max_stylus_force + 1e-12);
+  REQUIRE(r.setpoint.allFinite());
+  const auto& cfg = rig.mapper.config();
+  for (int i = 0; i < 4; ++i) {
+    REQUIRE(r.setpoint[i] >= cfg.lower[i] - 1e-12);
+    REQUIRE(r.setpoint[i] <= cfg.upper[i] + 1e-12);
+  }
+  if (previous_valid && r.enable_mask != 0) {
+    const double max_step = rig.loop.config().safety.max_setpoint_rate * 1e-3 + 1e-12;
+    REQUIRE((r.setpoint - previous).cwiseAbs().maxCoeff() <= max_step);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("start-up: motors stay disabled until the robot's position is known") {
+  Rig rig;
+  auto r = rig.tick();
+  // The first setpoint already gets an answer from the in-memory sbRIO; the setpoint itself
+  // went out with enable mask 0.
+  CHECK(r.enable_mask == 0);
+  CHECK(r.link == tp::LinkState::recovering);
+  CHECK(r.stylus_force.norm() == 0.0);
+  r = rig.tick();
+  CHECK(r.enable_mask == 0x0F);
+  CHECK(r.status == tp::TickStatus::ok);
+}
+
+TEST_CASE("clean link: every tick ok, force ramps in, stats exact") {
+  Rig rig;
+  double previous_scale = 0.0;
+  for (int i = 0; i < 2000; ++i) {
+    const auto r = rig.tick();
+    if (i > 0) REQUIRE(r.status == tp::TickStatus::ok);
+    REQUIRE(r.force_scale >= previous_scale);  // ramp never jumps back while the link is fine
+    previous_scale = r.force_scale;
+  }
+  CHECK(previous_scale == 1.0);  // 0.5 s ramp at 1 kHz
+  CHECK(rig.loop.stats().ticks() == 2000);
+  CHECK(rig.loop.stats().received() == 2000);
+  CHECK(rig.loop.stats().loss_percent() == 0.0);
+  CHECK(rig.loop.stats().rate() == doctest::Approx(1000.0));
+  CHECK(rig.device.max_force > 0.0);  // the scripted motion produces effort, hence force
+}
+
+TEST_CASE("every fault kind: never a non-finite or over-limit output, counters consistent") {
+  struct Case {
+    const char* name;
+    io::FaultRates rates;
+  };
+  const Case cases[] = {
+      {"drop send", {.drop_send = 0.2}},
+      {"drop receive", {.drop_receive = 0.2}},
+      {"delay", {.delay = 0.2}},
+      {"duplicate", {.duplicate = 0.3}},
+      {"reorder", {.delay = 0.3, .reorder = 0.5}},
+      {"corrupt", {.corrupt = 0.3}},
+      {"truncate", {.truncate = 0.2}},
+      {"everything", {0.05, 0.05, 0.05, 0.05, 0.1, 0.05, 0.2}},
+  };
+  for (const auto& c : cases) {
+    CAPTURE(c.name);
+    Rig rig(c.rates, {}, 2016);
+    tp::MotorVector previous = tp::MotorVector::Zero();
+    bool previous_valid = false;
+    for (int i = 0; i < 5000; ++i) {
+      const auto r = rig.tick();
+      check_invariants(r, rig, previous, previous_valid);
+      previous = r.setpoint;
+      previous_valid = r.enable_mask != 0;
+    }
+    const auto& s = rig.loop.stats();
+    const auto& f = rig.faulty.counters();
+    CHECK(s.exchanges() == 5000);
+    CHECK(s.received() + s.timeouts() + s.decode_errors() + s.transport_errors() == 5000);
+    CHECK_FALSE(rig.device.non_finite_force);
+    if (c.rates.drop_receive > 0 && c.rates.drop_send == 0 && c.rates.delay == 0) {
+      CHECK(s.timeouts() == f.dropped_receive);
+      CHECK(s.timeouts() > 800);  // 20 % of 5000 = 1000 +- 28
+    }
+    if (c.rates.drop_send > 0 && c.rates.drop_receive == 0) {
+      CHECK(s.timeouts() == f.dropped_send);  // no request, no answer
+    }
+    if (c.rates.truncate > 0 && c.rates.corrupt == 0) {
+      CHECK(s.decode_errors() == f.truncated);  // every truncated packet has the wrong size
+    }
+    if (c.rates.corrupt > 0 && c.rates.truncate == 0) {
+      CHECK(s.decode_errors() <= f.corrupted);  // some flips still give finite floats
+      CHECK(s.decode_errors() > 0);
+    }
+    if (c.rates.duplicate > 0) {
+      CHECK(s.stale_dropped() == f.duplicated);  // duplicates are drained, newest kept
+    }
+  }
+}
+
+TEST_CASE_TEMPLATE_DEFINE("link loss: declared on miss 11, safe state, recovery ramps force",
+                          PolicyTag, link_loss) {
+  tp::TeleopLoopConfig config;
+  config.safety.policy = PolicyTag::value;
+  Rig rig({}, config);
+  for (int i = 0; i < 1000; ++i) (void)rig.tick();
+  REQUIRE(rig.device.last_force.norm() > 0.0);
+  const auto held = rig.loop.tick().setpoint;
+  rig.clock.advance(1ms);
+
+  rig.faulty.set_rates({.drop_receive = 1.0});
+  for (int miss = 1; miss <= 10; ++miss) {
+    const auto r = rig.tick();
+    REQUIRE(r.status == tp::TickStatus::degraded);
+    REQUIRE(r.consecutive_misses == miss);
+    REQUIRE(r.stylus_force.norm() > 0.0);  // last estimate held through a short gap
+  }
+  auto r = rig.tick();  // miss 11: "superior to 10"
+  CHECK(r.status == tp::TickStatus::link_lost);
+  CHECK(r.stylus_force.norm() == 0.0);
+  CHECK(rig.loop.watchdog().link_losses() == 1);
+  for (int i = 0; i < 200; ++i) {
+    r = rig.tick();
+    REQUIRE(r.status == tp::TickStatus::link_lost);
+    REQUIRE(r.stylus_force.norm() == 0.0);
+    switch (PolicyTag::value) {
+      case tp::SafeStatePolicy::disable_motors:
+        REQUIRE(r.enable_mask == 0);
+        break;
+      case tp::SafeStatePolicy::hold_position:
+        REQUIRE(r.enable_mask == 0x0F);
+        REQUIRE(r.setpoint == rig.loop.tick().setpoint);  // frozen
+        rig.clock.advance(1ms);
+        break;
+      case tp::SafeStatePolicy::zero_force:
+        REQUIRE(r.enable_mask == 0x0F);
+        break;
+    }
+  }
+  (void)held;
+
+  rig.faulty.set_rates({});
+  r = rig.tick();
+  CHECK(r.link == tp::LinkState::recovering);
+  CHECK(rig.loop.watchdog().recoveries() == 1);
+  double previous = r.stylus_force.norm();
+  CHECK(previous <= 3.0 * 1e-3 / 0.5 + 1e-12);  // one ramp step of a <= 3 N force
+  for (int i = 0; i < 600; ++i) {
+    r = rig.tick();
+    REQUIRE(r.status == tp::TickStatus::ok);
+    // No jolt: the force grows at most by the ramp slope (3 N / 0.5 s) plus the signal's change.
+    REQUIRE(r.stylus_force.norm() - previous <= 3.0 * 1e-3 / 0.5 + 0.05);
+    previous = r.stylus_force.norm();
+  }
+  CHECK(r.link == tp::LinkState::up);
+  CHECK(r.force_scale == 1.0);
+}
+
+template <tp::SafeStatePolicy P>
+struct Policy {
+  static constexpr tp::SafeStatePolicy value = P;
+};
+TEST_CASE_TEMPLATE_INVOKE(link_loss, Policy<tp::SafeStatePolicy::hold_position>,
+                          Policy<tp::SafeStatePolicy::disable_motors>,
+                          Policy<tp::SafeStatePolicy::zero_force>);
+
+TEST_CASE("garbage from the estimator or the device never reaches the other side") {
+  Rig rig;
+  for (int i = 0; i < 100; ++i) (void)rig.tick();
+  rig.estimator.produce_nan = true;
+  auto r = rig.tick();
+  CHECK(r.estimator_rejected);
+  CHECK(r.stylus_force.allFinite());
+  CHECK(r.stylus_force.norm() == 0.0);
+  rig.estimator.produce_nan = false;
+
+  rig.device.fail = true;
+  const auto before = rig.loop.tick().setpoint;
+  rig.clock.advance(1ms);
+  r = rig.tick();
+  CHECK(r.status == tp::TickStatus::device_error);
+  CHECK(r.stylus_force.norm() == 0.0);
+  CHECK(r.setpoint == before);  // robot held while the operator's input is unknown
+}
+
+TEST_CASE("run() paces on absolute deadlines and stops on request") {
+  Rig rig;
+  int seen = 0;
+  const auto n = rig.loop.run([&] { return seen >= 250; }, [&](const tp::TickResult&) { ++seen; });
+  CHECK(n == 250);
+  CHECK(rig.loop.stats().rate() == doctest::Approx(1000.0));
+  CHECK(rig.clock.now() == 1s + 250ms);
+}
+
+TEST_CASE("no heap allocation in 10,000 ticks after warm-up") {
+  Rig rig({.drop_receive = 0.05, .corrupt = 0.05, .truncate = 0.02}, {}, 3);
+  for (int i = 0; i < 100; ++i) (void)rig.tick();
+  const long before = g_allocations.load();
+  for (int i = 0; i < 10000; ++i) {
+    const auto r = rig.loop.tick();
+    rig.clock.advance(1ms);
+    (void)r;
+  }
+  CHECK(g_allocations.load() - before == 0);
+  CHECK(rig.loop.stats().ticks() == 10100);
+}
