@@ -4,6 +4,8 @@
 //! `ENDOHAPTICS_ASSERT` for programmer errors. Real-time code never throws: it returns a status.
 #pragma once
 
+#include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
 #include <string>
 
@@ -15,7 +17,23 @@ class Error : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+namespace detail {
+//! Without exceptions a configuration error cannot be recovered from: say why, then abort.
+[[noreturn]] inline void fail_fast(const std::exception& e) noexcept {
+  std::fprintf(stderr, "endohaptics: fatal configuration error: %s\n", e.what());
+  std::abort();
+}
+}  // namespace detail
+
 }  // namespace endohaptics
+
+//! Throws a configuration-time exception, or, in a build without exceptions (-fno-exceptions),
+//! prints its message and aborts. Never used on the real-time path.
+#if defined(__cpp_exceptions) || defined(__EXCEPTIONS)
+#define ENDOHAPTICS_THROW(...) throw __VA_ARGS__
+#else
+#define ENDOHAPTICS_THROW(...) ::endohaptics::detail::fail_fast(__VA_ARGS__)
+#endif
 
 #ifndef ENDOHAPTICS_ASSERT
 #include <cassert>

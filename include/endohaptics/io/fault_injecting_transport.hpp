@@ -50,8 +50,9 @@ class FaultInjectingTransport {
     for (const double p : {rates.drop_send, rates.drop_receive, rates.delay, rates.duplicate,
                            rates.corrupt, rates.truncate, rates.reorder}) {
       if (!(p >= 0.0 && p <= 1.0)) {
-        throw Error("FaultInjectingTransport: every fault rate must be in [0, 1], got " +
-                    std::to_string(p));
+        ENDOHAPTICS_THROW(
+            Error("FaultInjectingTransport: every fault rate must be in [0, 1], got " +
+                  std::to_string(p)));
       }
     }
   }

@@ -39,17 +39,19 @@ class UdpTransport {
     namespace ip = boost::asio::ip;
     boost::system::error_code ec;
     const ip::address local = ip::make_address(config.local_address, ec);
-    if (ec) throw Error("UdpTransport: invalid local address '" + config.local_address + "'");
+    if (ec)
+      ENDOHAPTICS_THROW(
+          Error("UdpTransport: invalid local address '" + config.local_address + "'"));
     socket_.open(local.is_v6() ? ip::udp::v6() : ip::udp::v4(), ec);
-    if (ec) throw Error("UdpTransport: cannot open a UDP socket: " + ec.message());
+    if (ec) ENDOHAPTICS_THROW(Error("UdpTransport: cannot open a UDP socket: " + ec.message()));
     if (config.receive_buffer_bytes > 0) {
       socket_.set_option(boost::asio::socket_base::receive_buffer_size(config.receive_buffer_bytes),
                          ec);
     }
     socket_.bind(ip::udp::endpoint(local, config.local_port), ec);
     if (ec) {
-      throw Error("UdpTransport: cannot bind " + config.local_address + ":" +
-                  std::to_string(config.local_port) + ": " + ec.message());
+      ENDOHAPTICS_THROW(Error("UdpTransport: cannot bind " + config.local_address + ":" +
+                              std::to_string(config.local_port) + ": " + ec.message()));
     }
     connect(config.remote_address, config.remote_port);
   }
@@ -61,11 +63,11 @@ class UdpTransport {
     namespace ip = boost::asio::ip;
     boost::system::error_code ec;
     const ip::address remote = ip::make_address(address, ec);
-    if (ec) throw Error("UdpTransport: invalid remote address '" + address + "'");
+    if (ec) ENDOHAPTICS_THROW(Error("UdpTransport: invalid remote address '" + address + "'"));
     socket_.connect(ip::udp::endpoint(remote, port), ec);
     if (ec) {
-      throw Error("UdpTransport: cannot reach " + address + ":" + std::to_string(port) + ": " +
-                  ec.message());
+      ENDOHAPTICS_THROW(Error("UdpTransport: cannot reach " + address + ":" + std::to_string(port) +
+                              ": " + ec.message()));
     }
   }
 

@@ -49,7 +49,8 @@ class DurationStats {
   }
   [[nodiscard]] double min() const noexcept { return count_ ? min_ : 0.0; }
   [[nodiscard]] double max() const noexcept { return count_ ? max_ : 0.0; }
-  //! Upper edge of the histogram bin holding quantile q in [0, 1] (resolution BinWidthNs).
+  //! Upper edge of the histogram bin holding quantile q in [0, 1] (resolution BinWidthNs),
+  //! capped by the largest value seen.
   [[nodiscard]] double quantile(double q) const noexcept {
     if (count_ == 0) return 0.0;
     q = std::clamp(q, 0.0, 1.0);
@@ -57,7 +58,9 @@ class DurationStats {
     std::uint64_t seen = 0;
     for (int i = 0; i < Bins; ++i) {
       seen += histogram_[static_cast<std::size_t>(i)];
-      if (seen >= target && seen > 0) return static_cast<double>((i + 1) * BinWidthNs) * 1e-9;
+      if (seen >= target && seen > 0) {
+        return std::min(static_cast<double>((i + 1) * BinWidthNs) * 1e-9, max_);
+      }
     }
     return max_;  // in the overflow bin: the largest value seen bounds it
   }

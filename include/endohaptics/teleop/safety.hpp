@@ -69,7 +69,7 @@ struct SafetyConfig {
 
   //! Throws Error naming the field and value.
   void validate() const {
-    auto fail = [](const std::string& what) { throw Error("SafetyConfig: " + what); };
+    auto fail = [](const std::string& what) { ENDOHAPTICS_THROW(Error("SafetyConfig: " + what)); };
     if (max_consecutive_misses < 0) {
       fail("max_consecutive_misses must be >= 0, got " + std::to_string(max_consecutive_misses));
     }

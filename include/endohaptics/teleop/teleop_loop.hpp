@@ -111,8 +111,9 @@ struct TeleopLoopConfig {
   SafetyConfig safety{};
 
   void validate() const {
-    if (period.count() <= 0) throw Error("TeleopLoopConfig: period must be > 0");
-    if (receive_timeout.count() < 0) throw Error("TeleopLoopConfig: receive_timeout must be >= 0");
+    if (period.count() <= 0) ENDOHAPTICS_THROW(Error("TeleopLoopConfig: period must be > 0"));
+    if (receive_timeout.count() < 0)
+      ENDOHAPTICS_THROW(Error("TeleopLoopConfig: receive_timeout must be >= 0"));
     safety.validate();
   }
 };

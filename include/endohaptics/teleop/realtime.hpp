@@ -1,0 +1,71 @@
+//! @file
+//! Real-time set-up for the thread that runs a TeleopLoop: SCHED_FIFO priority, CPU affinity and
+//! mlockall, each attempted only when asked and reported plainly when the system refuses (no
+//! root / no CAP_SYS_NICE / no RLIMIT_MEMLOCK). Linux. Configuration time: call before the loop.
+#pragma once
+
+#include <sched.h>
+#include <sys/mman.h>
+
+#include <cerrno>
+#include <cstring>
+#include <string>
+#include <vector>
+
+namespace endohaptics::teleop {
+
+struct RealtimeOptions {
+  int fifo_priority = 0;     //!< 1..99 requests SCHED_FIFO at that priority; 0 leaves the scheduler
+  int cpu = -1;              //!< >= 0 pins the calling thread to that CPU
+  bool lock_memory = false;  //!< mlockall(MCL_CURRENT | MCL_FUTURE): no page faults in the loop
+};
+
+//! What was applied and what was refused, one line each, for the user to read.
+struct RealtimeReport {
+  bool fifo = false;
+  bool pinned = false;
+  bool locked = false;
+  std::vector<std::string> messages;
+};
+
+//! Applies `options` to the calling thread; never throws for a refusal, it reports it.
+inline RealtimeReport apply_realtime(const RealtimeOptions& options) {
+  RealtimeReport report;
+  auto refused = [&](const std::string& what, int err) {
+    report.messages.push_back(
+        what + " refused: " + std::strerror(err) +
+        (err == EPERM ? " (needs root or CAP_SYS_NICE / RLIMIT_MEMLOCK)" : ""));
+  };
+  if (options.fifo_priority > 0) {
+    sched_param param{};
+    param.sched_priority = options.fifo_priority;
+    if (::sched_setscheduler(0, SCHED_FIFO, &param) == 0) {
+      report.fifo = true;
+      report.messages.push_back("SCHED_FIFO priority " + std::to_string(options.fifo_priority));
+    } else {
+      refused("SCHED_FIFO priority " + std::to_string(options.fifo_priority), errno);
+    }
+  }
+  if (options.cpu >= 0) {
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    CPU_SET(static_cast<unsigned>(options.cpu), &set);
+    if (::sched_setaffinity(0, sizeof set, &set) == 0) {
+      report.pinned = true;
+      report.messages.push_back("pinned to CPU " + std::to_string(options.cpu));
+    } else {
+      refused("pinning to CPU " + std::to_string(options.cpu), errno);
+    }
+  }
+  if (options.lock_memory) {
+    if (::mlockall(MCL_CURRENT | MCL_FUTURE) == 0) {
+      report.locked = true;
+      report.messages.push_back("memory locked (mlockall)");
+    } else {
+      refused("mlockall", errno);
+    }
+  }
+  return report;
+}
+
+}  // namespace endohaptics::teleop
