@@ -1,0 +1,322 @@
+//! @file
+//! CylindricalMapper: Geomagic Touch stylus position -> EndoWrist joint setpoints (eq. 5.9) and
+//! tool joint forces -> stylus force (eq. 5.8), worksheet 5.5 and figure 5.14.
+//! Units: position in m (Touch base frame, z up), theta and setpoints in rad (motor side, after
+//! gearing), forces in N. Conventions and defaults: docs/models/cylindrical_mapper.md.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <numbers>
+#include <string>
+#include <string_view>
+
+#include "endohaptics/core/error.hpp"
+
+namespace endohaptics::kinematics {
+
+//! The EndoWrist joints the mapping drives; the value is the index into tool-joint vectors.
+enum class ToolJoint : std::uint8_t { roll = 0, pitch = 1, clamp1 = 2, clamp2 = 3 };
+
+//! Human-readable name of a tool joint.
+[[nodiscard]] constexpr std::string_view to_string(ToolJoint joint) noexcept {
+  switch (joint) {
+    case ToolJoint::roll:
+      return "roll";
+    case ToolJoint::pitch:
+      return "pitch";
+    case ToolJoint::clamp1:
+      return "clamp1";
+    case ToolJoint::clamp2:
+      return "clamp2";
+  }
+  return "unknown joint";
+}
+
+//! Outcome of a mapping. On anything but `ok` the caller's output is left untouched.
+enum class MapperStatus : std::uint8_t {
+  ok = 0,
+  non_finite,  //!< NaN or +-Inf in the input (or an overflow to one while mapping)
+};
+
+//! Human-readable name of a status, for logs.
+[[nodiscard]] constexpr std::string_view to_string(MapperStatus status) noexcept {
+  switch (status) {
+    case MapperStatus::ok:
+      return "ok";
+    case MapperStatus::non_finite:
+      return "non-finite value";
+  }
+  return "unknown status";
+}
+
+//! Cylindrical coordinates of the stylus (figure 5.14).
+template <typename Scalar = double>
+struct Cylindrical {
+  Scalar theta{};  //!< rad, from +y towards +x: theta = atan2(x, y)
+  Scalar r{};      //!< m, horizontal distance O_c -> O_p
+  Scalar z{};      //!< m, height
+};
+
+//! What `map_position` did.
+template <typename Scalar = double>
+struct [[nodiscard]] PositionResult {
+  MapperStatus status = MapperStatus::ok;
+  std::uint8_t clamped_mask = 0;      //!< bit j: tool joint j was limited to its range
+  bool theta_held = false;            //!< r <= min_radius: theta is the last valid one
+  Cylindrical<Scalar> coordinates{};  //!< the (theta, r, z) used; meaningful only when ok
+
+  [[nodiscard]] constexpr bool ok() const noexcept { return status == MapperStatus::ok; }
+  //! True when `joint` was limited to its range.
+  [[nodiscard]] constexpr bool clamped(ToolJoint joint) const noexcept {
+    return ((clamped_mask >> static_cast<unsigned>(joint)) & 1u) != 0;
+  }
+};
+
+//! What `map_force` did.
+struct [[nodiscard]] ForceResult {
+  MapperStatus status = MapperStatus::ok;
+  bool limited = false;  //!< the force was scaled down to `force_limit` (direction kept)
+
+  [[nodiscard]] constexpr bool ok() const noexcept { return status == MapperStatus::ok; }
+};
+
+//! Configuration of eq. 5.9 and 5.8. Defaults: the 2016 rig (docs/models/cylindrical_mapper.md
+//! says which are from the worksheet, which are assumptions, and which units they assume).
+template <typename Scalar = double>
+struct CylindricalMapperConfig {
+  using Vector3 = Eigen::Matrix<Scalar, 3, 1>;
+  using Vector4 = Eigen::Matrix<Scalar, 4, 1>;
+
+  Scalar a_roll = Scalar(0.7096);  //!< rad/rad: P_roll = a_roll theta + b_roll
+  Scalar b_roll = Scalar(-1.108);  //!< rad
+  Scalar a_pitch = Scalar(3.93);   //!< rad/m: P_pitch = a_pitch z + b_pitch
+  Scalar b_pitch = Scalar(-0.54);  //!< rad
+  Scalar a_clamp = Scalar(5.384);  //!< rad/m: P_clamp1 = -a_clamp r + b_clamp, P_clamp2 = -P_clamp1
+  Scalar b_clamp = Scalar(0.7);    //!< rad
+  //! motor_order[m]: the tool joint driven by motor slot m (a permutation).
+  std::array<ToolJoint, 4> motor_order = {ToolJoint::roll, ToolJoint::pitch, ToolJoint::clamp1,
+                                          ToolJoint::clamp2};
+  //! rad, per tool joint (index = ToolJoint); assumption: the +-1.028 rad of the 2016 tuning logs.
+  Vector4 lower = Vector4::Constant(Scalar(-1.028));
+  Vector4 upper = Vector4::Constant(Scalar(1.028));  //!< rad, per tool joint
+  Scalar min_radius = Scalar(1e-3);  //!< m; at r <= min_radius theta is held (undefined at 0)
+  //! rad, in [-pi, pi]: theta is reported in (neutral - pi, neutral + pi], and held at this
+  //! value until the first position with r > min_radius.
+  Scalar theta_neutral = std::numbers::pi_v<Scalar> / 2;
+  //! Per cylindrical axis (clamp/radial, roll/tangential, pitch/vertical), N per tool-force unit.
+  Vector3 force_scale = Vector3::Ones();
+  Scalar force_limit = Scalar(2.5);  //!< N, magnitude limit of the stylus force (Touch peak 3.3)
+};
+
+//! Eq. 5.9 (position -> joint setpoints, with per-joint range limits) and eq. 5.8 (joint forces
+//! -> stylus force, with a magnitude limit). Per-tick functions are noexcept and allocation-free.
+template <typename Scalar = double>
+class CylindricalMapper {
+ public:
+  static constexpr int num_joints = 4;
+  using Config = CylindricalMapperConfig<Scalar>;
+  using Vector3 = Eigen::Matrix<Scalar, 3, 1>;
+  using MotorVector = Eigen::Matrix<Scalar, num_joints, 1>;  //!< motor order
+  using Coordinates = Cylindrical<Scalar>;
+
+  //! Validates `config`; throws endohaptics::Error naming the bad field and its value.
+  explicit CylindricalMapper(const Config& config = Config{}) : config_(config) {
+    validate();
+    held_theta_ = config_.theta_neutral;
+  }
+
+  [[nodiscard]] const Config& config() const noexcept { return config_; }
+
+  //! Eq. 5.9: stylus position (m, base frame) -> setpoints (rad, motor order), each limited to
+  //! its range. Updates the held theta. `setpoint` is untouched unless the result is ok.
+  PositionResult<Scalar> map_position(const Vector3& position, MotorVector& setpoint) noexcept {
+    PositionResult<Scalar> result;
+    if (!position.allFinite()) {
+      result.status = MapperStatus::non_finite;
+      return result;
+    }
+    const Scalar r = std::hypot(position.x(), position.y());
+    Scalar theta = held_theta_;
+    if (r > config_.min_radius) {
+      theta = wrap(std::atan2(position.x(), position.y()));
+    } else {
+      result.theta_held = true;
+    }
+    std::array<Scalar, num_joints> p{};
+    p[index(ToolJoint::roll)] = config_.a_roll * theta + config_.b_roll;
+    p[index(ToolJoint::pitch)] = config_.a_pitch * position.z() + config_.b_pitch;
+    p[index(ToolJoint::clamp1)] = -config_.a_clamp * r + config_.b_clamp;
+    p[index(ToolJoint::clamp2)] = config_.a_clamp * r - config_.b_clamp;
+    for (std::size_t j = 0; j < p.size(); ++j) {
+      const auto i = static_cast<Eigen::Index>(j);
+      if (std::isnan(p[j])) {  // only 0 * inf (huge input with a zero scale) gets here
+        result.status = MapperStatus::non_finite;
+        return result;
+      }
+      if (p[j] < config_.lower[i]) {
+        p[j] = config_.lower[i];
+        result.clamped_mask = static_cast<std::uint8_t>(result.clamped_mask | (1u << j));
+      } else if (p[j] > config_.upper[i]) {
+        p[j] = config_.upper[i];
+        result.clamped_mask = static_cast<std::uint8_t>(result.clamped_mask | (1u << j));
+      }
+    }
+    for (int m = 0; m < num_joints; ++m) {
+      setpoint[m] = p[index(config_.motor_order[static_cast<std::size_t>(m)])];
+    }
+    held_theta_ = theta;
+    result.coordinates = Coordinates{theta, r, position.z()};
+    return result;
+  }
+
+  //! Eq. 5.8 at stylus angle `theta` (rad): joint forces (motor order; each the external force on
+  //! that joint, positive along its positive setpoint) -> stylus force (N, base frame), scaled per
+  //! axis and limited in magnitude. `stylus_force` is untouched unless the result is ok.
+  ForceResult map_force(const MotorVector& joint_force, Scalar theta,
+                        Vector3& stylus_force) const noexcept {
+    ForceResult result;
+    if (!joint_force.allFinite() || !std::isfinite(theta)) {
+      result.status = MapperStatus::non_finite;
+      return result;
+    }
+    const Scalar f_roll = joint_force[motor_of(ToolJoint::roll)];
+    const Scalar f_pitch = joint_force[motor_of(ToolJoint::pitch)];
+    const Scalar f_clamp1 = joint_force[motor_of(ToolJoint::clamp1)];
+    const Scalar f_clamp2 = joint_force[motor_of(ToolJoint::clamp2)];
+    // Generalised forces along r, theta, z (virtual work: P_clamp2 grows with r, P_clamp1 falls).
+    const Scalar clamp = sign(config_.a_clamp) * (f_clamp2 - f_clamp1) / 2 * config_.force_scale[0];
+    const Scalar roll = sign(config_.a_roll) * f_roll * config_.force_scale[1];
+    const Scalar pitch = sign(config_.a_pitch) * f_pitch * config_.force_scale[2];
+    const Scalar s = std::sin(theta);
+    const Scalar c = std::cos(theta);
+    Vector3 force(clamp * s + roll * c, clamp * c - roll * s, pitch);
+    if (!force.allFinite()) {
+      result.status = MapperStatus::non_finite;
+      return result;
+    }
+    const Scalar magnitude = force.stableNorm();
+    if (magnitude > config_.force_limit) {
+      force *= config_.force_limit / magnitude;
+      result.limited = true;
+    }
+    stylus_force = force;
+    return result;
+  }
+
+  //! Eq. 5.8 at the theta of the last successful `map_position` (or `theta_neutral`).
+  ForceResult map_force(const MotorVector& joint_force, Vector3& stylus_force) const noexcept {
+    return map_force(joint_force, held_theta_, stylus_force);
+  }
+
+  //! Inverse of eq. 5.8 without scale or limit: stylus force (N) at `theta` -> (F_clamp along
+  //! e_r, F_roll along e_theta, F_pitch along z). Precondition: finite inputs (NaN in, NaN out).
+  [[nodiscard]] static Vector3 cylindrical_force(const Vector3& stylus_force,
+                                                 Scalar theta) noexcept {
+    const Scalar s = std::sin(theta);
+    const Scalar c = std::cos(theta);
+    return Vector3(stylus_force.x() * s + stylus_force.y() * c,
+                   stylus_force.x() * c - stylus_force.y() * s, stylus_force.z());
+  }
+
+  //! The theta of the last successful `map_position` (rad), or `theta_neutral` before it.
+  [[nodiscard]] Scalar theta() const noexcept { return held_theta_; }
+
+  //! Forgets the held theta: back to `theta_neutral`.
+  void reset() noexcept { held_theta_ = config_.theta_neutral; }
+
+ private:
+  static constexpr std::size_t index(ToolJoint joint) noexcept {
+    return static_cast<std::size_t>(joint);
+  }
+  Eigen::Index motor_of(ToolJoint joint) const noexcept {
+    return static_cast<Eigen::Index>(motor_of_joint_[index(joint)]);
+  }
+  static constexpr Scalar sign(Scalar x) noexcept {
+    return x > Scalar(0) ? Scalar(1) : (x < Scalar(0) ? Scalar(-1) : Scalar(0));
+  }
+
+  // atan2 gives [-pi, pi]; move it into (neutral - pi, neutral + pi]. One step suffices because
+  // theta_neutral is in [-pi, pi].
+  Scalar wrap(Scalar theta) const noexcept {
+    constexpr Scalar pi = std::numbers::pi_v<Scalar>;
+    if (theta <= config_.theta_neutral - pi) theta += 2 * pi;
+    if (theta > config_.theta_neutral + pi) theta -= 2 * pi;
+    return theta;
+  }
+
+  [[noreturn]] static void fail(const std::string& what) {
+    const std::string message = "CylindricalMapper: " + what;
+#if defined(__cpp_exceptions)
+    throw Error(message);
+#else
+    std::fputs(message.c_str(), stderr);
+    std::fputc('\n', stderr);
+    std::abort();
+#endif
+  }
+
+  static std::string show(Scalar value) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%.17g", static_cast<double>(value));
+    return buffer;
+  }
+
+  static void require_finite(Scalar value, const char* field) {
+    if (!std::isfinite(value)) fail(std::string(field) + " must be finite, got " + show(value));
+  }
+
+  void validate() {
+    require_finite(config_.a_roll, "a_roll");
+    require_finite(config_.b_roll, "b_roll");
+    require_finite(config_.a_pitch, "a_pitch");
+    require_finite(config_.b_pitch, "b_pitch");
+    require_finite(config_.a_clamp, "a_clamp");
+    require_finite(config_.b_clamp, "b_clamp");
+    for (int j = 0; j < num_joints; ++j) {
+      const std::string name(to_string(static_cast<ToolJoint>(j)));
+      require_finite(config_.lower[j], ("lower[" + name + "]").c_str());
+      require_finite(config_.upper[j], ("upper[" + name + "]").c_str());
+      if (config_.lower[j] > config_.upper[j]) {
+        fail("range of " + name + " is empty: lower " + show(config_.lower[j]) + " > upper " +
+             show(config_.upper[j]));
+      }
+    }
+    std::array<bool, num_joints> seen{};
+    for (std::size_t m = 0; m < config_.motor_order.size(); ++m) {
+      const auto j = static_cast<unsigned>(config_.motor_order[m]);
+      if (j >= static_cast<unsigned>(num_joints)) {
+        fail("motor_order[" + std::to_string(m) + "] is not a tool joint: " + std::to_string(j));
+      }
+      if (seen[j]) {
+        fail("motor_order is not a permutation: " + std::string(to_string(config_.motor_order[m])) +
+             " appears twice (again at motor " + std::to_string(m) + ")");
+      }
+      seen[j] = true;
+      motor_of_joint_[j] = static_cast<int>(m);
+    }
+    require_finite(config_.min_radius, "min_radius");
+    if (config_.min_radius < 0) fail("min_radius must be >= 0 m, got " + show(config_.min_radius));
+    require_finite(config_.theta_neutral, "theta_neutral");
+    if (std::fabs(config_.theta_neutral) > std::numbers::pi_v<Scalar>) {
+      fail("theta_neutral must be in [-pi, pi] rad, got " + show(config_.theta_neutral));
+    }
+    for (int k = 0; k < 3; ++k) {
+      require_finite(config_.force_scale[k], ("force_scale[" + std::to_string(k) + "]").c_str());
+    }
+    require_finite(config_.force_limit, "force_limit");
+    if (!(config_.force_limit > 0)) {
+      fail("force_limit must be > 0 N, got " + show(config_.force_limit));
+    }
+  }
+
+  Config config_;
+  std::array<int, num_joints> motor_of_joint_{};  // inverse of motor_order
+  Scalar held_theta_{};
+};
+
+}  // namespace endohaptics::kinematics

@@ -1,0 +1,536 @@
+// The no-allocation test below needs Eigen's malloc guard, which must be enabled before Eigen.
+#define EIGEN_RUNTIME_NO_MALLOC
+#include "endohaptics/kinematics/cylindrical_mapper.hpp"
+
+#include <doctest/doctest.h>
+
+#include <Eigen/Geometry>  // cross()
+
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <new>
+#include <numbers>
+#include <random>
+#include <string>
+
+// Counts every global allocation of this test executable (the no-allocation test reads it).
+namespace {
+std::atomic<long> allocations{0};
+}  // namespace
+
+void* operator new(std::size_t size) {
+  allocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+
+namespace {
+
+using endohaptics::kinematics::CylindricalMapper;
+using endohaptics::kinematics::CylindricalMapperConfig;
+using endohaptics::kinematics::MapperStatus;
+using endohaptics::kinematics::ToolJoint;
+using Mapper = CylindricalMapper<double>;
+using Config = Mapper::Config;
+using Vector3 = Mapper::Vector3;
+using Motors = Mapper::MotorVector;
+
+constexpr double pi = std::numbers::pi;
+constexpr double not_a_number = std::numeric_limits<double>::quiet_NaN();
+constexpr double inf = std::numeric_limits<double>::infinity();
+constexpr std::uint8_t bit(ToolJoint j) {
+  return static_cast<std::uint8_t>(1u << static_cast<unsigned>(j));
+}
+
+doctest::Approx exact(double x) { return doctest::Approx(x).epsilon(1e-12).scale(1.0); }
+
+// Default motor order is [roll, pitch, clamp1, clamp2].
+Motors joint_forces(double roll, double pitch, double clamp1, double clamp2) {
+  return Motors(roll, pitch, clamp1, clamp2);
+}
+
+Motors map(Mapper& mapper, const Vector3& p) {
+  Motors out = Motors::Constant(99.0);
+  const auto result = mapper.map_position(p, out);
+  REQUIRE(result.ok());
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("eq. 5.9 with the 2016 defaults at hand-computed points") {
+  // theta = atan2(x, y) (from +y towards +x), r = hypot(x, y); setpoints
+  //   roll = 0.7096 theta - 1.108, pitch = 3.93 z - 0.54,
+  //   clamp1 = -(5.384 r - 0.7), clamp2 = 5.384 r - 0.7,  each limited to +-1.028 rad.
+  // Values re-checked with /usr/bin/python3 (math.atan2, math.hypot, the same formulas).
+  Mapper mapper;
+
+  SUBCASE("theta = pi/2 (stylus along +x), r = 0.1 m, z = 0.2 m") {
+    // roll = 0.7096 * 1.5707963267948966 - 1.108 = 1.1146370734936585 - 1.108 = 0.0066370734936585
+    // pitch = 0.786 - 0.54 = 0.246; clamp1 = -(0.5384 - 0.7) = 0.1616; clamp2 = -0.1616.
+    Motors out = Motors::Zero();
+    const auto result = mapper.map_position(Vector3(0.1, 0.0, 0.2), out);
+    REQUIRE(result.ok());
+    CHECK(result.coordinates.theta == exact(pi / 2));
+    CHECK(result.coordinates.r == exact(0.1));
+    CHECK(result.coordinates.z == 0.2);
+    CHECK(out[0] == exact(0.0066370734936584963));
+    CHECK(out[1] == exact(0.246));
+    CHECK(out[2] == exact(0.1616));
+    CHECK(out[3] == exact(-0.1616));
+    CHECK(result.clamped_mask == 0);
+    CHECK_FALSE(result.theta_held);
+  }
+  SUBCASE("theta = pi/4, r = 0.1 sqrt(2), z = 0") {
+    // roll = 0.7096 * 0.7853981633974483 - 1.108 = -0.5506814632531708;
+    // pitch = -0.54; clamp2 = 5.384 * 0.1414213562373095 - 0.7 = 0.06141258198167443.
+    const Motors out = map(mapper, Vector3(0.1, 0.1, 0.0));
+    CHECK(out[0] == exact(-0.5506814632531708));
+    CHECK(out[1] == exact(-0.54));
+    CHECK(out[2] == exact(-0.06141258198167443));
+    CHECK(out[3] == exact(0.06141258198167443));
+  }
+  SUBCASE("theta = 3 pi/4, z = 0.3") {
+    // roll = 0.7096 * 2.356194490192345 - 1.108 = 0.5639556102404879; pitch = 1.179 - 0.54.
+    const Motors out = map(mapper, Vector3(0.1, -0.1, 0.3));
+    CHECK(out[0] == exact(0.5639556102404879));
+    CHECK(out[1] == exact(0.639));
+    CHECK(out[3] == exact(0.06141258198167443));
+  }
+  SUBCASE("theta = 0 (stylus along +y): roll -1.108 is below the range and is clamped") {
+    // pitch = 0.393 - 0.54 = -0.147; clamp1 = -(0.8076 - 0.7) = -0.1076.
+    Motors out = Motors::Zero();
+    const auto result = mapper.map_position(Vector3(0.0, 0.15, 0.1), out);
+    REQUIRE(result.ok());
+    CHECK(result.coordinates.theta == 0.0);
+    CHECK(out[0] == -1.028);
+    CHECK(out[1] == exact(-0.147));
+    CHECK(out[2] == exact(-0.1076));
+    CHECK(out[3] == exact(0.1076));
+    CHECK(result.clamped_mask == bit(ToolJoint::roll));
+    CHECK(result.clamped(ToolJoint::roll));
+    CHECK_FALSE(result.clamped(ToolJoint::clamp1));
+  }
+  SUBCASE("theta = pi (stylus along -y): roll 1.1213 is above the range and is clamped") {
+    Motors out = Motors::Zero();
+    const auto result = mapper.map_position(Vector3(0.0, -0.12, 0.15), out);
+    REQUIRE(result.ok());
+    CHECK(result.coordinates.theta == exact(pi));
+    CHECK(out[0] == 1.028);
+    CHECK(result.clamped_mask == bit(ToolJoint::roll));
+  }
+}
+
+TEST_CASE(
+    "theta is wrapped around theta_neutral: the branch cut is opposite the neutral direction") {
+  Mapper mapper;  // neutral pi/2: theta in (-pi/2, 3pi/2]
+  Motors out = Motors::Zero();
+  auto result = mapper.map_position(Vector3(-0.1, 0.0, 0.0), out);  // along -x
+  REQUIRE(result.ok());
+  CHECK(result.coordinates.theta == exact(3 * pi / 2));
+  CHECK(out[0] == 1.028);  // 0.7096 * 4.712 - 1.108 = 2.236 -> upper limit, not lower
+
+  result = mapper.map_position(Vector3(-0.1, -1e-9, 0.0), out);  // just past -x towards -y
+  CHECK(result.coordinates.theta < 3 * pi / 2);
+  result = mapper.map_position(Vector3(-0.1, 1e-9, 0.0), out);  // just past -x towards +y
+  CHECK(result.coordinates.theta == doctest::Approx(-pi / 2));
+
+  Config config;
+  config.theta_neutral = 0.0;  // theta in (-pi, pi]
+  Mapper centred(config);
+  result = centred.map_position(Vector3(-0.1, 0.0, 0.0), out);
+  CHECK(result.coordinates.theta == exact(-pi / 2));
+  result = centred.map_position(Vector3(0.0, -0.1, 0.0), out);
+  CHECK(result.coordinates.theta == exact(pi));
+}
+
+TEST_CASE("per-joint range limits: each joint is limited and reported") {
+  Config config;
+  // Index = ToolJoint: roll, pitch, clamp1, clamp2.
+  config.lower << -2.0, -0.1, -0.5, -0.05;
+  config.upper << 2.0, 0.1, 0.5, 0.05;
+  Mapper mapper(config);
+  Motors out = Motors::Zero();
+  // r = 0.2: clamp2 = 1.0768 - 0.7 = 0.3768 -> 0.05, clamp1 = -0.3768 (inside -0.5).
+  // z = 0.2: pitch 0.246 -> 0.1. theta = pi/2: roll 0.0066 inside.
+  const auto result = mapper.map_position(Vector3(0.2, 0.0, 0.2), out);
+  REQUIRE(result.ok());
+  CHECK(out[0] == exact(0.0066370734936584963));
+  CHECK(out[1] == 0.1);
+  CHECK(out[2] == exact(-0.3768));
+  CHECK(out[3] == 0.05);
+  CHECK(result.clamped_mask == (bit(ToolJoint::pitch) | bit(ToolJoint::clamp2)));
+
+  // Opening the jaws too far (worksheet 6.2): r = 0.4 m gives clamp2 = 1.4536, clamp1 = -1.4536;
+  // with the default +-1.028 rad both stop at the range.
+  Mapper defaults;
+  const auto wide = defaults.map_position(Vector3(0.4, 0.0, 0.137), out);
+  CHECK(out[2] == -1.028);
+  CHECK(out[3] == 1.028);
+  CHECK(wide.clamped_mask == (bit(ToolJoint::clamp1) | bit(ToolJoint::clamp2)));
+}
+
+TEST_CASE("motor order is a configurable permutation") {
+  Config config;
+  config.motor_order = {ToolJoint::clamp2, ToolJoint::roll, ToolJoint::clamp1, ToolJoint::pitch};
+  Mapper mapper(config);
+  const Motors out = map(mapper, Vector3(0.1, 0.0, 0.2));
+  CHECK(out[0] == exact(-0.1616));                // clamp2
+  CHECK(out[1] == exact(0.0066370734936584963));  // roll
+  CHECK(out[2] == exact(0.1616));                 // clamp1
+  CHECK(out[3] == exact(0.246));                  // pitch
+
+  // Joint forces follow the same order: a pure clamp2 force of +2 N is F_clamp = +1 N radial.
+  Vector3 force = Vector3::Zero();
+  REQUIRE(mapper.map_force(Motors(2.0, 0.0, 0.0, 0.0), pi / 2, force).ok());
+  CHECK(force.isApprox(Vector3(1.0, 0.0, 0.0), 1e-15));
+  // A pure roll force sits in motor slot 1 now.
+  REQUIRE(mapper.map_force(Motors(0.0, 1.0, 0.0, 0.0), pi / 2, force).ok());
+  CHECK(force.isApprox(Vector3(0.0, -1.0, 0.0), 1e-15));
+}
+
+TEST_CASE("r -> 0: theta is undefined and the last valid theta is held") {
+  Mapper mapper;
+  Motors out = Motors::Zero();
+
+  // Before any valid theta: theta_neutral = pi/2 (roll 0.0066), clamp setpoints from r = 0.
+  auto result = mapper.map_position(Vector3(0.0, 0.0, 0.2), out);
+  REQUIRE(result.ok());
+  CHECK(result.theta_held);
+  CHECK(result.coordinates.theta == exact(pi / 2));
+  CHECK(out[0] == exact(0.0066370734936584963));
+  CHECK(out[2] == exact(0.7));
+  CHECK(out[3] == exact(-0.7));
+
+  result = mapper.map_position(Vector3(0.1, 0.1, 0.2), out);  // theta = pi/4
+  CHECK_FALSE(result.theta_held);
+  CHECK(mapper.theta() == exact(pi / 4));
+
+  for (const Vector3& p : {Vector3(0.0, 0.0, 0.2), Vector3(-0.0, -0.0, 0.2),
+                           Vector3(5e-4, -5e-4, 0.1),   // r = 0.71 mm < 1 mm
+                           Vector3(1e-3, 0.0, 0.1)}) {  // r = min_radius exactly: still held
+    result = mapper.map_position(p, out);
+    CAPTURE(p.transpose());
+    CHECK(result.theta_held);
+    CHECK(result.coordinates.theta == exact(pi / 4));
+    CHECK(out[0] == exact(-0.5506814632531708));
+  }
+
+  // The force map without an explicit theta uses the held one: a clamp force at pi/4 points
+  // along (sin, cos)(pi/4).
+  Vector3 force = Vector3::Zero();
+  REQUIRE(mapper.map_force(joint_forces(0, 0, -1, 1), force).ok());
+  CHECK(force.isApprox(Vector3(std::sqrt(0.5), std::sqrt(0.5), 0.0), 1e-15));
+
+  mapper.reset();
+  CHECK(mapper.theta() == exact(pi / 2));
+}
+
+TEST_CASE("eq. 5.8: clamp force is radial and roll force tangential and pitch force vertical") {
+  Mapper mapper;
+  Vector3 force = Vector3::Zero();
+  // F_clamp = (f_clamp2 - f_clamp1) / 2; e_r = (sin, cos, 0), e_theta = (cos, -sin, 0).
+  SUBCASE("theta = 0: e_r = +y, e_theta = +x") {
+    REQUIRE(mapper.map_force(joint_forces(0, 0, -1, 1), 0.0, force).ok());
+    CHECK(force == Vector3(0, 1, 0));
+    REQUIRE(mapper.map_force(joint_forces(1, 0, 0, 0), 0.0, force).ok());
+    CHECK(force == Vector3(1, 0, 0));
+  }
+  SUBCASE("theta = pi/2: e_r = +x, e_theta = -y") {
+    REQUIRE(mapper.map_force(joint_forces(0, 0, -0.5, 0.5), pi / 2, force).ok());
+    CHECK(force.isApprox(Vector3(0.5, 0, 0), 1e-15));
+    REQUIRE(mapper.map_force(joint_forces(1, 0, 0, 0), pi / 2, force).ok());
+    CHECK(force.isApprox(Vector3(0, -1, 0), 1e-15));
+  }
+  SUBCASE("pitch maps to z at any theta") {
+    REQUIRE(mapper.map_force(joint_forces(0, -1.5, 0, 0), 1.234, force).ok());
+    CHECK(force == Vector3(0, 0, -1.5));
+  }
+  SUBCASE("one jaw alone gives half its force (the mean of the two jaws)") {
+    REQUIRE(mapper.map_force(joint_forces(0, 0, 0, 1.2), 0.0, force).ok());
+    CHECK(force.isApprox(Vector3(0, 0.6, 0), 1e-15));
+  }
+  SUBCASE("parallel and perpendicular to the stylus position, at random theta") {
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> value(-1.0, 1.0);
+    for (int trial = 0; trial < 1000; ++trial) {
+      const Vector3 p(0.1 * std::cos(trial * 0.37), 0.1 * std::sin(trial * 0.37), 0.15);
+      Motors out = Motors::Zero();
+      const auto result = mapper.map_position(p, out);
+      REQUIRE(result.ok());
+      const double theta = result.coordinates.theta;
+      const Vector3 radial(p.x(), p.y(), 0.0);
+      const double clamp = value(rng);
+      REQUIRE(mapper.map_force(joint_forces(0, 0, -clamp, clamp), force).ok());
+      CAPTURE(trial);
+      CHECK(force.cross(radial).norm() < 1e-15);                                // parallel
+      CHECK(force.dot(radial) == doctest::Approx(clamp * 0.1).epsilon(1e-12));  // same sense
+      REQUIRE(mapper.map_force(joint_forces(value(rng), 0, 0, 0), theta, force).ok());
+      CHECK(std::abs(force.dot(radial)) < 1e-15);  // perpendicular
+      CHECK(force.z() == 0.0);
+    }
+  }
+}
+
+TEST_CASE("the force mapping does the same work as the joint forces axis by axis") {
+  // For a small stylus move along e_r, e_theta or z alone, F . dx must have the sign of
+  // sum_j f_j dP_j (eq. 5.9): the feedback pushes where the tool is pushed. Holds also when a
+  // scale a is negative, because F carries sign(a).
+  for (const double sign : {1.0, -1.0}) {
+    Config config;
+    config.a_roll *= sign;
+    config.a_clamp *= sign;
+    config.a_pitch *= sign;
+    config.b_roll = config.b_pitch = config.b_clamp = 0.0;
+    config.lower.setConstant(-100.0);
+    config.upper.setConstant(100.0);
+    config.force_limit = 1e6;
+    Mapper mapper(config);
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> value(-1.0, 1.0);
+    for (int trial = 0; trial < 300; ++trial) {
+      const double theta = 1.4 * value(rng);  // away from the cut at -pi/2
+      const Vector3 p(0.12 * std::sin(theta), 0.12 * std::cos(theta), 0.1);
+      const Vector3 e_r(std::sin(theta), std::cos(theta), 0);
+      const Vector3 e_t(std::cos(theta), -std::sin(theta), 0);
+      const Motors f(value(rng), value(rng), value(rng), value(rng));
+      Motors p0 = Motors::Zero();
+      REQUIRE(mapper.map_position(p, p0).ok());
+      Vector3 force = Vector3::Zero();
+      REQUIRE(mapper.map_force(f, force).ok());
+      for (const Vector3& dir : {e_r, e_t, Vector3(Vector3::UnitZ())}) {
+        const Vector3 dx = 1e-6 * dir;
+        Motors p1 = Motors::Zero();
+        REQUIRE(mapper.map_position(p + dx, p1).ok());
+        const double joint_work = f.dot(p1 - p0);
+        const double stylus_work = force.dot(dx);
+        CAPTURE(trial);
+        CAPTURE(sign);
+        if (std::abs(joint_work) > 1e-9) CHECK((joint_work > 0) == (stylus_work > 0));
+      }
+    }
+  }
+}
+
+TEST_CASE("magnitude limit scales the force and keeps its direction") {
+  Mapper mapper;  // 2.5 N
+  Vector3 force = Vector3::Zero();
+  // theta = 0: clamp 3 N along +y, roll 4 N along +x: (4, 3, 0), |F| = 5 -> (2, 1.5, 0).
+  auto result = mapper.map_force(joint_forces(4, 0, -3, 3), 0.0, force);
+  REQUIRE(result.ok());
+  CHECK(result.limited);
+  CHECK(force.isApprox(Vector3(2.0, 1.5, 0.0), 1e-15));
+  CHECK(force.norm() == exact(2.5));
+
+  // Below the limit nothing changes: (1.2, 0.9, 0.8), |F| = 1.7.
+  result = mapper.map_force(joint_forces(1.2, 0.8, -0.9, 0.9), 0.0, force);
+  CHECK_FALSE(result.limited);
+  CHECK(force.isApprox(Vector3(1.2, 0.9, 0.8), 1e-15));
+
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> value(-50.0, 50.0);
+  for (int trial = 0; trial < 1000; ++trial) {
+    const Motors f(value(rng), value(rng), value(rng), value(rng));
+    const double theta = value(rng) / 10;
+    Config unlimited;
+    unlimited.force_limit = 1e9;
+    Vector3 raw = Vector3::Zero();
+    REQUIRE(Mapper(unlimited).map_force(f, theta, raw).ok());
+    REQUIRE(mapper.map_force(f, theta, force).ok());
+    CAPTURE(trial);
+    CHECK(force.norm() <= 2.5 * (1 + 1e-15));
+    if (raw.norm() > 2.5) CHECK(force.isApprox(raw.normalized() * 2.5, 1e-12));
+  }
+
+  // Huge but finite forces do not overflow the norm.
+  REQUIRE(mapper.map_force(joint_forces(1e300, 0, 0, 0), 0.0, force).ok());
+  CHECK(force.isApprox(Vector3(2.5, 0, 0), 1e-15));
+}
+
+TEST_CASE("force scale per cylindrical axis and the sign of the position scales") {
+  Config config;
+  config.force_scale << 0.5, 2.0, -1.0;  // clamp, roll, pitch
+  Mapper mapper(config);
+  Vector3 force = Vector3::Zero();
+  // theta = 0: clamp (1 - -1)/2 * 0.5 = 0.5 along +y, roll 0.5 * 2 = 1 along +x, pitch -1.
+  REQUIRE(mapper.map_force(joint_forces(0.5, 1.0, -1.0, 1.0), 0.0, force).ok());
+  CHECK(force.isApprox(Vector3(1.0, 0.5, -1.0), 1e-15));
+
+  Config mirrored;
+  mirrored.a_roll = -0.7096;  // roll runs the other way round: so does its feedback
+  mirrored.a_clamp = 0.0;     // clamp not driven by r: no clamp feedback
+  Mapper other(mirrored);
+  REQUIRE(other.map_force(joint_forces(1.0, 0.0, -1.0, 1.0), 0.0, force).ok());
+  CHECK(force == Vector3(-1.0, 0.0, 0.0));
+}
+
+TEST_CASE("round trip: the projection inverts eq. 5.8 and a radial force is clamp only") {
+  std::mt19937_64 rng(2016);
+  std::uniform_real_distribution<double> value(-0.7, 0.7);
+  std::uniform_real_distribution<double> angle(-pi / 2, 3 * pi / 2);
+  Mapper mapper;
+  for (int trial = 0; trial < 1000; ++trial) {
+    const double theta = angle(rng);
+    const Motors f(value(rng), value(rng), value(rng), value(rng));  // |F| < 2.5 N
+    Vector3 force = Vector3::Zero();
+    const auto result = mapper.map_force(f, theta, force);
+    REQUIRE(result.ok());
+    REQUIRE_FALSE(result.limited);
+    const Vector3 back = Mapper::cylindrical_force(force, theta);
+    CAPTURE(trial);
+    CHECK(back.x() == doctest::Approx((f[3] - f[2]) / 2).epsilon(1e-12).scale(1));
+    CHECK(back.y() == doctest::Approx(f[0]).epsilon(1e-12).scale(1));
+    CHECK(back.z() == f[1]);
+
+    const Vector3 radial = 1.7 * Vector3(std::sin(theta), std::cos(theta), 0);
+    const Vector3 cyl = Mapper::cylindrical_force(radial, theta);
+    CHECK(cyl.x() == exact(1.7));
+    CHECK(std::abs(cyl.y()) < 1e-15);
+    CHECK(cyl.z() == 0.0);
+  }
+}
+
+TEST_CASE("non-finite input is refused and leaves outputs and theta untouched") {
+  Mapper mapper;
+  Motors out = Motors::Zero();
+  REQUIRE(mapper.map_position(Vector3(0.1, 0.1, 0.1), out).ok());  // theta = pi/4
+  const Motors before = out;
+  for (const double bad : {not_a_number, inf, -inf}) {
+    for (int axis = 0; axis < 3; ++axis) {
+      Vector3 p(0.05, -0.1, 0.2);
+      p[axis] = bad;
+      const auto result = mapper.map_position(p, out);
+      CAPTURE(axis);
+      CHECK(result.status == MapperStatus::non_finite);
+      CHECK_FALSE(result.ok());
+      CHECK(out == before);
+      CHECK(mapper.theta() == exact(pi / 4));
+    }
+    const Vector3 sentinel(7, 8, 9);
+    Vector3 force = sentinel;
+    for (int j = 0; j < 4; ++j) {
+      Motors f = Motors::Constant(0.1);
+      f[j] = bad;
+      CHECK(mapper.map_force(f, 0.3, force).status == MapperStatus::non_finite);
+      CHECK(force == sentinel);
+    }
+    CHECK(mapper.map_force(Motors::Zero(), bad, force).status == MapperStatus::non_finite);
+    CHECK(force == sentinel);
+  }
+  CHECK(to_string(MapperStatus::non_finite) == "non-finite value");
+  CHECK(to_string(MapperStatus::ok) == "ok");
+  CHECK(to_string(ToolJoint::clamp2) == "clamp2");
+}
+
+TEST_CASE("huge finite positions are clamped and never NaN") {
+  Mapper mapper;
+  Motors out = Motors::Zero();
+  // hypot(1.5e308, 1.5e308) overflows to +inf: clamp setpoints go to their limits.
+  auto result = mapper.map_position(Vector3(1.5e308, 1.5e308, 1e308), out);
+  REQUIRE(result.ok());
+  CHECK(out[1] == 1.028);
+  CHECK(out[2] == -1.028);
+  CHECK(out[3] == 1.028);
+  CHECK(result.clamped_mask ==
+        (bit(ToolJoint::pitch) | bit(ToolJoint::clamp1) | bit(ToolJoint::clamp2)));
+
+  // With a zero clamp scale, 0 * inf would be NaN: refused instead of sent.
+  Config config;
+  config.a_clamp = 0.0;
+  Mapper zero(config);
+  const Motors before = out;
+  result = zero.map_position(Vector3(1.5e308, 1.5e308, 0.0), out);
+  CHECK(result.status == MapperStatus::non_finite);
+  CHECK(out == before);
+}
+
+TEST_CASE("invalid configurations throw endohaptics::Error naming field and value") {
+  const auto message = [](const Config& config) -> std::string {
+    try {
+      const Mapper mapper(config);
+    } catch (const endohaptics::Error& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  Config c;
+  CHECK(message(c) == "no error");
+
+  c = Config{};
+  c.motor_order = {ToolJoint::roll, ToolJoint::roll, ToolJoint::clamp1, ToolJoint::clamp2};
+  CHECK(message(c) ==
+        "CylindricalMapper: motor_order is not a permutation: roll appears twice (again at motor "
+        "1)");
+  c = Config{};
+  c.motor_order[2] = static_cast<ToolJoint>(4);
+  CHECK(message(c) == "CylindricalMapper: motor_order[2] is not a tool joint: 4");
+  c = Config{};
+  c.lower[1] = 0.5;
+  c.upper[1] = -0.5;
+  CHECK(message(c) == "CylindricalMapper: range of pitch is empty: lower 0.5 > upper -0.5");
+  c = Config{};
+  c.a_roll = not_a_number;
+  CHECK(message(c) == "CylindricalMapper: a_roll must be finite, got nan");
+  c = Config{};
+  c.upper[3] = inf;
+  CHECK(message(c) == "CylindricalMapper: upper[clamp2] must be finite, got inf");
+  c = Config{};
+  c.force_limit = 0.0;
+  CHECK(message(c) == "CylindricalMapper: force_limit must be > 0 N, got 0");
+  c = Config{};
+  c.min_radius = -1.0;
+  CHECK(message(c) == "CylindricalMapper: min_radius must be >= 0 m, got -1");
+  c = Config{};
+  c.theta_neutral = 4.0;
+  CHECK(message(c) == "CylindricalMapper: theta_neutral must be in [-pi, pi] rad, got 4");
+  c = Config{};
+  c.force_scale[1] = -inf;
+  CHECK(message(c) == "CylindricalMapper: force_scale[1] must be finite, got -inf");
+}
+
+TEST_CASE_TEMPLATE("float and double give the hand-computed values", Scalar, double, float) {
+  using M = CylindricalMapper<Scalar>;
+  using V3 = typename M::Vector3;
+  const double tol = std::is_same_v<Scalar, float> ? 1e-6 : 1e-12;
+  M mapper;
+  typename M::MotorVector out = M::MotorVector::Zero();
+  const auto result = mapper.map_position(V3(Scalar(0.1), Scalar(0), Scalar(0.2)), out);
+  REQUIRE(result.ok());
+  CHECK(static_cast<double>(out[0]) ==
+        doctest::Approx(0.0066370734936584963).epsilon(tol).scale(1));
+  CHECK(static_cast<double>(out[1]) == doctest::Approx(0.246).epsilon(tol).scale(1));
+  CHECK(static_cast<double>(out[2]) == doctest::Approx(0.1616).epsilon(tol).scale(1));
+  CHECK(static_cast<double>(out[3]) == doctest::Approx(-0.1616).epsilon(tol).scale(1));
+
+  V3 force = V3::Zero();
+  const auto fr = mapper.map_force(
+      typename M::MotorVector(Scalar(4), Scalar(0), Scalar(-3), Scalar(3)), Scalar(0), force);
+  REQUIRE(fr.ok());
+  CHECK(fr.limited);
+  CHECK(static_cast<double>(force.x()) == doctest::Approx(2.0).epsilon(tol));
+  CHECK(static_cast<double>(force.y()) == doctest::Approx(1.5).epsilon(tol));
+}
+
+TEST_CASE("10000 ticks of position and force mapping allocate nothing") {
+  Mapper mapper;
+  Motors setpoint = Motors::Zero();
+  Vector3 force = Vector3::Zero();
+  double sink = 0;
+  const long before = allocations.load();
+  Eigen::internal::set_is_malloc_allowed(false);
+  for (int tick = 0; tick < 10000; ++tick) {
+    const double t = tick * 1e-3;
+    const Vector3 p(0.12 * std::cos(t), 0.12 * std::sin(t), 0.1 + 0.01 * std::sin(3 * t));
+    const auto position = mapper.map_position(p, setpoint);
+    const auto feedback = mapper.map_force(Motors(0.3, -0.2, 0.5, -0.5), force);
+    if (!position.ok() || !feedback.ok()) sink += 1000;
+    sink += setpoint.sum() + force.sum();
+  }
+  Eigen::internal::set_is_malloc_allowed(true);
+  CHECK(allocations.load() == before);
+  CHECK(std::isfinite(sink));
+}
