@@ -1,0 +1,405 @@
+//! @file
+//! LTI state-space models: continuous eq. 4.1 (x' = A x + B u, y = C x + D u), discrete eq. 4.2
+//! (x(k+1) = A x(k) + B u(k), y(k) = C x(k) + D u(k)), ZOH/Tustin discretisation, parallel and
+//! series composition (4.3). Signal units are the model's; sample times in s.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <complex>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <string>
+#include <string_view>
+#include <type_traits>
+#include <unsupported/Eigen/MatrixFunctions>
+
+#include "endohaptics/core/error.hpp"
+
+namespace endohaptics::model {
+
+namespace detail {
+
+//! Throws Error(message); in a -fno-exceptions build prints it and aborts (configuration only).
+[[noreturn]] inline void throw_error(const std::string& message) {
+#if defined(__cpp_exceptions)
+  throw Error(message);
+#else
+  std::fputs(message.c_str(), stderr);
+  std::fputc('\n', stderr);
+  std::abort();
+#endif
+}
+
+//! Formats a number with enough digits to round-trip, for error messages.
+template <typename Scalar>
+std::string format_number(Scalar value) {
+  std::array<char, 64> buffer{};  // shortest representation that reads back to the same value
+  const auto result = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
+  return std::string(buffer.data(), result.ptr);
+}
+
+//! Throws Error naming `what`(row,col) when a matrix holds NaN or +-Inf.
+template <typename Derived>
+void require_finite(const Eigen::MatrixBase<Derived>& m, std::string_view owner,
+                    std::string_view what) {
+  for (Eigen::Index j = 0; j < m.cols(); ++j) {
+    for (Eigen::Index i = 0; i < m.rows(); ++i) {
+      if (!std::isfinite(m(i, j))) {
+        throw_error(std::string(owner) + ": " + std::string(what) + "(" + std::to_string(i) + "," +
+                    std::to_string(j) + ") is not finite (" + format_number(m(i, j)) + ")");
+      }
+    }
+  }
+}
+
+//! Throws Error unless `sample_time` is finite and > 0.
+template <typename Scalar>
+void require_sample_time(Scalar sample_time, std::string_view owner) {
+  if (!std::isfinite(sample_time) || !(sample_time > Scalar(0))) {
+    throw_error(std::string(owner) + ": sample time must be finite and > 0 s, got " +
+                format_number(sample_time));
+  }
+}
+
+//! True when every entry is finite (also for zero-size vectors). Branch-free: x * 0 is 0 for
+//! finite x and NaN for NaN or +-Inf, so the sum is 0 exactly when all entries are finite.
+template <typename Derived>
+bool all_finite(const Eigen::MatrixBase<Derived>& m) noexcept {
+  using Scalar = typename Derived::Scalar;
+  Scalar zero_if_finite(0);
+  for (Eigen::Index i = 0; i < m.size(); ++i) zero_if_finite += m.coeff(i) * Scalar(0);
+  return zero_if_finite == Scalar(0);
+}
+
+//! True when two sample times agree to a few ulps (they are usually computed the same way).
+template <typename Scalar>
+bool same_sample_time(Scalar a, Scalar b) noexcept {
+  return std::abs(a - b) <=
+         Scalar(8) * std::numeric_limits<Scalar>::epsilon() * std::max(std::abs(a), std::abs(b));
+}
+
+}  // namespace detail
+
+//! Outcome of a checked tick (`update`). On anything but `ok` state and output are untouched.
+enum class StepStatus : std::uint8_t {
+  ok = 0,
+  non_finite_input,   //!< NaN or +-Inf in the input vector
+  non_finite_result,  //!< finite input, but the output or next state overflowed (diverging model)
+};
+
+//! Human-readable name of a status, for logs.
+[[nodiscard]] constexpr std::string_view to_string(StepStatus status) noexcept {
+  switch (status) {
+    case StepStatus::ok:
+      return "ok";
+    case StepStatus::non_finite_input:
+      return "non-finite input";
+    case StepStatus::non_finite_result:
+      return "non-finite output or state";
+  }
+  return "unknown status";
+}
+
+//! Discrete-time LTI model (eq. 4.2): x(k+1) = A x(k) + B u(k), y(k) = C x(k) + D u(k).
+//! Nx >= 1 states, Nu >= 0 inputs (Nu == 0: autonomous), Ny >= 1 outputs.
+template <int Nx, int Nu, int Ny, typename Scalar = double>
+class StateSpace {
+  static_assert(Nx >= 1, "StateSpace needs at least one state (Nx >= 1)");
+  static_assert(Nu >= 0, "StateSpace input count must be >= 0");
+  static_assert(Ny >= 1, "StateSpace needs at least one output (Ny >= 1)");
+  static_assert(std::is_floating_point_v<Scalar>, "StateSpace Scalar must be floating point");
+
+ public:
+  static constexpr int states = Nx;
+  static constexpr int inputs = Nu;
+  static constexpr int outputs = Ny;
+  using ScalarType = Scalar;
+  using State = Eigen::Matrix<Scalar, Nx, 1>;
+  using Input = Eigen::Matrix<Scalar, Nu, 1>;
+  using Output = Eigen::Matrix<Scalar, Ny, 1>;
+  using MatrixA = Eigen::Matrix<Scalar, Nx, Nx>;
+  using MatrixB = Eigen::Matrix<Scalar, Nx, Nu>;
+  using MatrixC = Eigen::Matrix<Scalar, Ny, Nx>;
+  using MatrixD = Eigen::Matrix<Scalar, Ny, Nu>;
+  using Eigenvalues = Eigen::Matrix<std::complex<Scalar>, Nx, 1>;
+
+  //! Builds the model with zero initial state. Throws Error on a non-finite matrix entry or a
+  //! sample time that is not finite and > 0 (the message names the entry and the value).
+  StateSpace(const MatrixA& A, const MatrixB& B, const MatrixC& C, const MatrixD& D,
+             Scalar sample_time)
+      : A_(A), B_(B), C_(C), D_(D), sample_time_(sample_time) {
+    detail::require_finite(A_, "StateSpace", "A");
+    detail::require_finite(B_, "StateSpace", "B");
+    detail::require_finite(C_, "StateSpace", "C");
+    detail::require_finite(D_, "StateSpace", "D");
+    detail::require_sample_time(sample_time_, "StateSpace");
+  }
+
+  [[nodiscard]] const MatrixA& A() const noexcept { return A_; }  //!< state matrix
+  [[nodiscard]] const MatrixB& B() const noexcept { return B_; }  //!< input matrix
+  [[nodiscard]] const MatrixC& C() const noexcept { return C_; }  //!< output matrix
+  [[nodiscard]] const MatrixD& D() const noexcept { return D_; }  //!< feedthrough matrix
+  //! Sample time the model was identified or discretised at, s.
+  [[nodiscard]] Scalar sample_time() const noexcept { return sample_time_; }
+  //! Current state x(k).
+  [[nodiscard]] const State& state() const noexcept { return x_; }
+
+  //! Sets the state to `x0` (zero by default).
+  void reset(const State& x0 = State::Zero()) noexcept { x_ = x0; }
+
+  //! y(k) = C x(k) + D u(k) at the current state; does not advance.
+  [[nodiscard]] Output output(const Input& u) const noexcept {
+    Output y = C_ * x_;
+    if constexpr (Nu > 0) y.noalias() += D_ * u;
+    return y;
+  }
+
+  //! One tick: returns y(k) = C x(k) + D u(k), then advances x(k+1) = A x(k) + B u(k).
+  //! A NaN/Inf input propagates into the state (no UB); `reset` recovers.
+  Output step(const Input& u) noexcept {
+    const Output y = output(u);
+    State next = A_ * x_;
+    if constexpr (Nu > 0) next.noalias() += B_ * u;
+    x_ = next;
+    return y;
+  }
+
+  //! Checked tick: like `step`, but refuses a non-finite input or result. Writes y(k) into `y`
+  //! and advances only on `ok`; otherwise state and `y` are untouched.
+  [[nodiscard]] StepStatus update(const Input& u, Output& y) noexcept {
+    if (!detail::all_finite(u)) return StepStatus::non_finite_input;
+    const Output y_now = output(u);
+    State next = A_ * x_;
+    if constexpr (Nu > 0) next.noalias() += B_ * u;
+    if (!detail::all_finite(y_now) || !detail::all_finite(next)) {
+      return StepStatus::non_finite_result;
+    }
+    y = y_now;
+    x_ = next;
+    return StepStatus::ok;
+  }
+
+  //! Steps once per input column from the current state (like scipy.signal.dlsim) and returns
+  //! one output column per sample; the state is left at x(k + N).
+  template <int N>
+  [[nodiscard]] Eigen::Matrix<Scalar, Ny, N> simulate(
+      const Eigen::Matrix<Scalar, Nu, N>& inputs_per_sample) noexcept {
+    static_assert(N >= 1, "simulate needs a fixed number N >= 1 of samples");
+    Eigen::Matrix<Scalar, Ny, N> y;
+    for (int k = 0; k < N; ++k) y.col(k) = step(inputs_per_sample.col(k));
+    return y;
+  }
+
+  //! Eigenvalues (poles) of A. Configuration time: throws Error if the QR iteration fails.
+  [[nodiscard]] Eigenvalues eigenvalues() const {
+    Eigen::EigenSolver<MatrixA> solver(A_, /*computeEigenvectors=*/false);
+    if (solver.info() != Eigen::Success) {
+      detail::throw_error("StateSpace: eigenvalue computation of A did not converge");
+    }
+    return solver.eigenvalues();
+  }
+
+  //! max |lambda_i(A)|: the model is asymptotically stable when this is < 1.
+  [[nodiscard]] Scalar spectral_radius() const { return eigenvalues().cwiseAbs().maxCoeff(); }
+
+  //! True when every pole lies strictly inside the unit circle.
+  [[nodiscard]] bool is_stable() const { return spectral_radius() < Scalar(1); }
+
+  //! Steady-state gain C (I - A)^-1 B + D (Ny x Nu). Throws Error if I - A is singular
+  //! (a pole at z = 1, e.g. an integrator).
+  [[nodiscard]] MatrixD dc_gain() const {
+    const MatrixA I_minus_A = MatrixA::Identity() - A_;
+    const Eigen::FullPivLU<MatrixA> lu(I_minus_A);
+    if (!lu.isInvertible()) {
+      detail::throw_error("StateSpace: DC gain undefined, I - A is singular (rank " +
+                          std::to_string(lu.rank()) + " of " + std::to_string(Nx) +
+                          "; A has a pole at z = 1)");
+    }
+    if constexpr (Nu == 0) {
+      return MatrixD{};
+    } else {
+      const MatrixB X = lu.solve(B_);
+      return C_ * X + D_;
+    }
+  }
+
+ private:
+  MatrixA A_;
+  MatrixB B_;
+  MatrixC C_;
+  MatrixD D_;
+  Scalar sample_time_;
+  State x_ = State::Zero();
+};
+
+//! Continuous-time LTI model (eq. 4.1): x' = A x + B u, y = C x + D u. Only a description to
+//! be discretised with `discretize_zoh` or `discretize_tustin`; it has no state.
+template <int Nx, int Nu, int Ny, typename Scalar = double>
+class ContinuousStateSpace {
+  static_assert(Nx >= 1, "ContinuousStateSpace needs at least one state (Nx >= 1)");
+  static_assert(Nu >= 0, "ContinuousStateSpace input count must be >= 0");
+  static_assert(Ny >= 1, "ContinuousStateSpace needs at least one output (Ny >= 1)");
+  static_assert(std::is_floating_point_v<Scalar>,
+                "ContinuousStateSpace Scalar must be floating point");
+
+ public:
+  static constexpr int states = Nx;
+  static constexpr int inputs = Nu;
+  static constexpr int outputs = Ny;
+  using ScalarType = Scalar;
+  using State = Eigen::Matrix<Scalar, Nx, 1>;
+  using Input = Eigen::Matrix<Scalar, Nu, 1>;
+  using Output = Eigen::Matrix<Scalar, Ny, 1>;
+  using MatrixA = Eigen::Matrix<Scalar, Nx, Nx>;
+  using MatrixB = Eigen::Matrix<Scalar, Nx, Nu>;
+  using MatrixC = Eigen::Matrix<Scalar, Ny, Nx>;
+  using MatrixD = Eigen::Matrix<Scalar, Ny, Nu>;
+
+  //! Throws Error on a non-finite matrix entry (the message names the entry and the value).
+  ContinuousStateSpace(const MatrixA& A, const MatrixB& B, const MatrixC& C, const MatrixD& D)
+      : A_(A), B_(B), C_(C), D_(D) {
+    detail::require_finite(A_, "ContinuousStateSpace", "A");
+    detail::require_finite(B_, "ContinuousStateSpace", "B");
+    detail::require_finite(C_, "ContinuousStateSpace", "C");
+    detail::require_finite(D_, "ContinuousStateSpace", "D");
+  }
+
+  [[nodiscard]] const MatrixA& A() const noexcept { return A_; }  //!< state matrix, 1/s
+  [[nodiscard]] const MatrixB& B() const noexcept { return B_; }  //!< input matrix
+  [[nodiscard]] const MatrixC& C() const noexcept { return C_; }  //!< output matrix
+  [[nodiscard]] const MatrixD& D() const noexcept { return D_; }  //!< feedthrough matrix
+
+ private:
+  MatrixA A_;
+  MatrixB B_;
+  MatrixC C_;
+  MatrixD D_;
+};
+
+//! Zero-order-hold discretisation (scipy cont2discrete 'zoh'): Van Loan's block exponential
+//! expm([[A, B], [0, 0]] Ts) = [[Ad, Bd], [0, I]]; Cd = C, Dd = D. Throws Error on a bad Ts.
+template <int Nx, int Nu, int Ny, typename Scalar>
+[[nodiscard]] StateSpace<Nx, Nu, Ny, Scalar> discretize_zoh(
+    const ContinuousStateSpace<Nx, Nu, Ny, Scalar>& continuous, Scalar sample_time) {
+  detail::require_sample_time(sample_time, "discretize_zoh");
+  constexpr int n = Nx + Nu;
+  Eigen::Matrix<Scalar, n, n> M = Eigen::Matrix<Scalar, n, n>::Zero();
+  M.template topLeftCorner<Nx, Nx>() = continuous.A() * sample_time;
+  if constexpr (Nu > 0) M.template topRightCorner<Nx, Nu>() = continuous.B() * sample_time;
+  const Eigen::Matrix<Scalar, n, n> E = M.exp();
+  typename StateSpace<Nx, Nu, Ny, Scalar>::MatrixB Bd;
+  if constexpr (Nu > 0) Bd = E.template topRightCorner<Nx, Nu>();
+  return StateSpace<Nx, Nu, Ny, Scalar>(E.template topLeftCorner<Nx, Nx>(), Bd, continuous.C(),
+                                        continuous.D(), sample_time);
+}
+
+//! Tustin (bilinear) discretisation, as scipy cont2discrete 'bilinear' (gbt, alpha = 1/2):
+//! M = I - A Ts/2, Ad = M^-1 (I + A Ts/2), Bd = M^-1 B Ts, Cd = C M^-1, Dd = D + C Bd / 2.
+//! Throws Error on a bad Ts or when I - A Ts/2 is singular (a pole at s = 2/Ts).
+template <int Nx, int Nu, int Ny, typename Scalar>
+[[nodiscard]] StateSpace<Nx, Nu, Ny, Scalar> discretize_tustin(
+    const ContinuousStateSpace<Nx, Nu, Ny, Scalar>& continuous, Scalar sample_time) {
+  detail::require_sample_time(sample_time, "discretize_tustin");
+  using SS = StateSpace<Nx, Nu, Ny, Scalar>;
+  const Scalar half = sample_time / Scalar(2);
+  const typename SS::MatrixA I = SS::MatrixA::Identity();
+  const typename SS::MatrixA M = I - continuous.A() * half;
+  const Eigen::FullPivLU<typename SS::MatrixA> lu(M);
+  if (!lu.isInvertible()) {
+    detail::throw_error("discretize_tustin: I - A Ts/2 is singular for Ts = " +
+                        detail::format_number(sample_time) + " s (A has an eigenvalue at 2/Ts)");
+  }
+  const typename SS::MatrixA Ad = lu.solve(I + continuous.A() * half);
+  typename SS::MatrixB Bd;
+  typename SS::MatrixD Dd = continuous.D();
+  if constexpr (Nu > 0) {
+    Bd = lu.solve(continuous.B() * sample_time);
+    Dd += continuous.C() * Bd / Scalar(2);
+  }
+  // Cd = C M^-1, i.e. the solution of M^T Cd^T = C^T.
+  const typename SS::MatrixC Cd = Eigen::FullPivLU<typename SS::MatrixA>(M.transpose())
+                                      .solve(continuous.C().transpose())
+                                      .transpose();
+  return SS(Ad, Bd, Cd, Dd, sample_time);
+}
+
+//! Parallel (block-diagonal) composition, worksheet eq. 4.3: states, inputs and outputs are
+//! stacked [first; second]. The result starts from the stacked current states.
+//! Throws Error when the sample times differ.
+template <int Nx1, int Nu1, int Ny1, int Nx2, int Nu2, int Ny2, typename Scalar>
+[[nodiscard]] StateSpace<Nx1 + Nx2, Nu1 + Nu2, Ny1 + Ny2, Scalar> parallel(
+    const StateSpace<Nx1, Nu1, Ny1, Scalar>& first,
+    const StateSpace<Nx2, Nu2, Ny2, Scalar>& second) {
+  if (!detail::same_sample_time(first.sample_time(), second.sample_time())) {
+    detail::throw_error("parallel: sample times differ (" +
+                        detail::format_number(first.sample_time()) + " s and " +
+                        detail::format_number(second.sample_time()) + " s)");
+  }
+  using SS = StateSpace<Nx1 + Nx2, Nu1 + Nu2, Ny1 + Ny2, Scalar>;
+  typename SS::MatrixA A = SS::MatrixA::Zero();
+  typename SS::MatrixB B = SS::MatrixB::Zero();
+  typename SS::MatrixC C = SS::MatrixC::Zero();
+  typename SS::MatrixD D = SS::MatrixD::Zero();
+  A.template topLeftCorner<Nx1, Nx1>() = first.A();
+  A.template bottomRightCorner<Nx2, Nx2>() = second.A();
+  if constexpr (Nu1 > 0) {
+    B.template topLeftCorner<Nx1, Nu1>() = first.B();
+    D.template topLeftCorner<Ny1, Nu1>() = first.D();
+  }
+  if constexpr (Nu2 > 0) {
+    B.template bottomRightCorner<Nx2, Nu2>() = second.B();
+    D.template bottomRightCorner<Ny2, Nu2>() = second.D();
+  }
+  C.template topLeftCorner<Ny1, Nx1>() = first.C();
+  C.template bottomRightCorner<Ny2, Nx2>() = second.C();
+  SS result(A, B, C, D, first.sample_time());
+  typename SS::State x0;
+  x0 << first.state(), second.state();
+  result.reset(x0);
+  return result;
+}
+
+//! Series composition: the output of `first` feeds the input of `second` (y = G2 G1 u). State
+//! [x1; x2]; A = [[A1, 0], [B2 C1, A2]], B = [B1; B2 D1], C = [D2 C1, C2], D = D2 D1.
+//! Requires Ny1 == Nu2. The result starts from the stacked current states. Throws Error when
+//! the sample times differ.
+template <int Nx1, int Nu1, int Ny1, int Nx2, int Nu2, int Ny2, typename Scalar>
+requires(Ny1 == Nu2) [[nodiscard]] StateSpace<Nx1 + Nx2, Nu1, Ny2, Scalar> series(
+    const StateSpace<Nx1, Nu1, Ny1, Scalar>& first,
+    const StateSpace<Nx2, Nu2, Ny2, Scalar>& second) {
+  if (!detail::same_sample_time(first.sample_time(), second.sample_time())) {
+    detail::throw_error("series: sample times differ (" +
+                        detail::format_number(first.sample_time()) + " s and " +
+                        detail::format_number(second.sample_time()) + " s)");
+  }
+  using SS = StateSpace<Nx1 + Nx2, Nu1, Ny2, Scalar>;
+  typename SS::MatrixA A = SS::MatrixA::Zero();
+  typename SS::MatrixB B = SS::MatrixB::Zero();
+  typename SS::MatrixC C;
+  typename SS::MatrixD D = SS::MatrixD::Zero();
+  A.template topLeftCorner<Nx1, Nx1>() = first.A();
+  A.template bottomLeftCorner<Nx2, Nx1>() = second.B() * first.C();
+  A.template bottomRightCorner<Nx2, Nx2>() = second.A();
+  C.template leftCols<Nx1>() = second.D() * first.C();
+  C.template rightCols<Nx2>() = second.C();
+  if constexpr (Nu1 > 0) {
+    B.template topRows<Nx1>() = first.B();
+    B.template bottomRows<Nx2>() = second.B() * first.D();
+    D = second.D() * first.D();
+  }
+  SS result(A, B, C, D, first.sample_time());
+  typename SS::State x0;
+  x0 << first.state(), second.state();
+  result.reset(x0);
+  return result;
+}
+
+}  // namespace endohaptics::model

@@ -1,0 +1,421 @@
+#include "endohaptics/model/state_space.hpp"
+
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <string>
+
+namespace {
+
+using endohaptics::Error;
+using endohaptics::model::ContinuousStateSpace;
+using endohaptics::model::discretize_tustin;
+using endohaptics::model::discretize_zoh;
+using endohaptics::model::StateSpace;
+using endohaptics::model::StepStatus;
+
+// Entry-wise |actual - expected| <= tol, reporting the entry that fails.
+template <typename A, typename B>
+void check_close(const A& actual, const B& expected, double tol) {
+  REQUIRE(actual.rows() == expected.rows());
+  REQUIRE(actual.cols() == expected.cols());
+  for (Eigen::Index i = 0; i < actual.rows(); ++i) {
+    for (Eigen::Index j = 0; j < actual.cols(); ++j) {
+      INFO("entry (" << i << "," << j << "): " << actual(i, j) << " vs " << expected(i, j));
+      CHECK(std::abs(static_cast<double>(actual(i, j)) - static_cast<double>(expected(i, j))) <=
+            tol);
+    }
+  }
+}
+
+template <typename M>
+M random_matrix(std::mt19937_64& rng, double scale = 1.0) {
+  std::uniform_real_distribution<double> dist(-scale, scale);
+  M m;
+  for (Eigen::Index i = 0; i < m.size(); ++i) {
+    m.data()[i] = static_cast<typename M::Scalar>(dist(rng));
+  }
+  return m;
+}
+
+template <typename SS>
+SS random_model(std::mt19937_64& rng) {
+  // Scale A so the model stays bounded over the short runs below.
+  return SS(random_matrix<typename SS::MatrixA>(rng, 0.9 / SS::states),
+            random_matrix<typename SS::MatrixB>(rng), random_matrix<typename SS::MatrixC>(rng),
+            random_matrix<typename SS::MatrixD>(rng), typename SS::ScalarType(0.01));
+}
+
+template <typename E>
+std::string message_of(E&& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "(no exception)";
+}
+
+// Mass-spring-damper x'' = -4 x - 0.4 x' + u, y = x.
+using Msd = ContinuousStateSpace<2, 1, 1>;
+Msd msd() {
+  Msd::MatrixA A{{0.0, 1.0}, {-4.0, -0.4}};
+  return Msd(A, Msd::MatrixB{{0.0}, {1.0}}, Msd::MatrixC{{1.0, 0.0}}, Msd::MatrixD::Zero());
+}
+
+}  // namespace
+
+// Reference numbers: /usr/bin/python3 (scipy 1.10.1); the full script is in
+// docs/models/state_space.md ("Reproducing the reference numbers"); the relevant lines:
+//   A=[[0,1],[-4,-0.4]]; B=[[0],[1]]; C=[[1,0]]; D=[[0]]
+//   scipy.signal.cont2discrete((A,B,C,D), 0.1, method='zoh' | 'bilinear')
+// printed with np.set_printoptions(precision=17, floatmode='unique').
+TEST_CASE("discretize_zoh matches scipy cont2discrete 'zoh' (mass-spring-damper, Ts = 0.1 s)") {
+  const auto d = discretize_zoh(msd(), 0.1);
+  check_close(d.A(),
+              Eigen::Matrix2d{{0.9803295444599633, 0.09737421592285536},
+                              {-0.38949686369142156, 0.9413798580908213}},
+              1e-14);
+  check_close(d.B(), Eigen::Vector2d{0.004917613885009153, 0.09737421592285538}, 1e-14);
+  check_close(d.C(), Eigen::RowVector2d{1.0, 0.0}, 0.0);
+  check_close(d.D(), Eigen::Matrix<double, 1, 1>{0.0}, 0.0);
+  CHECK(d.sample_time() == 0.1);
+}
+
+TEST_CASE("discretize_tustin matches scipy cont2discrete 'bilinear' (mass-spring-damper)") {
+  const auto d = discretize_tustin(msd(), 0.1);
+  check_close(d.A(),
+              Eigen::Matrix2d{{0.9805825242718447, 0.0970873786407767},
+                              {-0.3883495145631068, 0.9417475728155339}},
+              1e-14);
+  check_close(d.B(), Eigen::Vector2d{0.004854368932038835, 0.0970873786407767}, 1e-14);
+  check_close(d.C(), Eigen::RowVector2d{0.9902912621359223, 0.04854368932038835}, 1e-14);
+  check_close(d.D(), Eigen::Matrix<double, 1, 1>{0.0024271844660194177}, 1e-15);
+}
+
+// scipy: A3=[[-1,2,0],[-2,-1,0.5],[0,0,-3]]; B3=[[1,0],[0,2],[0.5,-1]];
+// C3=[[1,0,1],[0,1,-1]]; D3=[[0.1,0],[0,-0.2]]; cont2discrete(..., 0.05, method=...).
+TEST_CASE("3 states, 2 inputs, 2 outputs with feedthrough: zoh and bilinear match scipy") {
+  using Css = ContinuousStateSpace<3, 2, 2>;
+  const Css c(Css::MatrixA{{-1.0, 2.0, 0.0}, {-2.0, -1.0, 0.5}, {0.0, 0.0, -3.0}},
+              Css::MatrixB{{1.0, 0.0}, {0.0, 2.0}, {0.5, -1.0}},
+              Css::MatrixC{{1.0, 0.0, 1.0}, {0.0, 1.0, -1.0}},
+              Css::MatrixD{{0.1, 0.0}, {0.0, -0.2}});
+  SUBCASE("zoh") {
+    const auto d = discretize_zoh(c, 0.05);
+    check_close(d.A(),
+                Eigen::Matrix3d{{0.9464772395132298, 0.09496448346290236, 0.001149402546841297},
+                                {-0.09496448346290234, 0.9464772395132298, 0.02259171831888429},
+                                {0.0, 0.0, 0.8607079764250578}},
+                1e-14);
+    check_close(d.B(),
+                Eigen::Matrix<double, 3, 2>{{0.04870012901655207, 0.004812847936181071},
+                                            {-0.002123965098398754, 0.09679620615757224},
+                                            {0.023215337262490365, -0.04643067452498073}},
+                1e-14);
+    check_close(d.C(), c.C(), 0.0);
+    check_close(d.D(), c.D(), 0.0);
+  }
+  SUBCASE("bilinear") {
+    const auto d = discretize_tustin(c, 0.05);
+    check_close(d.A(),
+                Eigen::Matrix3d{{0.9465875370919882, 0.09495548961424334, 0.0011041336001656203},
+                                {-0.09495548961424334, 0.9465875370919882, 0.022634738803395216},
+                                {0.0, 0.0, 0.8604651162790699}},
+                1e-14);
+    check_close(d.B(),
+                Eigen::Matrix<double, 3, 2>{{0.048678490097301776, 0.004720171140708027},
+                                            {-0.0020909530053136436, 0.09676350838451454},
+                                            {0.023255813953488375, -0.04651162790697675}},
+                1e-14);
+    check_close(d.C(),
+                Eigen::Matrix<double, 2, 3>{
+                    {0.9732937685459943, 0.04747774480712168, 0.9307846249396178},
+                    {-0.04747774480712167, 0.9732937685459941, -0.9189151887378373}},
+                1e-14);
+    check_close(d.D(),
+                Eigen::Matrix2d{{0.13596715202539508, -0.02089572838313436},
+                                {-0.01267338347940101, -0.12836243185425436}},
+                1e-14);
+  }
+}
+
+// scipy: A0=[[0,1],[-1,0]], no inputs, Ts = 0.5: zoh gives the rotation by 0.5 rad
+// [[cos .5, sin .5], [-sin .5, cos .5]]; 'bilinear' gives [[15/17, 8/17], [-8/17, 15/17]].
+TEST_CASE("autonomous model (Nu == 0): harmonic oscillator discretised and stepped") {
+  using Css = ContinuousStateSpace<2, 0, 1>;
+  const Css c(Css::MatrixA{{0.0, 1.0}, {-1.0, 0.0}}, Css::MatrixB{}, Css::MatrixC{{1.0, 0.0}},
+              Css::MatrixD{});
+  auto zoh = discretize_zoh(c, 0.5);
+  check_close(zoh.A(),
+              Eigen::Matrix2d{{0.8775825618903728, 0.479425538604203},
+                              {-0.479425538604203, 0.8775825618903728}},
+              1e-15);
+  check_close(discretize_tustin(c, 0.5).A(),
+              Eigen::Matrix2d{{15.0 / 17.0, 8.0 / 17.0}, {-8.0 / 17.0, 15.0 / 17.0}}, 1e-15);
+  // x(k) = rotation by -0.5 k rad of x(0) = [1, 0]: y(k) = cos(0.5 k).
+  zoh.reset(Eigen::Vector2d{1.0, 0.0});
+  for (int k = 0; k < 20; ++k) {
+    CHECK(zoh.step(StateSpace<2, 0, 1>::Input{})[0] == doctest::Approx(std::cos(0.5 * k)));
+  }
+  CHECK(zoh.spectral_radius() == doctest::Approx(1.0).epsilon(1e-12));
+  CHECK(zoh.dc_gain().size() == 0);
+}
+
+// scipy: Ad=[[0.9,0.1,0],[-0.2,0.8,0.05],[0,0.1,0.5]]; Bd=[[1,0],[0,0.5],[0.2,-0.3]];
+// Cd=[[1,-1,0],[0,0.5,2]]; Dd=[[0,0.1],[0.2,0]];
+// u=[[1,0],[0.5,-1],[0,2],[-1,0.25],[0.3,0.3],[2,-0.5]]; x0=[0.1,-0.2,0.3]
+// t, y, x = scipy.signal.dlsim((Ad,Bd,Cd,Dd,0.01), u, x0=x0); x_end = Ad@x[-1] + Bd@u[-1];
+// dc = Cd @ solve(I - Ad, Bd) + Dd; eig = scipy.linalg.eigvals(Ad).
+TEST_CASE("simulate matches scipy dlsim; dc_gain, eigenvalues and spectral radius match scipy") {
+  using SS = StateSpace<3, 2, 2>;
+  SS model(SS::MatrixA{{0.9, 0.1, 0.0}, {-0.2, 0.8, 0.05}, {0.0, 0.1, 0.5}},
+           SS::MatrixB{{1.0, 0.0}, {0.0, 0.5}, {0.2, -0.3}},
+           SS::MatrixC{{1.0, -1.0, 0.0}, {0.0, 0.5, 2.0}}, SS::MatrixD{{0.0, 0.1}, {0.2, 0.0}},
+           0.01);
+  model.reset(SS::State{0.1, -0.2, 0.3});
+  const Eigen::Matrix<double, 2, 6> u{{1.0, 0.5, 0.0, -1.0, 0.3, 2.0},
+                                      {0.0, -1.0, 2.0, 0.25, 0.3, -0.5}};
+  const Eigen::Matrix<double, 2, 6> y = model.simulate(u);
+  const Eigen::Matrix<double, 2, 6> y_scipy{
+      {0.30000000000000004, 1.135, 2.4760000000000004, 1.1693750000000003, 0.21405750000000015,
+       0.2942201250000001},
+      {0.7, 0.6775, 0.6822499999999999, -0.9801375000000001, -0.9235925000000003,
+       -0.12689818750000026}};
+  check_close(y, y_scipy, 1e-14);
+  check_close(model.state(), SS::State{2.3516347375, -0.30743746250000015, 0.4172295375}, 1e-14);
+
+  check_close(
+      model.dc_gain(),
+      Eigen::Matrix2d{{10.0, 0.10000000000000045}, {-3.56923076923077, -0.11538461538461542}},
+      1e-13);
+  const auto ev = model.eigenvalues();
+  // One real pole 0.48619313135802755 and the pair 0.8569034343209867 +- 0.13219446373038038i.
+  int real_poles = 0;
+  for (int i = 0; i < 3; ++i) {
+    if (std::abs(ev[i].imag()) < 1e-12) {
+      ++real_poles;
+      CHECK(ev[i].real() == doctest::Approx(0.48619313135802755).epsilon(1e-13));
+    } else {
+      CHECK(ev[i].real() == doctest::Approx(0.8569034343209867).epsilon(1e-13));
+      CHECK(std::abs(ev[i].imag()) == doctest::Approx(0.13219446373038038).epsilon(1e-12));
+    }
+  }
+  CHECK(real_poles == 1);
+  CHECK(model.spectral_radius() == doctest::Approx(0.8670402943301219).epsilon(1e-13));
+  CHECK(model.is_stable());
+}
+
+TEST_CASE("dc_gain throws when I - A is singular (integrator), is_stable is false at |z| = 1") {
+  using SS = StateSpace<2, 1, 1>;
+  const SS integrator(SS::MatrixA{{1.0, 0.0}, {0.0, 0.5}}, SS::MatrixB{{1.0}, {1.0}},
+                      SS::MatrixC{{1.0, 1.0}}, SS::MatrixD::Zero(), 0.01);
+  CHECK_THROWS_AS((void)integrator.dc_gain(), Error);
+  CHECK(message_of([&] { (void)integrator.dc_gain(); }).find("singular") != std::string::npos);
+  CHECK_FALSE(integrator.is_stable());
+  CHECK(integrator.spectral_radius() == doctest::Approx(1.0));
+}
+
+TEST_CASE("invalid construction throws Error naming the entry and the value") {
+  using SS = StateSpace<2, 1, 1>;
+  SS::MatrixA A = SS::MatrixA::Identity() * 0.5;
+  const SS::MatrixB B = SS::MatrixB::Ones();
+  const SS::MatrixC C = SS::MatrixC::Ones();
+  const SS::MatrixD D = SS::MatrixD::Zero();
+  CHECK_NOTHROW(SS(A, B, C, D, 0.02));
+
+  A(1, 0) = std::numeric_limits<double>::quiet_NaN();
+  const std::string nan_message = message_of([&] { SS(A, B, C, D, 0.02); });
+  CHECK(nan_message.find("A(1,0)") != std::string::npos);
+  CHECK(nan_message.find("nan") != std::string::npos);
+
+  SS::MatrixD bad_d = D;
+  bad_d(0, 0) = -std::numeric_limits<double>::infinity();
+  CHECK(message_of([&] { SS(SS::MatrixA::Zero(), B, C, bad_d, 0.02); }).find("D(0,0)") !=
+        std::string::npos);
+
+  CHECK(message_of([&] { SS(SS::MatrixA::Zero(), B, C, D, -0.5); }).find("-0.5") !=
+        std::string::npos);
+  CHECK_THROWS_AS(SS(SS::MatrixA::Zero(), B, C, D, 0.0), Error);
+  CHECK_THROWS_AS(SS(SS::MatrixA::Zero(), B, C, D, std::numeric_limits<double>::infinity()), Error);
+  CHECK_THROWS_AS(SS(SS::MatrixA::Zero(), B, C, D, std::numeric_limits<double>::quiet_NaN()),
+                  Error);
+  CHECK(message_of([&] { (void)discretize_zoh(msd(), 0.0); }).find("sample time") !=
+        std::string::npos);
+  CHECK_THROWS_AS((void)discretize_tustin(msd(), -1.0), Error);
+
+  using Css = ContinuousStateSpace<1, 1, 1>;
+  CHECK(message_of([&] {
+          Css(Css::MatrixA{{1.0}}, Css::MatrixB{{std::numeric_limits<double>::infinity()}},
+              Css::MatrixC{{1.0}}, Css::MatrixD{{0.0}});
+        }).find("B(0,0)") != std::string::npos);
+  // Tustin is undefined when A has an eigenvalue at 2/Ts (here 20 1/s with Ts = 0.1 s).
+  CHECK(message_of([] {
+          (void)discretize_tustin(Css(Css::MatrixA{{20.0}}, Css::MatrixB{{1.0}},
+                                      Css::MatrixC{{1.0}}, Css::MatrixD{{0.0}}),
+                                  0.1);
+        }).find("singular") != std::string::npos);
+}
+
+TEST_CASE_TEMPLATE("step, output, simulate and update follow eq. 4.2 entry by entry", SS,
+                   StateSpace<1, 1, 1>, StateSpace<2, 0, 1>, StateSpace<3, 2, 2>,
+                   StateSpace<4, 1, 3>, StateSpace<6, 2, 1>, StateSpace<5, 3, 2, float>) {
+  using Scalar = typename SS::ScalarType;
+  constexpr int nx = SS::states, nu = SS::inputs, ny = SS::outputs;
+  const double tol = std::is_same_v<Scalar, float> ? 1e-5 : 1e-13;
+  std::mt19937_64 rng(4242 + nx * 100 + nu * 10 + ny);
+  SS model = random_model<SS>(rng);
+  const auto x0 = random_matrix<typename SS::State>(rng);
+  model.reset(x0);
+  CHECK(model.state() == x0);
+
+  // Hand loop (no Eigen products) of x+ = A x + B u, y = C x + D u.
+  Eigen::Matrix<double, nx, 1> x = x0.template cast<double>();
+  for (int k = 0; k < 50; ++k) {
+    const auto u = random_matrix<typename SS::Input>(rng);
+    Eigen::Matrix<double, ny, 1> y_hand;
+    for (int i = 0; i < ny; ++i) {
+      double acc = 0;
+      for (int j = 0; j < nx; ++j) acc += double(model.C()(i, j)) * x[j];
+      for (int j = 0; j < nu; ++j) acc += double(model.D()(i, j)) * double(u[j]);
+      y_hand[i] = acc;
+    }
+    Eigen::Matrix<double, nx, 1> x_next;
+    for (int i = 0; i < nx; ++i) {
+      double acc = 0;
+      for (int j = 0; j < nx; ++j) acc += double(model.A()(i, j)) * x[j];
+      for (int j = 0; j < nu; ++j) acc += double(model.B()(i, j)) * double(u[j]);
+      x_next[i] = acc;
+    }
+    const typename SS::State before = model.state();
+    check_close(model.output(u), y_hand, tol);
+    CHECK(model.state() == before);  // output() does not advance
+    check_close(model.step(u), y_hand, tol);
+    check_close(model.state(), x_next, tol);
+    x = model.state().template cast<double>();  // re-anchor to keep float drift out
+  }
+
+  SUBCASE("simulate equals repeated steps and leaves the final state") {
+    const auto inputs = random_matrix<Eigen::Matrix<Scalar, nu, 8>>(rng);
+    SS copy = model;
+    const Eigen::Matrix<Scalar, ny, 8> y = model.simulate(inputs);
+    for (int k = 0; k < 8; ++k) check_close(y.col(k), copy.step(inputs.col(k)), 0.0);
+    check_close(model.state(), copy.state(), 0.0);
+  }
+  SUBCASE("update equals step on finite data and refuses non-finite data untouched") {
+    SS copy = model;
+    const auto u = random_matrix<typename SS::Input>(rng);
+    typename SS::Output y = SS::Output::Constant(Scalar(7));
+    REQUIRE(model.update(u, y) == StepStatus::ok);
+    check_close(y, copy.step(u), 0.0);
+    check_close(model.state(), copy.state(), 0.0);
+    if constexpr (nu > 0) {
+      typename SS::Input bad = u;
+      bad[nu - 1] = std::numeric_limits<Scalar>::quiet_NaN();
+      const typename SS::State before = model.state();
+      typename SS::Output untouched = SS::Output::Constant(Scalar(7));
+      CHECK(model.update(bad, untouched) == StepStatus::non_finite_input);
+      CHECK(model.state() == before);
+      CHECK(untouched == SS::Output::Constant(Scalar(7)));
+      // step() does not check: NaN reaches the state (documented), reset recovers.
+      (void)model.step(bad);
+      CHECK_FALSE(model.state().allFinite());
+      model.reset();
+      CHECK(model.state().isZero());
+    }
+  }
+  SUBCASE("a diverging model reports non_finite_result instead of storing Inf") {
+    using Scalar_ = Scalar;
+    SS big(SS::MatrixA::Identity() * std::numeric_limits<Scalar_>::max(), SS::MatrixB::Zero(),
+           SS::MatrixC::Identity(), SS::MatrixD::Zero(), Scalar_(1));
+    big.reset(SS::State::Constant(Scalar_(4)));
+    typename SS::Output y = SS::Output::Zero();
+    CHECK(big.update(SS::Input::Zero(), y) == StepStatus::non_finite_result);
+    CHECK(big.state() == SS::State::Constant(Scalar_(4)));
+  }
+}
+
+TEST_CASE("parallel: block-diagonal A, stacked inputs and outputs (hand result)") {
+  using S1 = StateSpace<1, 1, 1>;
+  using S2 = StateSpace<1, 1, 1>;
+  S1 g1(S1::MatrixA{{0.5}}, S1::MatrixB{{1.0}}, S1::MatrixC{{2.0}}, S1::MatrixD{{0.1}}, 0.02);
+  S2 g2(S2::MatrixA{{-0.3}}, S2::MatrixB{{2.0}}, S2::MatrixC{{1.0}}, S2::MatrixD{{0.0}}, 0.02);
+  g1.reset(S1::State{1.0});
+  g2.reset(S2::State{-2.0});
+  auto p = endohaptics::model::parallel(g1, g2);
+  static_assert(std::is_same_v<decltype(p), StateSpace<2, 2, 2>>);
+  check_close(p.A(), Eigen::Matrix2d{{0.5, 0.0}, {0.0, -0.3}}, 0.0);
+  check_close(p.B(), Eigen::Matrix2d{{1.0, 0.0}, {0.0, 2.0}}, 0.0);
+  check_close(p.C(), Eigen::Matrix2d{{2.0, 0.0}, {0.0, 1.0}}, 0.0);
+  check_close(p.D(), Eigen::Matrix2d{{0.1, 0.0}, {0.0, 0.0}}, 0.0);
+  check_close(p.state(), Eigen::Vector2d{1.0, -2.0}, 0.0);
+  // y1 = 2 * 1 + 0.1 * 3 = 2.3, y2 = 1 * -2 = -2; then x = [0.5 + 3, 0.6 + 2 * -1].
+  check_close(p.step(Eigen::Vector2d{3.0, -1.0}), Eigen::Vector2d{2.3, -2.0}, 1e-15);
+  check_close(p.state(), Eigen::Vector2d{3.5, -1.4}, 1e-15);
+
+  // With an autonomous part: inputs are only those of the first model.
+  using S0 = StateSpace<2, 0, 1>;
+  const S0 osc(S0::MatrixA{{0.0, 1.0}, {-1.0, 0.0}}, S0::MatrixB{}, S0::MatrixC{{1.0, 0.0}},
+               S0::MatrixD{}, 0.02);
+  const auto q = endohaptics::model::parallel(g1, osc);
+  static_assert(std::is_same_v<std::remove_const_t<decltype(q)>, StateSpace<3, 1, 2>>);
+  check_close(q.B(), Eigen::Vector3d{1.0, 0.0, 0.0}, 0.0);
+  check_close(q.A().bottomRightCorner<2, 2>(), osc.A(), 0.0);
+
+  S2 other_rate(S2::MatrixA{{0.1}}, S2::MatrixB{{1.0}}, S2::MatrixC{{1.0}}, S2::MatrixD{{0.0}},
+                0.01);
+  CHECK(message_of([&] { (void)endohaptics::model::parallel(g1, other_rate); }).find("0.01") !=
+        std::string::npos);
+}
+
+TEST_CASE("series: y of the first feeds u of the second (hand result and simulation)") {
+  using S1 = StateSpace<1, 1, 1>;
+  const S1 g1(S1::MatrixA{{0.5}}, S1::MatrixB{{1.0}}, S1::MatrixC{{2.0}}, S1::MatrixD{{0.1}}, 0.02);
+  const S1 g2(S1::MatrixA{{-0.3}}, S1::MatrixB{{2.0}}, S1::MatrixC{{1.0}}, S1::MatrixD{{0.5}},
+              0.02);
+  const auto s = endohaptics::model::series(g1, g2);
+  static_assert(std::is_same_v<std::remove_const_t<decltype(s)>, StateSpace<2, 1, 1>>);
+  // A = [[a1, 0], [b2 c1, a2]] = [[0.5, 0], [4, -0.3]]; B = [b1; b2 d1] = [1; 0.2];
+  // C = [d2 c1, c2] = [1, 1]; D = d2 d1 = 0.05.
+  check_close(s.A(), Eigen::Matrix2d{{0.5, 0.0}, {4.0, -0.3}}, 1e-15);
+  check_close(s.B(), Eigen::Vector2d{1.0, 0.2}, 1e-15);
+  check_close(s.C(), Eigen::RowVector2d{1.0, 1.0}, 1e-15);
+  check_close(s.D(), Eigen::Matrix<double, 1, 1>{0.05}, 1e-15);
+
+  // MIMO: a 3x2x2 feeding a 2x2x1 equals stepping the two models one after the other.
+  std::mt19937_64 rng(7);
+  auto first = random_model<StateSpace<3, 2, 2>>(rng);
+  auto second = random_model<StateSpace<2, 2, 1>>(rng);
+  first.reset(random_matrix<StateSpace<3, 2, 2>::State>(rng));
+  second.reset(random_matrix<StateSpace<2, 2, 1>::State>(rng));
+  auto chain = endohaptics::model::series(first, second);
+  for (int k = 0; k < 40; ++k) {
+    const auto u = random_matrix<Eigen::Vector2d>(rng);
+    check_close(chain.step(u), second.step(first.step(u)), 1e-12);
+  }
+
+  const S1 other_rate(S1::MatrixA{{0.1}}, S1::MatrixB{{1.0}}, S1::MatrixC{{1.0}},
+                      S1::MatrixD{{0.0}}, 0.04);
+  CHECK_THROWS_AS((void)endohaptics::model::series(g1, other_rate), Error);
+}
+
+// Same scipy reference as the double case (Ts = 0.1 s mass-spring-damper), float precision.
+TEST_CASE("float instance: zoh of the mass-spring-damper and a step response") {
+  using Css = ContinuousStateSpace<2, 1, 1, float>;
+  const Css c(Css::MatrixA{{0.0f, 1.0f}, {-4.0f, -0.4f}}, Css::MatrixB{{0.0f}, {1.0f}},
+              Css::MatrixC{{1.0f, 0.0f}}, Css::MatrixD::Zero());
+  auto d = discretize_zoh(c, 0.1f);
+  check_close(d.A(),
+              Eigen::Matrix2d{{0.9803295444599633, 0.09737421592285536},
+                              {-0.38949686369142156, 0.9413798580908213}},
+              2e-6);
+  check_close(d.B(), Eigen::Vector2d{0.004917613885009153, 0.09737421592285538}, 2e-6);
+  // DC gain of 1 / (s^2 + 0.4 s + 4) is 1/4, preserved exactly by ZOH.
+  CHECK(d.dc_gain()(0, 0) == doctest::Approx(0.25f).epsilon(1e-5));
+  for (int k = 0; k < 2000; ++k) (void)d.step(StateSpace<2, 1, 1, float>::Input{1.0f});
+  CHECK(d.output(StateSpace<2, 1, 1, float>::Input{1.0f})[0] ==
+        doctest::Approx(0.25f).epsilon(1e-4));
+  CHECK(d.is_stable());
+}
