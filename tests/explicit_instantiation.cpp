@@ -1,8 +1,50 @@
 // Instantiates every member of every class template, so an unused member cannot hide an error.
 #include <endohaptics/endohaptics.hpp>
 
-template class endohaptics::protocol::PacketCodec<1>;
-template class endohaptics::protocol::PacketCodec<4>;
-template class endohaptics::protocol::PacketCodec<8>;
-template struct endohaptics::protocol::MotorState<4>;
-template struct endohaptics::protocol::MotorSetpoint<4>;
+namespace eh = endohaptics;
+
+struct InstantiationDevice {
+  eh::teleop::DeviceStatus read(eh::teleop::StylusSample&) noexcept {
+    return eh::teleop::DeviceStatus::ok;
+  }
+  eh::teleop::DeviceStatus command_force(const Eigen::Vector3d&) noexcept {
+    return eh::teleop::DeviceStatus::ok;
+  }
+};
+
+template class eh::protocol::PacketCodec<1>;
+template class eh::protocol::PacketCodec<4>;
+template class eh::protocol::PacketCodec<8>;
+template struct eh::protocol::MotorState<4>;
+template struct eh::protocol::MotorSetpoint<4>;
+
+template class eh::model::StateSpace<3, 2, 1>;
+template class eh::model::StateSpace<2, 0, 1>;
+template class eh::model::StateSpace<1, 1, 1, float>;
+template class eh::model::ContinuousStateSpace<3, 1, 2>;
+template class eh::model::HammersteinWiener<eh::model::StateSpace<6, 2, 1>,
+                                            eh::model::PerChannel<eh::model::Deadzone<double>, 2>>;
+template class eh::model::FrictionModel<1, float>;
+template class eh::model::FrictionModel<4>;
+template class eh::model::FrictionModel<7>;
+template class eh::model::HumanArmModel<double>;
+template class eh::model::HumanArmModel<float>;
+template class eh::model::HumanArm3<double>;
+
+template class eh::estimation::SteadyStateKalman<eh::model::StateSpace<3, 1, 2>>;
+template class eh::estimation::SteadyStateKalman<eh::model::StateSpace<6, 2, 1>, 2>;
+
+template class eh::kinematics::CylindricalMapper<double>;
+template class eh::kinematics::CylindricalMapper<float>;
+template class eh::kinematics::DhChain<6>;
+template class eh::kinematics::DhChain<3, float>;
+
+template class eh::io::DatagramQueue<128, 16>;
+template class eh::io::InMemoryTransport<128, 16>;
+template class eh::io::InMemoryLink<64, 4>;
+template class eh::io::FaultInjectingTransport<eh::io::InMemoryTransport<128, 16>>;
+template class eh::teleop::DurationStats<100, 1000>;
+template class eh::teleop::SetpointRateLimiter<4>;
+template class eh::teleop::TeleopLoop<
+    eh::io::InMemoryTransport<128, 16>, InstantiationDevice, eh::teleop::NoForceEstimator,
+    eh::kinematics::CylindricalMapper<double>, eh::teleop::ManualClock>;
