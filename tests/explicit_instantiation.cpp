@@ -22,8 +22,9 @@ template class eh::model::StateSpace<3, 2, 1>;
 template class eh::model::StateSpace<2, 0, 1>;
 template class eh::model::StateSpace<1, 1, 1, float>;
 template class eh::model::ContinuousStateSpace<3, 1, 2>;
-template class eh::model::HammersteinWiener<eh::model::StateSpace<6, 2, 1>,
-                                            eh::model::PerChannel<eh::model::Deadzone<double>, 2>>;
+// clang 14 instantiates members whose requires-clause is unsatisfied, so only argument lists
+// that satisfy every constraint are listed (default-constructible nonlinearities, Nm = Ny).
+template class eh::model::HammersteinWiener<eh::model::StateSpace<6, 2, 1>>;
 template class eh::model::FrictionModel<1, float>;
 template class eh::model::FrictionModel<4>;
 template class eh::model::FrictionModel<7>;
@@ -32,7 +33,7 @@ template class eh::model::HumanArmModel<float>;
 template class eh::model::HumanArm3<double>;
 
 template class eh::estimation::SteadyStateKalman<eh::model::StateSpace<3, 1, 2>>;
-template class eh::estimation::SteadyStateKalman<eh::model::StateSpace<6, 2, 1>, 2>;
+template class eh::estimation::SteadyStateKalman<eh::model::StateSpace<6, 2, 2>>;
 
 template class eh::kinematics::CylindricalMapper<double>;
 template class eh::kinematics::CylindricalMapper<float>;

@@ -115,12 +115,13 @@ class FrictionModel {
       check_level(joints_[j].viscous_gain, j, "viscous_gain (F_mu)");
     }
     if (!std::isfinite(options_.standstill_velocity) || options_.standstill_velocity < 0) {
-      throw Error("FrictionModel: standstill_velocity must be finite and >= 0 rad/s, got " +
-                  detail::friction::format(options_.standstill_velocity));
+      ENDOHAPTICS_THROW(
+          Error("FrictionModel: standstill_velocity must be finite and >= 0 rad/s, got " +
+                detail::friction::format(options_.standstill_velocity)));
     }
     if (!(options_.release_fraction > 0 && options_.release_fraction <= 1)) {
-      throw Error("FrictionModel: release_fraction must lie in (0, 1], got " +
-                  detail::friction::format(options_.release_fraction));
+      ENDOHAPTICS_THROW(Error("FrictionModel: release_fraction must lie in (0, 1], got " +
+                              detail::friction::format(options_.release_fraction)));
     }
   }
 
@@ -218,8 +219,9 @@ class FrictionModel {
 
   static void check_level(Scalar value, std::size_t j, std::string_view field) {
     if (!std::isfinite(value) || value < 0) {
-      throw Error("FrictionModel: joint " + std::to_string(j) + " " + std::string(field) +
-                  " must be finite and >= 0, got " + detail::friction::format(value));
+      ENDOHAPTICS_THROW(Error("FrictionModel: joint " + std::to_string(j) + " " +
+                              std::string(field) + " must be finite and >= 0, got " +
+                              detail::friction::format(value)));
     }
   }
 
@@ -341,8 +343,8 @@ inline std::array<double, 2> huber_line(const std::vector<double>& x, const std:
 
 inline void require_positive(double value, std::string_view name) {
   if (!std::isfinite(value) || !(value > 0)) {
-    throw Error("identify_friction: option " + std::string(name) + " must be finite and > 0, got " +
-                detail::friction::format(value));
+    ENDOHAPTICS_THROW(Error("identify_friction: option " + std::string(name) +
+                            " must be finite and > 0, got " + detail::friction::format(value)));
   }
 }
 
@@ -359,9 +361,10 @@ inline void require_positive(double value, std::string_view name) {
     std::span<const double> time, std::span<const double> ticks, std::span<const double> current,
     const FrictionIdentificationOptions& options = {}) {
   if (time.size() != ticks.size() || time.size() != current.size()) {
-    throw Error("identify_friction: arrays differ in length (time " + std::to_string(time.size()) +
-                ", ticks " + std::to_string(ticks.size()) + ", current " +
-                std::to_string(current.size()) + ")");
+    ENDOHAPTICS_THROW(Error("identify_friction: arrays differ in length (time " +
+                            std::to_string(time.size()) + ", ticks " +
+                            std::to_string(ticks.size()) + ", current " +
+                            std::to_string(current.size()) + ")"));
   }
   detail::friction::require_positive(options.radians_per_tick, "radians_per_tick");
   detail::friction::require_positive(options.grid_period, "grid_period");
@@ -370,12 +373,13 @@ inline void require_positive(double value, std::string_view name) {
   detail::friction::require_positive(options.huber_k, "huber_k");
   if (!std::isfinite(options.standstill_velocity) || options.standstill_velocity < 0 ||
       options.standstill_velocity >= options.moving_velocity) {
-    throw Error("identify_friction: standstill_velocity must lie in [0, moving_velocity), got " +
-                detail::friction::format(options.standstill_velocity));
+    ENDOHAPTICS_THROW(
+        Error("identify_friction: standstill_velocity must lie in [0, moving_velocity), got " +
+              detail::friction::format(options.standstill_velocity)));
   }
   if (options.min_fit_samples < 2) {
-    throw Error("identify_friction: min_fit_samples must be >= 2, got " +
-                std::to_string(options.min_fit_samples));
+    ENDOHAPTICS_THROW(Error("identify_friction: min_fit_samples must be >= 2, got " +
+                            std::to_string(options.min_fit_samples)));
   }
 
   FrictionIdentification result;
@@ -488,11 +492,11 @@ inline void require_positive(double value, std::string_view name) {
     }
   }
   if (!result.positive.valid() && !result.negative.valid()) {
-    throw Error("identify_friction: too little sliding motion (" +
-                std::to_string(result.positive.samples) + " samples with omega > +" +
-                detail::friction::format(options.moving_velocity) + " rad/s, " +
-                std::to_string(result.negative.samples) + " below -, need " +
-                std::to_string(options.min_fit_samples) + " in one direction)");
+    ENDOHAPTICS_THROW(Error("identify_friction: too little sliding motion (" +
+                            std::to_string(result.positive.samples) + " samples with omega > +" +
+                            detail::friction::format(options.moving_velocity) + " rad/s, " +
+                            std::to_string(result.negative.samples) + " below -, need " +
+                            std::to_string(options.min_fit_samples) + " in one direction)"));
   }
 
   // 7. Combine: sample-weighted over valid directions; Ks = largest onset current.

@@ -44,8 +44,8 @@ void validate(const HumanArmParameters<Scalar>& p) {
       {{"b1", p.b1}, {"b2", p.b2}, {"k1", p.k1}, {"k2", p.k2}, {"m_h", p.m_h}}};
   for (const auto& [name, value] : fields) {
     if (!std::isfinite(value) || !(value > Scalar(0))) {
-      throw Error("HumanArmParameters: " + std::string(name) + " must be finite and > 0, got " +
-                  detail::format_number(value));
+      ENDOHAPTICS_THROW(Error("HumanArmParameters: " + std::string(name) +
+                              " must be finite and > 0, got " + detail::format_number(value)));
     }
   }
 }
@@ -204,8 +204,8 @@ class HumanArmModel {
  private:
   static const Parameters& checked(const Parameters& p, Scalar sample_time) {
     if (!std::isfinite(sample_time) || !(sample_time > Scalar(0))) {
-      throw Error("HumanArmModel: sample time must be finite and > 0 s, got " +
-                  detail::format_number(sample_time));
+      ENDOHAPTICS_THROW(Error("HumanArmModel: sample time must be finite and > 0 s, got " +
+                              detail::format_number(sample_time)));
     }
     validate(p);
     return p;
