@@ -476,7 +476,8 @@ requires(Mode != RateMode::resample || ResamplableJointForceModel<M>) class Rate
   //! Throws Error when the model cannot run at `loop_period` under this mode; `joint` names it.
   RateStepper(const M& model, Scalar loop_period, std::string_view joint)
       : model_(prepare(model, loop_period, joint)),
-        ratio_(ticks_per_step(model, loop_period, joint)) {}
+        ratio_(ticks_per_step(model, loop_period, joint)),
+        memoryless_(model.memoryless()) {}
 
   [[nodiscard]] const M& model() const noexcept { return model_; }
   //! Loop ticks per model step (1 unless decimating).
@@ -484,11 +485,19 @@ requires(Mode != RateMode::resample || ResamplableJointForceModel<M>) class Rate
 
   //! Writes the force at the current state (feedthrough from `s`), then advances the model if a
   //! model period ends with this tick (decimation: with the mean of the window's signals).
+  //! A memoryless model is never advanced (its state cannot reach the output). On anything but
+  //! ok the caller restores a snapshot.
   [[nodiscard]] model::StepStatus tick(const Signals& s, Scalar& force) noexcept {
     force = model_.force(s);
+    if (memoryless_) return model::StepStatus::ok;
     if constexpr (Mode == RateMode::decimate) {
       if (ratio_ > 1) {
         sum_ = sum_ + s;
+        // Huge finite signals can overflow the window sum: refuse the tick, never keep an Inf.
+        if (!std::isfinite(sum_.position) || !std::isfinite(sum_.velocity) ||
+            !std::isfinite(sum_.current) || !std::isfinite(sum_.setpoint)) {
+          return model::StepStatus::non_finite_result;
+        }
         if (++count_ < ratio_) return model::StepStatus::ok;
         const Scalar inv = Scalar(1) / static_cast<Scalar>(ratio_);
         const Signals mean{sum_.position * inv, sum_.velocity * inv, sum_.current * inv,
@@ -564,6 +573,7 @@ requires(Mode != RateMode::resample || ResamplableJointForceModel<M>) class Rate
 
   M model_;
   int ratio_;
+  bool memoryless_;
   Signals sum_{};
   int count_ = 0;
 };
