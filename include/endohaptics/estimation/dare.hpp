@@ -320,6 +320,7 @@ DareSolution<Eigen::Dynamic, Scalar> solve_filter_dare_dynamic(
 //! not symmetric PSD, R is not symmetric PD, (A, C) is not detectable, the options are invalid,
 //! the iteration does not converge, or no stabilising solution exists (a mode on the unit
 //! circle that Q does not excite). Same P as scipy.linalg.solve_discrete_are(A.T, C.T, Q, R).
+//! Computed in double (or Scalar if wider) and rounded to Scalar; tolerances use Scalar's eps.
 template <int Nx, int Ny, typename Scalar>
 [[nodiscard]] DareSolution<Nx, Scalar> solve_filter_dare(const Eigen::Matrix<Scalar, Nx, Nx>& A,
                                                          const Eigen::Matrix<Scalar, Ny, Nx>& C,
