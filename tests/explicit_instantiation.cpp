@@ -46,6 +46,14 @@ template class eh::io::InMemoryLink<64, 4>;
 template class eh::io::FaultInjectingTransport<eh::io::InMemoryTransport<128, 16>>;
 template class eh::teleop::DurationStats<100, 1000>;
 template class eh::teleop::SetpointRateLimiter<4>;
+template class eh::sim::SimulatedRig<1, float>;
+template class eh::sim::SimulatedRig<4>;
+template class eh::sim::SimulatedRig<8>;
+template class eh::sim::ScriptedOperator<eh::teleop::ManualClock>;
+template class eh::sim::SbrioEmulator<eh::io::InMemoryTransport<128, 16>, eh::sim::SimulatedRig<4>,
+                                      eh::teleop::ManualClock>;
+template class eh::estimation::PacedEstimator<eh::teleop::NoForceEstimator,
+                                              eh::teleop::ManualClock>;
 template class eh::teleop::TeleopLoop<
     eh::io::InMemoryTransport<128, 16>, InstantiationDevice, eh::teleop::NoForceEstimator,
     eh::kinematics::CylindricalMapper<double>, eh::teleop::ManualClock>;

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <endohaptics/io/fault_injecting_transport.hpp>
 #include <endohaptics/io/in_memory_transport.hpp>
+#include <endohaptics/io/udp_server_transport.hpp>
 #include <endohaptics/io/udp_transport.hpp>
 #include <thread>
 
@@ -220,4 +221,47 @@ TEST_CASE("UDP transport: a peer that is not listening is reported, not hidden")
   const auto taken = pc.local_endpoint().port();
   CHECK_THROWS_WITH_AS(io::UdpTransport({.local_address = "127.0.0.1", .local_port = taken}),
                        doctest::Contains("cannot bind"), endohaptics::Error);
+}
+
+TEST_CASE("UDP server transport: answers whoever sent the newest datagram") {
+  io::UdpServerTransport server({.bind_address = "127.0.0.1", .port = 0});
+  const auto port = server.local_endpoint().port();
+  CHECK(!server.has_peer());
+  CHECK(server.send(pattern<49>(0)) == TransportStatus::error);  // nobody to answer yet
+  io::UdpTransport alice(
+      {.local_address = "127.0.0.1", .remote_address = "127.0.0.1", .remote_port = port});
+  io::UdpTransport bob(
+      {.local_address = "127.0.0.1", .remote_address = "127.0.0.1", .remote_port = port});
+  std::array<std::byte, 64> buffer{};
+  CHECK(server.receive(buffer, 2ms).status == TransportStatus::timeout);
+
+  REQUIRE(alice.send(pattern<17>(1)) == TransportStatus::ok);
+  auto r = server.receive(buffer, 100ms);
+  REQUIRE(r.status == TransportStatus::ok);
+  CHECK(r.size == 17);
+  CHECK(buffer[0] == std::byte{1});
+  REQUIRE(server.send(pattern<49>(10)) == TransportStatus::ok);
+  r = alice.receive(buffer, 100ms);
+  REQUIRE(r.status == TransportStatus::ok);
+  CHECK(buffer[0] == std::byte{10});
+  CHECK(bob.receive(buffer, 2ms).status == TransportStatus::timeout);
+
+  // Bob now: the answer goes to him; alice's older datagram is drained (queue of one).
+  REQUIRE(alice.send(pattern<17>(2)) == TransportStatus::ok);
+  std::this_thread::sleep_for(2ms);
+  REQUIRE(bob.send(pattern<17>(3)) == TransportStatus::ok);
+  std::this_thread::sleep_for(2ms);
+  r = server.receive(buffer, 100ms);
+  REQUIRE(r.status == TransportStatus::ok);
+  CHECK(r.dropped == 1);
+  CHECK(buffer[0] == std::byte{3});
+  REQUIRE(server.send(pattern<49>(20)) == TransportStatus::ok);
+  r = bob.receive(buffer, 100ms);
+  REQUIRE(r.status == TransportStatus::ok);
+  CHECK(buffer[0] == std::byte{20});
+
+  CHECK_THROWS_WITH_AS(io::UdpServerTransport({.bind_address = "127.0.0.1", .port = port}),
+                       doctest::Contains("cannot bind 127.0.0.1:"), endohaptics::Error);
+  CHECK_THROWS_WITH_AS(io::UdpServerTransport({.bind_address = "nowhere"}),
+                       doctest::Contains("invalid bind address 'nowhere'"), endohaptics::Error);
 }

@@ -23,6 +23,60 @@
 
 namespace endohaptics::io {
 
+namespace detail {
+
+//! Waits up to `timeout` (ppoll) until `fd` is readable. ok, timeout or error.
+inline TransportStatus wait_readable(int fd, std::chrono::nanoseconds timeout) noexcept {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  for (;;) {
+    const auto left = std::max(deadline - std::chrono::steady_clock::now(),
+                               std::chrono::steady_clock::duration::zero());
+    const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(left).count();
+    timespec ts{static_cast<std::time_t>(ns / 1'000'000'000),
+                static_cast<long>(ns % 1'000'000'000)};
+    pollfd pfd{fd, POLLIN, 0};
+    const int ready = ::ppoll(&pfd, 1, &ts, nullptr);
+    if (ready > 0) return TransportStatus::ok;
+    if (ready == 0) return TransportStatus::timeout;
+    if (errno != EINTR) return TransportStatus::error;
+  }
+}
+
+//! Waits up to `timeout`, then drains `fd` and keeps the newest datagram in `buffer`. With
+//! `from` != nullptr, the newest datagram's sender is written there (unconnected sockets).
+inline ReceiveResult receive_newest(int fd, std::span<std::byte> buffer,
+                                    std::chrono::nanoseconds timeout,
+                                    sockaddr_storage* from) noexcept {
+  ReceiveResult result;
+  result.status = wait_readable(fd, timeout);
+  if (result.status != TransportStatus::ok) return result;
+  result.status = TransportStatus::timeout;  // readable but nothing to read (e.g. bad checksum)
+  bool any = false;
+  for (;;) {
+    sockaddr_storage sender{};
+    socklen_t sender_size = sizeof(sender);
+    const ssize_t n =
+        ::recvfrom(fd, buffer.data(), buffer.size(), MSG_DONTWAIT | MSG_TRUNC,
+                   from != nullptr ? reinterpret_cast<sockaddr*>(&sender) : nullptr,  // NOLINT
+                   from != nullptr ? &sender_size : nullptr);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      if (errno == EAGAIN || errno == EWOULDBLOCK) break;
+      if (!any) result.status = TransportStatus::error;
+      return result;
+    }
+    if (any) ++result.dropped;
+    any = true;
+    if (from != nullptr) *from = sender;
+    const auto size = static_cast<std::size_t>(n);  // MSG_TRUNC: the real datagram length
+    result.status = size > buffer.size() ? TransportStatus::truncated : TransportStatus::ok;
+    result.size = std::min(size, buffer.size());
+  }
+  return result;
+}
+
+}  // namespace detail
+
 //! Where to bind and whom to talk to. Defaults: the 2016 rig's sbRIO (worksheet appendix B).
 struct UdpConfig {
   std::string local_address = "0.0.0.0";
@@ -88,40 +142,7 @@ class UdpTransport {
 
   //! Waits up to `timeout` for a datagram, then drains the socket and returns the newest.
   ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds timeout) noexcept {
-    ReceiveResult result;
-    const int fd = socket_.native_handle();
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    for (;;) {
-      const auto left = std::max(deadline - std::chrono::steady_clock::now(),
-                                 std::chrono::steady_clock::duration::zero());
-      const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(left).count();
-      timespec ts{static_cast<std::time_t>(ns / 1'000'000'000),
-                  static_cast<long>(ns % 1'000'000'000)};
-      pollfd pfd{fd, POLLIN, 0};
-      const int ready = ::ppoll(&pfd, 1, &ts, nullptr);
-      if (ready > 0) break;
-      if (ready == 0) return result;  // timeout
-      if (errno != EINTR) {
-        result.status = TransportStatus::error;
-        return result;
-      }
-    }
-    bool any = false;
-    for (;;) {
-      const ssize_t n = ::recv(fd, buffer.data(), buffer.size(), MSG_DONTWAIT | MSG_TRUNC);
-      if (n < 0) {
-        if (errno == EINTR) continue;
-        if (errno == EAGAIN || errno == EWOULDBLOCK) break;
-        if (!any) result.status = TransportStatus::error;
-        return result;
-      }
-      if (any) ++result.dropped;
-      any = true;
-      const auto size = static_cast<std::size_t>(n);  // MSG_TRUNC: the real datagram length
-      result.status = size > buffer.size() ? TransportStatus::truncated : TransportStatus::ok;
-      result.size = std::min(size, buffer.size());
-    }
-    return result;
+    return detail::receive_newest(socket_.native_handle(), buffer, timeout, nullptr);
   }
 
   //! The bound local endpoint (useful with local_port = 0).

@@ -105,8 +105,10 @@ class LoopStats {
     if (ticks_ > 0) {
       const auto period = t - last_start_;
       period_.add(period);
-      period_error_.add(period > nominal_ ? period - nominal_ : nominal_ - period);
-      if (period > nominal_ + nominal_ / 10) ++deadline_misses_;
+      if (nominal_.count() > 0) {  // a nominal period of 0 means "as fast as possible"
+        period_error_.add(period > nominal_ ? period - nominal_ : nominal_ - period);
+        if (period > nominal_ + nominal_ / 10) ++deadline_misses_;
+      }
     }
     if (ticks_ == 0) first_start_ = t;
     last_start_ = t;
@@ -171,18 +173,22 @@ class LoopStats {
   [[nodiscard]] std::string to_table() const {
     char buf[1024];
     const auto us = [](double s) { return s * 1e6; };
+    char nominal_buf[32];
+    std::snprintf(nominal_buf, sizeof nominal_buf, "%.1f Hz",
+                  nominal_.count() > 0 ? 1e9 / static_cast<double>(nominal_.count()) : 0.0);
+    const std::string nominal = nominal_.count() > 0 ? nominal_buf : "as fast as possible";
     const int n = std::snprintf(
         buf, sizeof buf,
-        "rate        %10.1f Hz   (nominal %.1f Hz)\n"
+        "rate        %10.1f Hz   (nominal %s)\n"
         "period      mean %8.1f us  std %7.2f us  p99 %7.1f us  max %8.1f us\n"
         "period err  mean %8.2f us  p99 %7.1f us  max %8.1f us  deadline misses %llu\n"
         "round trip  mean %8.1f us  std %7.2f us  p99 %7.1f us  max %8.1f us\n"
         "compute     mean %8.2f us  p99 %7.1f us  max %8.1f us\n"
         "packets     %llu ticks, %llu received, loss %.3f %% (timeouts %llu, decode errors "
         "%llu, transport errors %llu), stale dropped %llu\n",
-        rate(), 1e9 / static_cast<double>(nominal_.count()), us(period_.mean()),
-        us(period_.stddev()), us(period_.quantile(0.99)), us(period_.max()),
-        us(period_error_.mean()), us(period_error_.quantile(0.99)), us(period_error_.max()),
+        rate(), nominal.c_str(), us(period_.mean()), us(period_.stddev()),
+        us(period_.quantile(0.99)), us(period_.max()), us(period_error_.mean()),
+        us(period_error_.quantile(0.99)), us(period_error_.max()),
         static_cast<unsigned long long>(deadline_misses_), us(round_trip_.mean()),
         us(round_trip_.stddev()), us(round_trip_.quantile(0.99)), us(round_trip_.max()),
         us(compute_.mean()), us(compute_.quantile(0.99)), us(compute_.max()),

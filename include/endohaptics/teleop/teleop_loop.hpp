@@ -106,12 +106,18 @@ struct [[nodiscard]] TickResult {
 };
 
 struct TeleopLoopConfig {
-  std::chrono::nanoseconds period = std::chrono::milliseconds(1);           //!< nominal
+  //! Nominal period; 0 runs ticks back to back (as fast as the link allows).
+  std::chrono::nanoseconds period = std::chrono::milliseconds(1);
   std::chrono::nanoseconds receive_timeout = std::chrono::milliseconds(1);  //!< 2016: 1 ms
   SafetyConfig safety{};
 
   void validate() const {
-    if (period.count() <= 0) ENDOHAPTICS_THROW(Error("TeleopLoopConfig: period must be > 0"));
+    if (period.count() < 0) {
+      ENDOHAPTICS_THROW(
+          Error("TeleopLoopConfig: period must be >= 0 ns (0: as fast as the link "
+                "allows), got " +
+                std::to_string(period.count())));
+    }
     if (receive_timeout.count() < 0)
       ENDOHAPTICS_THROW(Error("TeleopLoopConfig: receive_timeout must be >= 0"));
     safety.validate();

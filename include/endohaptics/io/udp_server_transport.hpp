@@ -1,0 +1,101 @@
+//! @file
+//! UdpServerTransport: the sbRIO side of the link (worksheet 3.3.1), for the emulator and for
+//! tests: a bound, unconnected UDP socket that answers whoever sent the newest datagram.
+//! Same receive semantics as UdpTransport (deadline by ppoll, queue of one). POSIX only.
+#pragma once
+
+#include <sys/socket.h>
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/ip/address.hpp>
+#include <boost/asio/ip/udp.hpp>
+#include <cerrno>
+#include <chrono>
+#include <cstdint>
+#include <span>
+#include <string>
+
+#include "endohaptics/core/error.hpp"
+#include "endohaptics/io/transport.hpp"
+#include "endohaptics/io/udp_transport.hpp"
+
+namespace endohaptics::io {
+
+//! Where the server listens. Default: the sbRIO's port on every interface.
+struct UdpServerConfig {
+  std::string bind_address = "0.0.0.0";
+  std::uint16_t port = 61556;  //!< 0: any free port (see local_endpoint())
+};
+
+class UdpServerTransport {
+ public:
+  //! Opens and binds the socket. Throws Error naming the address on failure.
+  explicit UdpServerTransport(const UdpServerConfig& config) : socket_(io_) {
+    namespace ip = boost::asio::ip;
+    boost::system::error_code ec;
+    const ip::address local = ip::make_address(config.bind_address, ec);
+    if (ec) {
+      ENDOHAPTICS_THROW(
+          Error("UdpServerTransport: invalid bind address '" + config.bind_address + "'"));
+    }
+    socket_.open(local.is_v6() ? ip::udp::v6() : ip::udp::v4(), ec);
+    if (ec) {
+      ENDOHAPTICS_THROW(Error("UdpServerTransport: cannot open a UDP socket: " + ec.message()));
+    }
+    socket_.bind(ip::udp::endpoint(local, config.port), ec);
+    if (ec) {
+      ENDOHAPTICS_THROW(Error("UdpServerTransport: cannot bind " + config.bind_address + ":" +
+                              std::to_string(config.port) + ": " + ec.message()));
+    }
+  }
+
+  UdpServerTransport(const UdpServerTransport&) = delete;
+  UdpServerTransport& operator=(const UdpServerTransport&) = delete;
+
+  //! Sends to the sender of the newest datagram received; error before any was received.
+  TransportStatus send(std::span<const std::byte> datagram) noexcept {
+    if (peer_size_ == 0) return TransportStatus::error;
+    for (;;) {
+      const ssize_t n = ::sendto(socket_.native_handle(), datagram.data(), datagram.size(),
+                                 MSG_DONTWAIT | MSG_NOSIGNAL,
+                                 reinterpret_cast<const sockaddr*>(&peer_),  // NOLINT: socket API
+                                 peer_size_);
+      if (n >= 0) return TransportStatus::ok;
+      if (errno == EINTR) continue;
+      // A full buffer drops like the wire would; a vanished peer (ICMP) is not our error either.
+      return errno == EAGAIN || errno == EWOULDBLOCK || errno == ECONNREFUSED
+                 ? TransportStatus::ok
+                 : TransportStatus::error;
+    }
+  }
+
+  //! Waits up to `timeout`, drains the socket, returns the newest datagram and remembers its
+  //! sender as the peer `send` answers.
+  ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds timeout) noexcept {
+    sockaddr_storage from{};
+    const ReceiveResult r = detail::receive_newest(socket_.native_handle(), buffer, timeout, &from);
+    if (r.status == TransportStatus::ok || r.status == TransportStatus::truncated) {
+      peer_ = from;
+      peer_size_ = from.ss_family == AF_INET6 ? sizeof(sockaddr_in6) : sizeof(sockaddr_in);
+    }
+    return r;
+  }
+
+  //! The bound local endpoint (useful with port = 0).
+  [[nodiscard]] boost::asio::ip::udp::endpoint local_endpoint() const {
+    return socket_.local_endpoint();
+  }
+
+  //! True once a datagram has been received (there is someone to answer).
+  [[nodiscard]] bool has_peer() const noexcept { return peer_size_ != 0; }
+
+ private:
+  boost::asio::io_context io_;
+  boost::asio::ip::udp::socket socket_;
+  sockaddr_storage peer_{};
+  socklen_t peer_size_ = 0;
+};
+
+static_assert(Transport<UdpServerTransport>);
+
+}  // namespace endohaptics::io

@@ -1,0 +1,185 @@
+//! @file
+//! SbrioEmulator: the sbRIO's behaviour on the wire (worksheet 3.3.1, 5.3): receives setpoint
+//! packets, answers each with the newest state packet of a simulated rig, lets a motor follow
+//! its setpoint only while its enable bit is set, and disables every motor when no valid packet
+//! arrived for `watchdog_timeout` (100 ms). The rig runs in the clock's time. Times in ns.
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <concepts>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string_view>
+
+#include "endohaptics/core/error.hpp"
+#include "endohaptics/io/transport.hpp"
+#include "endohaptics/protocol/packet_codec.hpp"
+#include "endohaptics/teleop/clock.hpp"
+
+namespace endohaptics::sim {
+
+//! What the emulator needs from a simulated rig (SimulatedRig, or a user's own plant).
+template <typename R, int N>
+concept EmulatedRig = requires(R& rig, const R& crig, const protocol::MotorSetpoint<N>& setpoint,
+                               double seconds) {
+  { rig.command(setpoint) }
+  noexcept;
+  { rig.advance(seconds) }
+  noexcept;
+  { crig.state() }
+  noexcept->std::convertible_to<protocol::MotorState<N>>;
+};
+
+//! Emulator settings.
+struct EmulatorConfig {
+  //! No valid setpoint packet for this long: every motor is disabled (sbRIO watchdog).
+  std::chrono::nanoseconds watchdog_timeout = std::chrono::milliseconds(100);
+  //! The rig is advanced in chunks of at most this (bounds the work of one poll after a pause).
+  std::chrono::nanoseconds max_advance = std::chrono::seconds(1);
+
+  void validate() const {
+    if (watchdog_timeout.count() <= 0) {
+      ENDOHAPTICS_THROW(Error("EmulatorConfig: watchdog_timeout must be > 0 ns, got " +
+                              std::to_string(watchdog_timeout.count())));
+    }
+    if (max_advance.count() <= 0) {
+      ENDOHAPTICS_THROW(Error("EmulatorConfig: max_advance must be > 0 ns, got " +
+                              std::to_string(max_advance.count())));
+    }
+  }
+};
+
+//! What one poll did.
+enum class PollEvent : std::uint8_t {
+  idle = 0,         //!< nothing arrived before the timeout; the rig ran on
+  answered,         //!< a valid setpoint packet arrived and was answered
+  rejected,         //!< a datagram arrived that is not a valid setpoint packet (not answered)
+  transport_error,  //!< the transport failed (receive or send)
+};
+
+[[nodiscard]] constexpr std::string_view to_string(PollEvent e) noexcept {
+  switch (e) {
+    case PollEvent::idle:
+      return "idle";
+    case PollEvent::answered:
+      return "answered";
+    case PollEvent::rejected:
+      return "rejected";
+    case PollEvent::transport_error:
+      return "transport error";
+  }
+  return "unknown event";
+}
+
+//! Running totals (monotonic).
+struct EmulatorCounters {
+  std::uint64_t received = 0;       //!< valid setpoint packets
+  std::uint64_t answered = 0;       //!< state packets sent
+  std::uint64_t rejected = 0;       //!< invalid datagrams (wrong size, non-finite, bad mask)
+  std::uint64_t stale_dropped = 0;  //!< older datagrams drained unanswered (queue of one)
+  std::uint64_t transport_errors = 0;
+  std::uint64_t watchdog_trips = 0;  //!< times the 100 ms watchdog disabled the motors
+};
+
+//! The sbRIO side. `Transport` answers the sender of the newest datagram (UdpServerTransport,
+//! or an in-memory link end). All members a poll calls are noexcept and allocation-free.
+template <io::Transport Transport, typename Rig, teleop::Clock ClockT = teleop::SteadyClock,
+          int N = 4>
+requires EmulatedRig<Rig, N>
+class SbrioEmulator {
+ public:
+  using Codec = protocol::PacketCodec<N>;
+
+  //! Parts are owned by the caller and must outlive the emulator. Throws Error on a bad config.
+  SbrioEmulator(Transport& transport, Rig& rig, ClockT& clock, const EmulatorConfig& config = {})
+      : transport_(&transport),
+        rig_(&rig),
+        clock_(&clock),
+        config_((config.validate(), config)),
+        last_time_(clock.now()),
+        last_packet_(last_time_) {
+    rig_->command(setpoint_);  // everything disabled until the PC says otherwise
+  }
+
+  //! Waits up to `timeout` for a setpoint packet, runs the rig up to the clock's now (tripping the
+  //! watchdog on the way if due), applies the packet and answers it with the rig's state.
+  [[nodiscard]] PollEvent poll(std::chrono::nanoseconds timeout) noexcept {
+    const io::ReceiveResult rx = transport_->receive(rx_buffer_, timeout);
+    advance_to(clock_->now());
+    counters_.stale_dropped += rx.dropped;
+    if (rx.status == io::TransportStatus::timeout) return PollEvent::idle;
+    if (rx.status == io::TransportStatus::error) {
+      ++counters_.transport_errors;
+      return PollEvent::transport_error;
+    }
+    typename Codec::Setpoint received;
+    const auto decoded = rx.status == io::TransportStatus::ok
+                             ? Codec::decode_setpoint(
+                                   std::span<const std::byte>(rx_buffer_.data(), rx.size), received)
+                             : protocol::CodecStatus::wrong_size;
+    if (decoded != protocol::CodecStatus::ok) {
+      ++counters_.rejected;  // the real sbRIO ignores what it cannot parse: no answer, no feed
+      return PollEvent::rejected;
+    }
+    ++counters_.received;
+    setpoint_ = received;
+    rig_->command(setpoint_);
+    last_packet_ = last_time_;
+    tripped_ = false;
+
+    typename Codec::StateBytes tx{};
+    if (Codec::encode_state(rig_->state(), tx) != protocol::CodecStatus::ok ||
+        transport_->send(tx) != io::TransportStatus::ok) {
+      ++counters_.transport_errors;
+      return PollEvent::transport_error;
+    }
+    ++counters_.answered;
+    return PollEvent::answered;
+  }
+
+  //! Runs the rig up to `now` without receiving (e.g. between polls in a test).
+  void advance_to(std::chrono::nanoseconds now) noexcept {
+    if (!tripped_ && setpoint_.enable_mask != 0 && now - last_packet_ > config_.watchdog_timeout) {
+      run_until(last_packet_ + config_.watchdog_timeout);
+      setpoint_.enable_mask = 0;  // positions kept; the motors coast
+      rig_->command(setpoint_);
+      tripped_ = true;
+      ++counters_.watchdog_trips;
+    }
+    run_until(now);
+  }
+
+  [[nodiscard]] const EmulatorCounters& counters() const noexcept { return counters_; }
+  //! The setpoint the rig follows now (enable bits cleared by the watchdog).
+  [[nodiscard]] const typename Codec::Setpoint& setpoint() const noexcept { return setpoint_; }
+  //! True while the watchdog holds the motors disabled.
+  [[nodiscard]] bool watchdog_tripped() const noexcept { return tripped_; }
+  [[nodiscard]] Rig& rig() noexcept { return *rig_; }
+  [[nodiscard]] const Rig& rig() const noexcept { return *rig_; }
+  //! Clock time up to which the rig has run.
+  [[nodiscard]] std::chrono::nanoseconds time() const noexcept { return last_time_; }
+
+ private:
+  void run_until(std::chrono::nanoseconds t) noexcept {
+    while (t > last_time_) {
+      const auto step = std::min(t - last_time_, config_.max_advance);
+      (void)rig_->advance(std::chrono::duration<double>(step).count());
+      last_time_ += step;
+    }
+  }
+
+  Transport* transport_;
+  Rig* rig_;
+  ClockT* clock_;
+  EmulatorConfig config_;
+  typename Codec::Setpoint setpoint_{};
+  std::chrono::nanoseconds last_time_;
+  std::chrono::nanoseconds last_packet_;
+  bool tripped_ = false;
+  EmulatorCounters counters_{};
+  std::array<std::byte, 2 * Codec::setpoint_packet_size> rx_buffer_{};  // room to see long ones
+};
+
+}  // namespace endohaptics::sim

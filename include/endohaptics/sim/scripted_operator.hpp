@@ -1,0 +1,151 @@
+//! @file
+//! ScriptedOperator: a simulated operator holding the stylus (a teleop::HapticDevice). The hand
+//! follows a grasp-and-release script in cylindrical coordinates (figure 5.14: the radius r
+//! closes the clamps, eq. 5.9), and the stylus is where the arm of worksheet 5.1 (eq. 5.3,
+//! table 5.1) puts it under the force the loop renders. Units: m, s, N.
+#pragma once
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "endohaptics/core/error.hpp"
+#include "endohaptics/model/human_arm_model.hpp"
+#include "endohaptics/teleop/clock.hpp"
+#include "endohaptics/teleop/haptic_device.hpp"
+
+namespace endohaptics::sim {
+
+//! The script: rest open, close (smoothly, raised cosine), hold, open, repeat. Defaults map
+//! through the default CylindricalMapperConfig to clamp 1 from 0 rad (open) to +0.6 rad (closed,
+//! into the default tissue), roll and pitch near 0; the setpoint moves at most ~1.2 rad/s, within
+//! what the simulated cascade follows (docs/models/sim.md).
+struct OperatorScript {
+  double theta = std::numbers::pi / 2;  //!< rad, stylus azimuth (roll ~ 0 with the defaults)
+  double z = 0.1374;                    //!< m, stylus height (pitch ~ 0 with the defaults)
+  double r_open = 0.1300;               //!< m, radius with the clamps open
+  double r_closed = 0.0186;             //!< m, radius the hand aims at when grasping
+  double open_time = 0.7;               //!< s, resting open at the start of a cycle
+  double close_time = 0.8;              //!< s, closing
+  double hold_time = 0.7;               //!< s, holding closed
+  double release_time = 0.8;            //!< s, opening
+  double arm_sample_time = 1e-3;        //!< s, the arm model's ZOH period
+
+  [[nodiscard]] double cycle() const noexcept {
+    return open_time + close_time + hold_time + release_time;
+  }
+
+  //! Throws Error naming the field and value.
+  void validate() const {
+    auto check = [](bool ok, const char* field, double v) {
+      if (!ok) {
+        ENDOHAPTICS_THROW(
+            Error(std::string("OperatorScript: ") + field + " out of range: " + std::to_string(v)));
+      }
+    };
+    check(std::isfinite(theta), "theta", theta);
+    check(std::isfinite(z), "z", z);
+    check(std::isfinite(r_open) && r_open > 0.0, "r_open", r_open);
+    check(std::isfinite(r_closed) && r_closed >= 0.0, "r_closed", r_closed);
+    check(std::isfinite(open_time) && open_time >= 0.0, "open_time", open_time);
+    check(std::isfinite(close_time) && close_time > 0.0, "close_time", close_time);
+    check(std::isfinite(hold_time) && hold_time >= 0.0, "hold_time", hold_time);
+    check(std::isfinite(release_time) && release_time > 0.0, "release_time", release_time);
+    check(std::isfinite(arm_sample_time) && arm_sample_time > 0.0, "arm_sample_time",
+          arm_sample_time);
+  }
+
+  //! Where the hand aims at time `t` (s since start), m, device base frame.
+  [[nodiscard]] Eigen::Vector3d intent(double t) const noexcept {
+    const double c = cycle();
+    double phase = std::fmod(std::max(t, 0.0), c);
+    auto blend = [](double s) { return 0.5 - 0.5 * std::cos(std::numbers::pi * s); };  // 0 -> 1
+    double closed = 0.0;  // 0 open, 1 closed
+    if (phase < open_time) {
+      closed = 0.0;
+    } else if ((phase -= open_time) < close_time) {
+      closed = blend(phase / close_time);
+    } else if ((phase -= close_time) < hold_time) {
+      closed = 1.0;
+    } else {
+      phase -= hold_time;
+      closed = 1.0 - blend(std::min(phase / release_time, 1.0));
+    }
+    const double r = r_open + (r_closed - r_open) * closed;
+    return {r * std::sin(theta), r * std::cos(theta), z};  // theta = atan2(x, y)
+  }
+};
+
+//! teleop::HapticDevice. read(): the hand's intent plus the arm's response (admittance, eq. 5.3)
+//! to the force last commanded, the arm stepped at its own period up to the clock's now.
+template <teleop::Clock ClockT = teleop::SteadyClock>
+class ScriptedOperator {
+ public:
+  //! Throws Error on an invalid script or arm. `clock` must outlive the device.
+  explicit ScriptedOperator(ClockT& clock, const OperatorScript& script = {},
+                            const model::HumanArmParameters<double>& arm = {})
+      : clock_(&clock),
+        script_((script.validate(), script)),
+        arm_(script.arm_sample_time, arm),
+        period_(std::chrono::duration_cast<std::chrono::nanoseconds>(
+            std::chrono::duration<double>(script.arm_sample_time))),
+        start_(clock.now()),
+        next_step_(start_) {}
+
+  teleop::DeviceStatus read(teleop::StylusSample& sample) noexcept {
+    const auto now = clock_->now();
+    int steps = 0;
+    while (next_step_ <= now && steps < max_catch_up) {  // bounded: a long pause skips ahead
+      Eigen::Vector3d velocity;
+      (void)arm_.apply_force(force_, displacement_, velocity);
+      next_step_ += period_;
+      ++steps;
+    }
+    if (next_step_ <= now) next_step_ = now + period_;
+    sample.position = script_.intent(seconds(now)) + displacement_;
+    sample.buttons = 0;
+    last_position_ = sample.position;
+    return teleop::DeviceStatus::ok;
+  }
+
+  teleop::DeviceStatus command_force(const Eigen::Vector3d& force) noexcept {
+    if (!force.allFinite()) {
+      force_.setZero();
+      return teleop::DeviceStatus::error;  // a real device would refuse it too
+    }
+    force_ = force;
+    return teleop::DeviceStatus::ok;
+  }
+
+  [[nodiscard]] const Eigen::Vector3d& force() const noexcept { return force_; }  //!< N, last
+  [[nodiscard]] const Eigen::Vector3d& position() const noexcept { return last_position_; }
+  //! Hand's intended position now (without the arm's response), m.
+  [[nodiscard]] Eigen::Vector3d intent() const noexcept {
+    return script_.intent(seconds(clock_->now()));
+  }
+  [[nodiscard]] const OperatorScript& script() const noexcept { return script_; }
+
+  static constexpr int max_catch_up = 100;  //!< arm steps per read at most
+
+ private:
+  [[nodiscard]] double seconds(std::chrono::nanoseconds t) const noexcept {
+    return std::chrono::duration<double>(t - start_).count();
+  }
+
+  ClockT* clock_;
+  OperatorScript script_;
+  model::HumanArm3<double> arm_;
+  std::chrono::nanoseconds period_;
+  std::chrono::nanoseconds start_;
+  std::chrono::nanoseconds next_step_;
+  Eigen::Vector3d force_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d displacement_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d last_position_ = Eigen::Vector3d::Zero();
+};
+
+static_assert(teleop::HapticDevice<ScriptedOperator<teleop::SteadyClock>>);
+
+}  // namespace endohaptics::sim

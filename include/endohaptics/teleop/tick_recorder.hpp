@@ -1,0 +1,113 @@
+//! @file
+//! TickRecorder: per-tick CSV logging without I/O on the real-time thread. The loop thread
+//! `push`es a fixed-size record into a lock-free single-producer/single-consumer ring
+//! (Boost.Lockfree, preallocated); another thread `drain`s it to a file. A full ring drops the
+//! record and counts it (never blocks the loop). Times in s, angles in rad, forces in N.
+#pragma once
+
+#include <Eigen/Core>
+#include <atomic>
+#include <boost/lockfree/spsc_queue.hpp>
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <string>
+
+#include "endohaptics/core/error.hpp"
+#include "endohaptics/teleop/teleop_loop.hpp"
+
+namespace endohaptics::teleop {
+
+//! One CSV row: what a tick sent, received, estimated and rendered.
+struct TickRecord {
+  double time = 0.0;  //!< s, the clock's time when the tick ended
+  TickStatus status = TickStatus::waiting;
+  LinkState link = LinkState::waiting;
+  std::uint8_t enable_mask = 0;
+  std::uint8_t active_mask = 0;
+  double round_trip = 0.0;  //!< s
+  double force_scale = 0.0;
+  MotorVector setpoint = MotorVector::Zero();              //!< rad
+  MotorVector position = MotorVector::Zero();              //!< rad (newest valid)
+  MotorVector velocity = MotorVector::Zero();              //!< rad/s
+  MotorVector current = MotorVector::Zero();               //!< A
+  MotorVector joint_force = MotorVector::Zero();           //!< estimate, motor order (N; roll N m)
+  Eigen::Vector3d stylus_force = Eigen::Vector3d::Zero();  //!< N
+
+  [[nodiscard]] static TickRecord from(const TickResult& r, std::chrono::nanoseconds now) noexcept {
+    TickRecord rec;
+    rec.time = std::chrono::duration<double>(now).count();
+    rec.status = r.status;
+    rec.link = r.link;
+    rec.enable_mask = r.enable_mask;
+    rec.active_mask = r.measured.active_mask;
+    rec.round_trip = std::chrono::duration<double>(r.round_trip).count();
+    rec.force_scale = r.force_scale;
+    rec.setpoint = r.setpoint;
+    rec.position = r.measured.position;
+    rec.velocity = r.measured.velocity;
+    rec.current = r.measured.effort;
+    rec.joint_force = r.joint_force;
+    rec.stylus_force = r.stylus_force;
+    return rec;
+  }
+};
+
+//! The ring between the loop thread (push) and a writer thread (drain). `capacity` records are
+//! allocated once, at construction.
+class TickRecorder {
+ public:
+  explicit TickRecorder(std::size_t capacity = std::size_t{1} << 16) : queue_(capacity) {}
+
+  //! Loop thread: wait-free, allocation-free. False (and counted) when the ring is full.
+  bool push(const TickRecord& record) noexcept {
+    if (queue_.push(record)) return true;
+    dropped_.fetch_add(1, std::memory_order_relaxed);
+    return false;
+  }
+
+  //! CSV header matching `drain`'s rows.
+  static void write_header(std::FILE* out) {
+    std::fputs(
+        "time,status,link,enable_mask,active_mask,round_trip,force_scale,"
+        "setpoint0,setpoint1,setpoint2,setpoint3,position0,position1,position2,position3,"
+        "velocity0,velocity1,velocity2,velocity3,current0,current1,current2,current3,"
+        "joint_force0,joint_force1,joint_force2,joint_force3,stylus_fx,stylus_fy,stylus_fz\n",
+        out);
+  }
+
+  //! Writer thread: writes every queued record as a CSV row; returns how many. Throws Error when
+  //! the file cannot be written.
+  std::size_t drain(std::FILE* out) {
+    std::size_t n = 0;
+    TickRecord r;
+    while (queue_.pop(r)) {
+      int written =
+          std::fprintf(out, "%.9f,%d,%d,%u,%u,%.9g,%.4g", r.time, static_cast<int>(r.status),
+                       static_cast<int>(r.link), unsigned{r.enable_mask}, unsigned{r.active_mask},
+                       r.round_trip, r.force_scale);
+      for (const MotorVector* v :
+           {&r.setpoint, &r.position, &r.velocity, &r.current, &r.joint_force}) {
+        for (int i = 0; i < loop_motors; ++i) written = std::fprintf(out, ",%.7g", (*v)[i]);
+      }
+      written = std::fprintf(out, ",%.6g,%.6g,%.6g\n", r.stylus_force.x(), r.stylus_force.y(),
+                             r.stylus_force.z());
+      if (written < 0) ENDOHAPTICS_THROW(Error("TickRecorder: cannot write the tick log"));
+      ++n;
+    }
+    written_ += n;
+    return n;
+  }
+
+  [[nodiscard]] std::uint64_t dropped() const noexcept {
+    return dropped_.load(std::memory_order_relaxed);
+  }
+  [[nodiscard]] std::uint64_t written() const noexcept { return written_; }
+
+ private:
+  boost::lockfree::spsc_queue<TickRecord> queue_;
+  std::atomic<std::uint64_t> dropped_{0};
+  std::uint64_t written_ = 0;
+};
+
+}  // namespace endohaptics::teleop

@@ -1,0 +1,73 @@
+// Allocation counting for "no heap allocation per tick" tests. Include this FIRST in a test file
+// (before any Eigen or endohaptics header), in exactly one translation unit of the executable:
+//  - every global operator new (scalar, array, aligned, nothrow forms) is counted;
+//  - Eigen's own heap use (malloc, not operator new) is counted through EIGEN_RUNTIME_NO_MALLOC
+//    with an eigen_assert that records instead of aborting.
+// allocations_during(f) returns both counts made while running f.
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <cstdlib>
+#include <new>
+
+namespace endohaptics::test {
+inline std::atomic<long> new_calls{0};
+inline std::atomic<long> eigen_mallocs{0};
+}  // namespace endohaptics::test
+
+#ifndef EIGEN_RUNTIME_NO_MALLOC
+#define EIGEN_RUNTIME_NO_MALLOC
+#endif
+#ifndef eigen_assert
+#define eigen_assert(x)                                        \
+  do {                                                         \
+    if (!(x)) ::endohaptics::test::eigen_mallocs.fetch_add(1); \
+  } while (false)
+#endif
+
+#include <Eigen/Core>
+
+void* operator new(std::size_t size) {
+  endohaptics::test::new_calls.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) { return operator new(size); }
+void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
+  endohaptics::test::new_calls.fetch_add(1, std::memory_order_relaxed);
+  return std::malloc(size == 0 ? 1 : size);
+}
+void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept {
+  return operator new(size, tag);
+}
+void* operator new(std::size_t size, std::align_val_t align) {
+  endohaptics::test::new_calls.fetch_add(1, std::memory_order_relaxed);
+  const auto a = static_cast<std::size_t>(align);
+  if (void* p = std::aligned_alloc(a, (size + a - 1) / a * a)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size, std::align_val_t align) { return operator new(size, align); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+
+namespace endohaptics::test {
+
+//! Heap allocations (operator new calls + Eigen mallocs) made while running `f`.
+template <typename F>
+long allocations_during(F&& f) {
+  const long before_new = new_calls.load();
+  const long before_eigen = eigen_mallocs.load();
+  Eigen::internal::set_is_malloc_allowed(false);
+  f();
+  Eigen::internal::set_is_malloc_allowed(true);
+  return (new_calls.load() - before_new) + (eigen_mallocs.load() - before_eigen);
+}
+
+}  // namespace endohaptics::test

@@ -1,0 +1,64 @@
+#include <doctest/doctest.h>
+
+#include <chrono>
+#include <endohaptics/kinematics/cylindrical_mapper.hpp>
+#include <endohaptics/sim/scripted_operator.hpp>
+
+namespace sim = endohaptics::sim;
+namespace tp = endohaptics::teleop;
+using namespace std::chrono_literals;
+
+TEST_CASE("the default script opens and closes clamp 1 through the default mapping") {
+  tp::ManualClock clock(5s);
+  sim::ScriptedOperator op(clock);
+  endohaptics::kinematics::CylindricalMapper<> mapper;
+  Eigen::Vector4d setpoint;
+  tp::StylusSample s;
+  REQUIRE(op.read(s) == tp::DeviceStatus::ok);
+  REQUIRE(mapper.map_position(s.position, setpoint).ok());
+  CHECK(setpoint[0] == doctest::Approx(0.0).epsilon(0.01));           // roll ~ 0
+  CHECK(setpoint[1] == doctest::Approx(0.0).scale(1).epsilon(0.01));  // pitch ~ 0
+  CHECK(setpoint[2] == doctest::Approx(0.0).epsilon(0.01));           // clamp 1 open
+  CHECK(setpoint[3] == doctest::Approx(0.0).epsilon(0.01));           // clamp 2 mirrors it
+  clock.advance(1800ms);  // open 0.7 s + close 0.8 s + 0.3 s into the hold
+  REQUIRE(op.read(s) == tp::DeviceStatus::ok);
+  REQUIRE(mapper.map_position(s.position, setpoint).ok());
+  CHECK(setpoint[2] == doctest::Approx(0.6).epsilon(0.01));  // closed
+  CHECK(setpoint[3] == doctest::Approx(-0.6).epsilon(0.01));
+  clock.advance(1300ms);  // the hold is over and the release too (0.8 s): open again
+  REQUIRE(op.read(s) == tp::DeviceStatus::ok);
+  REQUIRE(mapper.map_position(s.position, setpoint).ok());
+  CHECK(setpoint[2] == doctest::Approx(0.0).scale(1).epsilon(0.01));
+}
+
+TEST_CASE("the rendered force moves the stylus by the arm's static compliance (eq. 5.3 at DC)") {
+  tp::ManualClock clock(0s);
+  sim::OperatorScript script;
+  script.close_time = 1e3;  // keep the intent still for the test
+  script.open_time = 1e3;
+  sim::ScriptedOperator op(clock, script);
+  tp::StylusSample s;
+  REQUIRE(op.read(s) == tp::DeviceStatus::ok);
+  const Eigen::Vector3d rest = s.position;
+  REQUIRE(op.command_force(Eigen::Vector3d(0.0, 1.0, 0.0)) == tp::DeviceStatus::ok);
+  for (int i = 0; i < 5000; ++i) {  // 5 s, read at 1 kHz
+    clock.advance(1ms);
+    REQUIRE(op.read(s) == tp::DeviceStatus::ok);
+  }
+  const double compliance = endohaptics::model::HumanArmParameters<double>{}.static_compliance();
+  CHECK(compliance == doctest::Approx((48.8 + 375.0) / (48.8 * 375.0)));
+  CHECK(s.position.y() - rest.y() == doctest::Approx(compliance).epsilon(0.01));
+  CHECK(s.position.x() == doctest::Approx(rest.x()));
+  CHECK(s.position.z() == doctest::Approx(rest.z()));
+}
+
+TEST_CASE("a non-finite force is refused; a bad script is refused with the field's name") {
+  tp::ManualClock clock;
+  sim::ScriptedOperator op(clock);
+  CHECK(op.command_force(Eigen::Vector3d(std::nan(""), 0, 0)) == tp::DeviceStatus::error);
+  CHECK(op.force().isZero());
+  sim::OperatorScript bad;
+  bad.close_time = 0.0;
+  CHECK_THROWS_WITH_AS(sim::ScriptedOperator(clock, bad), doctest::Contains("close_time"),
+                       endohaptics::Error);
+}
