@@ -93,11 +93,11 @@ TEST_CASE("loopback teleoperation: the clamp follows the operator and grasps the
   CHECK(r->loop.watchdog().link_losses() == 0);
   CHECK(r->emulator.counters().answered == 7000);
   CHECK(r->emulator.counters().watchdog_trips == 0);
-  CHECK(max_truth > 0.5);                 // the grasp touches the tissue
+  CHECK(max_truth > 0.5);  // the grasp touches the tissue
   // rad: the setpoint still moves a little (the arm yields to the rendered force), so allow the
   // lag of a slow motion on top of the play (0.017 rad).
   CHECK(max_tracking_error_hold < 0.1);
-  CHECK(r->hand.force().norm() <= 3.0);   // SafetyConfig::max_stylus_force
+  CHECK(r->hand.force().norm() <= 3.0);  // SafetyConfig::max_stylus_force
 }
 
 TEST_CASE("loopback teleoperation: link lost -> safe state, sbRIO watchdog, recovery") {
