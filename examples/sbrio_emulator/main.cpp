@@ -1,0 +1,155 @@
+// endohaptics-sbrio-emulator: behaves like the 2016 sbRIO on the wire (UDP, binary protocol)
+// with a simulated EndoWrist behind it, so the bridge can run without the lab. The truth log
+// holds what no real rig can give: the true contact force at the tool.
+#include <fmt/format.h>
+#include <fmt/os.h>
+
+#include <CLI/CLI.hpp>
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <endohaptics/io/udp_server_transport.hpp>
+#include <endohaptics/sim/sbrio_emulator.hpp>
+#include <endohaptics/sim/simulated_rig.hpp>
+#include <map>
+#include <memory>
+#include <string>
+
+namespace sim = endohaptics::sim;
+namespace eio = endohaptics::io;
+namespace tp = endohaptics::teleop;
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+extern "C" void on_signal(int) { g_stop.store(true); }
+
+struct TruthLog {
+  std::FILE* file = nullptr;
+  ~TruthLog() {
+    if (file != nullptr) std::fclose(file);
+  }
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"endohaptics sbRIO emulator: a simulated EndoWrist behind the 2016 UDP protocol"};
+  std::string bind = "0.0.0.0";
+  std::uint16_t port = 61556;
+  int motors = 4;
+  std::string environment = "tissue";
+  std::string truth_path;
+  double truth_period_ms = 1.0;
+  double duration = 0.0;
+  double watchdog_ms = 100.0;
+  bool quiet = false;
+  const std::map<std::string, sim::Environment> environments{
+      {"free", sim::Environment::free_space},
+      {"loadcell", sim::Environment::load_cell},
+      {"tissue", sim::Environment::tissue}};
+  app.add_option("--bind", bind, "address to listen on")->capture_default_str();
+  app.add_option("--port", port, "UDP port to listen on (0: any free port, printed)")
+      ->capture_default_str();
+  app.add_option("--motors", motors, "number of motors (the EndoWrist has 4)")
+      ->check(CLI::IsMember({4}))
+      ->capture_default_str();
+  app.add_option("--environment", environment, "what the tool touches: free|loadcell|tissue")
+      ->check(CLI::IsMember({"free", "loadcell", "tissue"}))
+      ->capture_default_str();
+  app.add_option("--truth-log", truth_path,
+                 "CSV: time, setpoints, positions, velocities, currents, true contact forces");
+  app.add_option("--truth-period-ms", truth_period_ms, "truth log row period")
+      ->check(CLI::Range(0.01, 1000.0))
+      ->capture_default_str();
+  app.add_option("--duration", duration, "seconds to run (0: until SIGINT/SIGTERM)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--watchdog-ms", watchdog_ms, "disable the motors after this long without packets")
+      ->check(CLI::Range(1.0, 10000.0))
+      ->capture_default_str();
+  app.add_flag("--quiet", quiet, "print only the final summary");
+  CLI11_PARSE(app, argc, argv);
+
+  try {
+    std::signal(SIGINT, on_signal);
+    std::signal(SIGTERM, on_signal);
+    eio::UdpServerTransport transport(eio::UdpServerConfig{bind, port});
+    tp::SteadyClock clock;
+    sim::SimulatedRig<4> rig(sim::endowrist_2016_rig<4>(environments.at(environment)));
+    sim::EmulatorConfig config;
+    config.watchdog_timeout = std::chrono::microseconds(static_cast<long>(watchdog_ms * 1e3));
+    sim::SbrioEmulator emulator(transport, rig, clock, config);
+
+    TruthLog truth;
+    if (!truth_path.empty()) {
+      truth.file = std::fopen(truth_path.c_str(), "w");
+      if (truth.file == nullptr) {
+        fmt::print(stderr, "error: cannot write the truth log '{}'\n", truth_path);
+        return 1;
+      }
+      std::fputs(
+          "time,enable_mask,active_mask,setpoint0,setpoint1,setpoint2,setpoint3,"
+          "position0,position1,position2,position3,velocity0,velocity1,velocity2,velocity3,"
+          "current0,current1,current2,current3,force0,force1,force2,force3\n",
+          truth.file);
+    }
+    // Line buffering so a supervising script sees the port as soon as it is bound.
+    std::setvbuf(stdout, nullptr, _IOLBF, 0);
+    const auto endpoint = transport.local_endpoint();
+    fmt::print("sbrio-emulator: listening on {}:{} ({} motors, environment {}, watchdog {} ms)\n",
+               endpoint.address().to_string(), endpoint.port(), motors, environment, watchdog_ms);
+
+    const auto start = clock.now();
+    const auto truth_period = std::chrono::nanoseconds(static_cast<long>(truth_period_ms * 1e6));
+    auto next_row = start;
+    auto next_report = start + std::chrono::seconds(1);
+    bool was_tripped = false;
+    while (!g_stop.load()) {
+      const auto now = clock.now();
+      if (duration > 0 && now - start >= std::chrono::duration<double>(duration)) break;
+      (void)emulator.poll(std::chrono::milliseconds(1));
+      if (emulator.watchdog_tripped() != was_tripped) {
+        was_tripped = emulator.watchdog_tripped();
+        if (!quiet) {
+          fmt::print("sbrio-emulator: {}\n", was_tripped
+                                                 ? "watchdog: no packets, motors disabled"
+                                                 : "packets again, motors follow their setpoints");
+        }
+      }
+      const auto t = emulator.time();
+      if (truth.file != nullptr && t >= next_row) {
+        next_row = t + truth_period;
+        const auto& tr = rig.truth();
+        const auto& sp = emulator.setpoint();
+        const auto state = rig.state();
+        auto row = fmt::format("{:.9f},{},{}", std::chrono::duration<double>(t).count(),
+                               sp.enable_mask, state.active_mask);
+        for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", sp.position[i]);
+        for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", tr.joint_position[i]);
+        for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", tr.motor_velocity[i]);
+        for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", tr.motor_current[i]);
+        for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", tr.contact_force[i]);
+        row += '\n';
+        std::fputs(row.c_str(), truth.file);
+      }
+      if (!quiet && t >= next_report) {
+        next_report += std::chrono::seconds(1);
+        const auto& c = emulator.counters();
+        fmt::print("sbrio-emulator: {} packets answered, {} rejected, clamp force {:.2f} N\n",
+                   c.answered, c.rejected, rig.truth().contact_force[2]);
+      }
+    }
+    const auto& c = emulator.counters();
+    fmt::print(
+        "sbrio-emulator: done after {:.1f} s: {} setpoint packets, {} answered, {} rejected, "
+        "{} stale dropped, {} transport errors, {} watchdog trips\n",
+        std::chrono::duration<double>(clock.now() - start).count(), c.received, c.answered,
+        c.rejected, c.stale_dropped, c.transport_errors, c.watchdog_trips);
+    return 0;
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "error: {}\n", e.what());
+    return 1;
+  }
+}

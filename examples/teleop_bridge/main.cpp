@@ -1,0 +1,274 @@
+// endohaptics-bridge: the program between the operator's stylus and the sbRIO. Wires a UDP
+// transport, a haptic device (a scripted operator, or a Geomagic Touch through OpenHaptics), the
+// 2016 force estimator and the cylindrical mapping into a TeleopLoop, then prints table-3.1
+// figures. SIGINT/SIGTERM: zero force, motors disabled, final statistics, exit 0.
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <atomic>
+#include <boost/lockfree/spsc_queue.hpp>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <endohaptics/estimation/force_estimator.hpp>
+#include <endohaptics/estimation/paced_estimator.hpp>
+#include <endohaptics/io/udp_transport.hpp>
+#include <endohaptics/kinematics/cylindrical_mapper.hpp>
+#include <endohaptics/sim/scripted_operator.hpp>
+#include <endohaptics/teleop/realtime.hpp>
+#include <endohaptics/teleop/teleop_loop.hpp>
+#include <endohaptics/teleop/tick_recorder.hpp>
+#include <memory>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include "config.hpp"
+#ifdef ENDOHAPTICS_HAVE_OPENHAPTICS
+#include "openhaptics_device.hpp"
+#endif
+
+namespace tp = endohaptics::teleop;
+namespace est = endohaptics::estimation;
+namespace eio = endohaptics::io;
+using std::chrono::nanoseconds;
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+extern "C" void on_signal(int) { g_stop.store(true); }
+
+struct Options {
+  std::string sbrio = "169.254.4.42:61556";
+  std::string rate = "1000";
+  double duration = 0.0;
+  std::string device = "sim";
+  std::string config_path;
+  std::string log_path;
+  bool stats = false;
+  int fifo_priority = 0;
+  int cpu = -1;
+  double busy_wait_us = 0.0;
+};
+
+// One second of the loop, summed up on the loop thread (no allocation) for the printer thread.
+struct Window {
+  double t = 0.0;  // s since start
+  double rate = 0.0;
+  double period_error_p99 = 0.0;  // s
+  double round_trip_mean = 0.0;   // s
+  double loss_percent = 0.0;
+  std::uint64_t decode_errors = 0;
+  std::uint64_t link_losses = 0;
+  std::uint64_t recoveries = 0;
+  tp::LinkState link = tp::LinkState::waiting;
+  double clamp_force = 0.0;  // N, the estimate for clamp 1 at the end of the window
+};
+
+std::pair<std::string, std::uint16_t> parse_endpoint(const std::string& s) {
+  const auto colon = s.rfind(':');
+  if (colon == std::string::npos || colon == 0 || colon + 1 == s.size()) {
+    throw endohaptics::Error("--sbrio must be HOST:PORT, got '" + s + "'");
+  }
+  const std::string port_text = s.substr(colon + 1);
+  std::size_t used = 0;
+  unsigned long port = 0;
+  try {
+    port = std::stoul(port_text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != port_text.size() || port == 0 || port > 65535) {
+    throw endohaptics::Error("--sbrio port must be 1..65535, got '" + port_text + "'");
+  }
+  return {s.substr(0, colon), static_cast<std::uint16_t>(port)};
+}
+
+template <typename Device>
+int run_bridge(Device& device, tp::SteadyClock& clock, const Options& opt,
+               const bridge::Config& cfg) {
+  const auto [host, port] = parse_endpoint(opt.sbrio);
+  eio::UdpConfig udp;
+  udp.remote_address = host;
+  udp.remote_port = port;
+  udp.local_address = host.find(':') != std::string::npos ? "::" : "0.0.0.0";
+  eio::UdpTransport transport(udp);
+
+  // The 2016 models run at their own rates (rate::Decimate) on a 1 kHz grid; PacedEstimator
+  // keeps that grid whatever the loop rate (--rate max) and through lost packets.
+  auto settings = cfg.estimator;
+  settings.loop_period = 1e-3;
+  est::ForceEstimator<est::rate::Decimate> estimator(settings);
+  est::PacedEstimator paced(estimator, clock, std::chrono::milliseconds(1));
+  endohaptics::kinematics::CylindricalMapper<> mapper(cfg.mapping);
+
+  tp::TeleopLoopConfig loop_config;
+  if (opt.rate == "max") {
+    loop_config.period = nanoseconds(0);
+  } else {
+    double hz = 0.0;
+    try {
+      hz = std::stod(opt.rate);
+    } catch (const std::exception&) {
+      hz = 0.0;
+    }
+    if (!(hz >= 1.0 && hz <= 100000.0)) {
+      throw endohaptics::Error("--rate must be 1..100000 Hz or 'max', got '" + opt.rate + "'");
+    }
+    loop_config.period = nanoseconds(static_cast<std::int64_t>(1e9 / hz + 0.5));
+  }
+  loop_config.receive_timeout = nanoseconds(static_cast<std::int64_t>(cfg.receive_timeout * 1e9));
+  loop_config.safety = cfg.safety;
+  tp::TeleopLoop loop(transport, device, paced, mapper, clock, loop_config);
+
+  if (opt.fifo_priority > 0 || opt.cpu >= 0) {
+    const auto report = tp::apply_realtime({opt.fifo_priority, opt.cpu, opt.fifo_priority > 0});
+    for (const auto& m : report.messages) fmt::print("bridge: realtime: {}\n", m);
+  }
+
+  // Per-tick log and per-second windows leave the loop thread through lock-free rings.
+  std::unique_ptr<tp::TickRecorder> recorder;
+  std::FILE* log = nullptr;
+  if (!opt.log_path.empty()) {
+    log = std::fopen(opt.log_path.c_str(), "w");
+    if (log == nullptr) throw endohaptics::Error("cannot write the log '" + opt.log_path + "'");
+    recorder = std::make_unique<tp::TickRecorder>();
+    tp::TickRecorder::write_header(log);
+  }
+  boost::lockfree::spsc_queue<Window> windows(64);
+  std::atomic<bool> done{false};
+  std::thread writer([&] {
+    auto print_window = [](const Window& w) {
+      fmt::print(
+          "bridge: t {:5.1f} s  rate {:7.1f} Hz  period err p99 {:6.1f} us  round trip {:6.1f} us"
+          "  loss {:6.3f} %  decode errors {}  link {}  (lost {}, recovered {})  clamp1 {:+.2f} "
+          "N\n",
+          w.t, w.rate, w.period_error_p99 * 1e6, w.round_trip_mean * 1e6, w.loss_percent,
+          w.decode_errors, to_string(w.link), w.link_losses, w.recoveries, w.clamp_force);
+    };
+    for (;;) {
+      const bool last = done.load();
+      if (recorder) recorder->drain(log);
+      Window w;
+      while (windows.pop(w)) {
+        if (opt.stats) print_window(w);
+      }
+      if (last) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  });
+
+  fmt::print("bridge: sbRIO {}:{}, rate {}, device {}, estimator 2016 models (paced at 1 kHz)\n",
+             host, port, opt.rate == "max" ? "max" : opt.rate + " Hz", opt.device);
+  std::fflush(stdout);
+  const auto start = clock.now();
+  const auto end = opt.duration > 0 ? start + std::chrono::duration_cast<nanoseconds>(
+                                                  std::chrono::duration<double>(opt.duration))
+                                    : nanoseconds::max();
+  tp::LoopStats window(loop_config.period);
+  auto next_window = start + std::chrono::seconds(1);
+  std::uint64_t decode_errors_before = 0;
+  loop.run([&] { return g_stop.load(std::memory_order_relaxed) || clock.now() >= end; },
+           [&](const tp::TickResult& r) {
+             const auto now = clock.now();
+             if (recorder) (void)recorder->push(tp::TickRecord::from(r, now));
+             window.record_tick_start(now);
+             window.record_exchange(r.exchange, r.round_trip, 0);
+             if (now >= next_window) {
+               next_window += std::chrono::seconds(1);
+               Window w;
+               w.t = std::chrono::duration<double>(now - start).count();
+               w.rate = window.rate();
+               w.period_error_p99 = window.period_error().quantile(0.99);
+               w.round_trip_mean = window.round_trip().mean();
+               w.loss_percent = window.loss_percent();
+               w.decode_errors = loop.stats().decode_errors() - decode_errors_before;
+               decode_errors_before = loop.stats().decode_errors();
+               w.link_losses = loop.watchdog().link_losses();
+               w.recoveries = loop.watchdog().recoveries();
+               w.link = r.link;
+               w.clamp_force = r.joint_force[2];
+               (void)windows.push(w);
+               window.reset();
+             }
+           },
+           nanoseconds(static_cast<std::int64_t>(opt.busy_wait_us * 1e3)));
+  loop.shutdown();  // zero force on the device, one packet with every motor disabled
+  done.store(true);
+  writer.join();
+  if (log != nullptr) std::fclose(log);
+
+  const auto& s = loop.stats();
+  fmt::print("bridge: final statistics after {:.2f} s\n{}",
+             std::chrono::duration<double>(clock.now() - start).count(), s.to_table());
+  fmt::print("bridge: link losses {}, recoveries {}, watchdog misses {}\n",
+             loop.watchdog().link_losses(), loop.watchdog().recoveries(),
+             loop.watchdog().total_misses());
+  const auto& pc = paced.counters();
+  fmt::print("bridge: estimator steps {}, held {}, skipped periods {}, rejected {}\n", pc.steps,
+             pc.held, pc.skipped, pc.rejected);
+  if (recorder) {
+    fmt::print("bridge: log {} rows written to {}, {} dropped (ring full)\n", recorder->written(),
+               opt.log_path, recorder->dropped());
+  }
+  const double complete =
+      s.ticks() ? 100.0 * static_cast<double>(s.received()) / static_cast<double>(s.ticks()) : 0.0;
+  fmt::print(
+      "bridge: summary ticks={} received={} complete={:.2f}% decode_errors={} "
+      "link_losses={} recoveries={}\n",
+      s.ticks(), s.received(), complete, s.decode_errors(), loop.watchdog().link_losses(),
+      loop.watchdog().recoveries());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"endohaptics bridge: stylus <-> sbRIO teleoperation with sensorless force feedback"};
+  Options opt;
+  app.add_option("--sbrio", opt.sbrio, "sbRIO address HOST:PORT")->capture_default_str();
+  app.add_option("--rate", opt.rate, "loop rate in Hz, or 'max' (as fast as the link allows)")
+      ->capture_default_str();
+  app.add_option("--duration", opt.duration, "seconds to run (0: until SIGINT)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--device", opt.device, "haptic device: sim (scripted operator) or openhaptics")
+      ->check(CLI::IsMember({"sim", "openhaptics"}))
+      ->capture_default_str();
+  app.add_option("--config", opt.config_path, "JSON: mapping, safety, estimator, operator, loop")
+      ->check(CLI::ExistingFile);
+  app.add_option("--log", opt.log_path, "per-tick CSV log");
+  app.add_flag("--stats", opt.stats, "print table-3.1 figures every second");
+  app.add_option("--fifo-priority", opt.fifo_priority, "SCHED_FIFO priority 1..99 (0: off)")
+      ->check(CLI::Range(0, 99));
+  app.add_option("--cpu", opt.cpu, "pin the loop thread to this CPU (-1: no pinning)")
+      ->check(CLI::Range(-1, 1023));
+  app.add_option("--busy-wait-us", opt.busy_wait_us,
+                 "spin the last microseconds of each period (lower jitter, one busy core)")
+      ->check(CLI::Range(0.0, 1000.0));
+  CLI11_PARSE(app, argc, argv);
+
+  try {
+    std::signal(SIGINT, on_signal);
+    std::signal(SIGTERM, on_signal);
+    const bridge::Config cfg =
+        opt.config_path.empty() ? bridge::Config{} : bridge::load_config(opt.config_path);
+    tp::SteadyClock clock;
+    if (opt.device == "sim") {
+      endohaptics::sim::ScriptedOperator<tp::SteadyClock> device(clock, cfg.operator_script);
+      return run_bridge(device, clock, opt, cfg);
+    }
+#ifdef ENDOHAPTICS_HAVE_OPENHAPTICS
+    bridge::OpenHapticsDevice device;
+    return run_bridge(device, clock, opt, cfg);
+#else
+    fmt::print(stderr,
+               "error: this bridge was built without the OpenHaptics SDK (--device openhaptics); "
+               "see docs/rig.md\n");
+    return 2;
+#endif
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "error: {}\n", e.what());
+    return 1;
+  }
+}

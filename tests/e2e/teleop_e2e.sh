@@ -1,0 +1,92 @@
+#!/usr/bin/env bash
+# End-to-end tests on UDP loopback: endohaptics-sbrio-emulator + endohaptics-bridge as separate
+# processes, bounded in time. Usage: teleop_e2e.sh BIN_DIR steady|kill-restart
+set -euo pipefail
+bin=$1
+scenario=$2
+work=$(mktemp -d)
+emulator_pid=""
+cleanup() {
+  [[ -n $emulator_pid ]] && kill "$emulator_pid" 2>/dev/null || true
+  rm -rf "$work"
+}
+trap cleanup EXIT
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+# Starts the emulator on $1 (0: any port) and sets emulator_pid and port.
+start_emulator() {
+  "$bin/endohaptics-sbrio-emulator" --bind 127.0.0.1 --port "$1" --quiet >"$work/emulator.$1.out" 2>&1 &
+  emulator_pid=$!
+  for _ in $(seq 100); do
+    port=$(sed -n 's/.*listening on 127.0.0.1:\([0-9]*\).*/\1/p' "$work/emulator.$1.out")
+    [[ -n $port ]] && return 0
+    kill -0 "$emulator_pid" 2>/dev/null || fail "emulator died: $(cat "$work/emulator.$1.out")"
+    sleep 0.05
+  done
+  fail "emulator did not report its port"
+}
+
+summary_value() { sed -n "s/.*summary .*$1=\([0-9.]*\).*/\1/p" "$2"; }
+
+case $scenario in
+  steady)
+    start_emulator 0
+    "$bin/endohaptics-bridge" --sbrio "127.0.0.1:$port" --duration 2 >"$work/bridge.out" 2>&1 ||
+      fail "bridge exited with $?: $(cat "$work/bridge.out")"
+    cat "$work/bridge.out"
+    complete=$(summary_value complete "$work/bridge.out")
+    decode=$(summary_value decode_errors "$work/bridge.out")
+    ticks=$(summary_value ticks "$work/bridge.out")
+    [[ -n $complete && -n $decode && -n $ticks ]] || fail "no summary line"
+    awk -v c="$complete" 'BEGIN { exit !(c >= 95) }' || fail "only $complete % of ticks complete"
+    [[ $decode == 0 ]] || fail "$decode decode errors"
+    awk -v t="$ticks" 'BEGIN { exit !(t >= 1800) }' || fail "only $ticks ticks in 2 s at 1 kHz"
+    echo "PASS: $ticks ticks, $complete % complete, 0 decode errors"
+    ;;
+  kill-restart)
+    start_emulator 0
+    first_port=$port
+    "$bin/endohaptics-bridge" --sbrio "127.0.0.1:$port" --duration 4 --log "$work/ticks.csv" \
+      >"$work/bridge.out" 2>&1 &
+    bridge_pid=$!
+    sleep 1.3
+    kill -9 "$emulator_pid"
+    wait "$emulator_pid" 2>/dev/null || true
+    emulator_pid=""
+    sleep 1.0
+    start_emulator "$first_port"
+    wait "$bridge_pid" || fail "bridge exited with $?: $(cat "$work/bridge.out")"
+    cat "$work/bridge.out"
+    # Columns: 1 time, 2 status, 3 link (0 waiting, 1 up, 2 degraded, 3 lost, 4 recovering),
+    # 7 force_scale, 28-30 stylus force.
+    awk -F, '
+      NR == 1 { next }
+      { n++ }
+      $3 == 1 && !lost_at { last_up = $1; up_rows++ }
+      $3 == 2 && !lost_at { misses++ }
+      $3 == 1 { misses = 0 }
+      $3 == 3 && !lost_at { lost_at = $1; misses_at_loss = misses + 1 }
+      $3 == 3 { lost_rows++; if ($28 != 0 || $29 != 0 || $30 != 0) forced++ }
+      lost_at && $3 == 4 && !rec_at { rec_at = $1; first_scale = $7 }
+      rec_at && $1 > rec_at + 0.25 && $1 < rec_at + 0.3 { mid_scale = $7 }
+      rec_at && $1 > rec_at + 0.7 && $3 == 1 { back_up = 1; final_scale = $7 }
+      END {
+        printf "rows %d, up before kill %d, lost at %.4f s after last up (%d misses), lost rows %d, " \
+               "recovering at %.3f s, ramp %.3f -> %.3f -> %.3f\n", n, up_rows, lost_at - last_up,
+               misses_at_loss, lost_rows, rec_at, first_scale, mid_scale, final_scale
+        if (up_rows < 500) { print "FAIL: too few good ticks before the kill"; exit 1 }
+        if (!lost_at) { print "FAIL: the bridge never entered its safe state"; exit 1 }
+        if (misses_at_loss != 11) { print "FAIL: link lost after " misses_at_loss " misses, not 11"; exit 1 }
+        if (lost_at - last_up > 0.05) { print "FAIL: safe state too late"; exit 1 }
+        if (lost_rows < 700) { print "FAIL: the bridge did not keep running while the link was down"; exit 1 }
+        if (forced) { print "FAIL: force rendered in the safe state"; exit 1 }
+        if (!rec_at) { print "FAIL: no recovery after the restart"; exit 1 }
+        if (!(first_scale < 0.05 && mid_scale > 0.3 && mid_scale < 0.8 && final_scale == 1)) {
+          print "FAIL: the force did not ramp back in"; exit 1 }
+        if (!back_up) { print "FAIL: the link did not come back up"; exit 1 }
+      }' "$work/ticks.csv" || fail "kill/restart behaviour (see above)"
+    grep -q "link_losses=1 recoveries=1" "$work/bridge.out" || fail "summary should count 1 loss, 1 recovery"
+    echo "PASS: safe state on loss, kept running, recovered with a force ramp"
+    ;;
+  *) fail "unknown scenario $scenario" ;;
+esac
