@@ -12,6 +12,7 @@
 #include <endohaptics/io/udp_server_transport.hpp>
 #include <endohaptics/sim/sbrio_emulator.hpp>
 #include <endohaptics/sim/simulated_rig.hpp>
+#include <endohaptics/teleop/realtime.hpp>
 #include <map>
 #include <memory>
 #include <string>
@@ -75,6 +76,7 @@ int main(int argc, char** argv) {
   try {
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
+    (void)endohaptics::teleop::apply_realtime({.timer_slack_ns = 1});  // prompt poll timeouts
     eio::UdpServerTransport transport(eio::UdpServerConfig{bind, port});
     tp::SteadyClock clock;
     sim::SimulatedRig<4> rig(sim::endowrist_2016_rig<4>(environments.at(environment)));

@@ -1,0 +1,168 @@
+// The whole loop on UDP loopback: TeleopLoop (UdpTransport, scripted operator, 2016 estimator
+// paced at 1 kHz, cylindrical mapping) against SbrioEmulator + SimulatedRig (UdpServerTransport)
+// in another thread. Pacing quality at 1 kHz side by side with the machine's bare
+// clock_nanosleep pacing (the floor any loop on this machine sits on), and the rate with
+// `--rate max` (period 0). Figures are user counters: rate_hz, loss_pct, p99_period_err_us,
+// max_period_err_us, deadline_misses. Arg: ticks per run.
+#include <benchmark/benchmark.h>
+
+#include <sched.h>
+
+#include <atomic>
+#include <chrono>
+#include <endohaptics/estimation/force_estimator.hpp>
+#include <endohaptics/estimation/paced_estimator.hpp>
+#include <endohaptics/io/udp_server_transport.hpp>
+#include <endohaptics/io/udp_transport.hpp>
+#include <endohaptics/kinematics/cylindrical_mapper.hpp>
+#include <endohaptics/sim/sbrio_emulator.hpp>
+#include <endohaptics/sim/scripted_operator.hpp>
+#include <endohaptics/sim/simulated_rig.hpp>
+#include <endohaptics/teleop/realtime.hpp>
+#include <endohaptics/teleop/teleop_loop.hpp>
+#include <memory>
+#include <thread>
+
+namespace {
+
+namespace io = endohaptics::io;
+namespace sim = endohaptics::sim;
+namespace tp = endohaptics::teleop;
+namespace est = endohaptics::estimation;
+using std::chrono::nanoseconds;
+
+// The emulated sbRIO in its own thread, on 127.0.0.1, any free port.
+class EmulatorThread {
+ public:
+  explicit EmulatorThread(int fifo_priority = 0)
+      : server_({.bind_address = "127.0.0.1", .port = 0}),
+        rig_(sim::endowrist_2016_rig<4>(sim::Environment::tissue)),
+        emulator_(server_, rig_, clock_),
+        thread_([this, fifo_priority] {
+          (void)tp::apply_realtime({.fifo_priority = fifo_priority, .timer_slack_ns = 1});
+          while (!stop_.load(std::memory_order_relaxed)) {
+            (void)emulator_.poll(std::chrono::milliseconds(1));
+          }
+        }) {}
+  ~EmulatorThread() {
+    stop_.store(true);
+    thread_.join();
+  }
+  [[nodiscard]] std::uint16_t port() const { return server_.local_endpoint().port(); }
+
+ private:
+  io::UdpServerTransport server_;
+  tp::SteadyClock clock_;
+  sim::SimulatedRig<4> rig_;
+  sim::SbrioEmulator<io::UdpServerTransport, sim::SimulatedRig<4>> emulator_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+void report(benchmark::State& st, const tp::LoopStats& s) {
+  st.counters["rate_hz"] = s.rate();
+  st.counters["loss_pct"] = s.loss_percent();
+  st.counters["p99_period_err_us"] = s.period_error().quantile(0.99) * 1e6;
+  st.counters["max_period_err_us"] = s.period_error().max() * 1e6;
+  st.counters["deadline_misses"] = static_cast<double>(s.deadline_misses());
+  st.counters["p99_round_trip_us"] = s.round_trip().quantile(0.99) * 1e6;
+}
+
+// fifo: SCHED_FIFO for the loop (80) and the emulator (70) when permitted (root); the
+// `fifo_applied` counter says whether it was.
+void run_loop(benchmark::State& st, nanoseconds period, nanoseconds busy_tail, bool fifo = false) {
+  const auto ticks = static_cast<std::uint64_t>(st.range(0));
+  const auto rt = tp::apply_realtime({.fifo_priority = fifo ? 80 : 0, .timer_slack_ns = 1});
+  for (auto _ : st) {
+    st.PauseTiming();
+    auto emulator = std::make_unique<EmulatorThread>(rt.fifo ? 70 : 0);
+    io::UdpTransport transport({.local_address = "127.0.0.1",
+                                .remote_address = "127.0.0.1",
+                                .remote_port = emulator->port()});
+    tp::SteadyClock clock;
+    sim::ScriptedOperator<tp::SteadyClock> hand(clock);
+    est::ForceEstimator<est::rate::Decimate> estimator;
+    est::PacedEstimator paced(estimator, clock, std::chrono::milliseconds(1));
+    endohaptics::kinematics::CylindricalMapper<> mapper;
+    tp::TeleopLoopConfig config;
+    config.period = period;
+    tp::TeleopLoop loop(transport, hand, paced, mapper, clock, config);
+    std::uint64_t n = 0;
+    // Warm-up until the link is up, then measure on fresh statistics.
+    loop.run([&] { return n >= 200; }, [&](const tp::TickResult&) { ++n; });
+    tp::LoopStats stats(period);
+    n = 0;
+    st.ResumeTiming();
+    loop.run([&] { return n >= ticks; },
+             [&](const tp::TickResult& r) {
+               ++n;
+               stats.record_tick_start(clock.now());
+               stats.record_exchange(r.exchange, r.round_trip, 0);
+             },
+             busy_tail);
+    st.PauseTiming();
+    report(st, stats);
+    emulator.reset();
+    st.ResumeTiming();
+  }
+  st.SetItemsProcessed(static_cast<std::int64_t>(ticks) * st.iterations());
+  st.counters["fifo_applied"] = rt.fifo ? 1 : 0;
+  if (rt.fifo) {  // back to normal scheduling for the benchmarks that follow
+    sched_param normal{};
+    (void)::sched_setscheduler(0, SCHED_OTHER, &normal);
+  }
+}
+
+void BM_Loopback_1kHz(benchmark::State& st) {
+  run_loop(st, std::chrono::milliseconds(1), nanoseconds(0));
+}
+void BM_Loopback_1kHz_busy_tail_200us(benchmark::State& st) {
+  run_loop(st, std::chrono::milliseconds(1), std::chrono::microseconds(200));
+}
+void BM_Loopback_1kHz_fifo_busy_tail_200us(benchmark::State& st) {
+  run_loop(st, std::chrono::milliseconds(1), std::chrono::microseconds(200), true);
+}
+void BM_Loopback_max_rate(benchmark::State& st) { run_loop(st, nanoseconds(0), nanoseconds(0)); }
+
+// The floor: a bare absolute-deadline clock_nanosleep loop at 1 kHz on the same machine, its
+// period error measured the same way (LoopStats).
+void BM_Baseline_clock_nanosleep_1kHz(benchmark::State& st) {
+  const auto ticks = st.range(0);
+  (void)tp::apply_realtime({.timer_slack_ns = 1});
+  for (auto _ : st) {
+    tp::SteadyClock clock;
+    tp::LoopStats stats(std::chrono::milliseconds(1));
+    auto next = clock.now();
+    for (std::int64_t i = 0; i < ticks; ++i) {
+      stats.record_tick_start(clock.now());
+      next += std::chrono::milliseconds(1);
+      clock.sleep_until(next);
+    }
+    report(st, stats);
+  }
+  st.SetItemsProcessed(ticks * st.iterations());
+}
+
+}  // namespace
+
+BENCHMARK(BM_Baseline_clock_nanosleep_1kHz)
+    ->Arg(3000)
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_Loopback_1kHz)->Arg(3000)->Iterations(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Loopback_1kHz_busy_tail_200us)
+    ->Arg(3000)
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_Loopback_1kHz_fifo_busy_tail_200us)
+    ->Arg(3000)
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_Loopback_max_rate)
+    ->Arg(60000)
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
