@@ -94,7 +94,10 @@ int main(int argc, char** argv) {
       std::fputs(
           "time,enable_mask,active_mask,setpoint0,setpoint1,setpoint2,setpoint3,"
           "position0,position1,position2,position3,velocity0,velocity1,velocity2,velocity3,"
-          "current0,current1,current2,current3,force0,force1,force2,force3\n",
+          "current0,current1,current2,current3,force0,force1,force2,force3,"
+          "reported_position0,reported_position1,reported_position2,reported_position3,"
+          "reported_velocity0,reported_velocity1,reported_velocity2,reported_velocity3,"
+          "reported_current0,reported_current1,reported_current2,reported_current3\n",
           truth.file);
     }
     // Line buffering so a supervising script sees the port as soon as it is bound.
@@ -133,6 +136,11 @@ int main(int argc, char** argv) {
         for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", tr.motor_velocity[i]);
         for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", tr.motor_current[i]);
         for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", tr.contact_force[i]);
+        // What the sbRIO reports (encoder, its velocity, its filtered current): the inputs a
+        // force model sees, next to the truth it should reproduce.
+        for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", state.position[i]);
+        for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", state.velocity[i]);
+        for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", state.effort[i]);
         row += '\n';
         std::fputs(row.c_str(), truth.file);
       }
