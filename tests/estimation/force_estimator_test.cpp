@@ -1,20 +1,4 @@
-// Eigen's own heap use goes through malloc, not operator new: count it through
-// EIGEN_RUNTIME_NO_MALLOC with an eigen_assert that records instead of aborting (this TU only).
-#include <atomic>
-#include <cstddef>
-#include <cstdlib>
-#include <new>
-
-namespace {
-std::atomic<long> g_new_calls{0};
-std::atomic<long> g_eigen_assert_failures{0};
-}  // namespace
-
-#define EIGEN_RUNTIME_NO_MALLOC
-#define eigen_assert(x)                             \
-  do {                                              \
-    if (!(x)) g_eigen_assert_failures.fetch_add(1); \
-  } while (false)
+#include "alloc_counter.hpp"  // first: counts every heap allocation of this executable
 
 #include "endohaptics/estimation/force_estimator.hpp"
 
@@ -35,15 +19,6 @@ std::atomic<long> g_eigen_assert_failures{0};
 #include "endohaptics/teleop/teleop_loop.hpp"
 #include "shared_data.hpp"
 
-// Every allocation through operator new is counted (array and aligned forms forward to these).
-void* operator new(std::size_t size) {
-  g_new_calls.fetch_add(1);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-
 namespace {
 
 namespace est = endohaptics::estimation;
@@ -51,6 +26,7 @@ namespace m = endohaptics::model;
 namespace rate = endohaptics::estimation::rate;
 using endohaptics::Error;
 using endohaptics::kinematics::ToolJoint;
+using endohaptics::test::allocations_during;
 using est::ForceEstimator;
 using est::ForceEstimator2016;
 using est::ForceStatus;
@@ -58,17 +34,6 @@ using est::JointState;
 
 using Decimated = ForceEstimator<rate::Decimate>;
 using Forces = Decimated::Forces;
-
-// Counts operator-new calls and Eigen heap allocations made by `f`.
-template <typename F>
-long allocations_during(F&& f) {
-  const long before_new = g_new_calls.load();
-  const long before_eigen = g_eigen_assert_failures.load();
-  Eigen::internal::set_is_malloc_allowed(false);
-  f();
-  Eigen::internal::set_is_malloc_allowed(true);
-  return (g_new_calls.load() - before_new) + (g_eigen_assert_failures.load() - before_eigen);
-}
 
 template <typename Scalar = double>
 JointState<Scalar> constant_state(Scalar i_roll, Scalar i_pitch, Scalar i_clamp1, Scalar i_clamp2,

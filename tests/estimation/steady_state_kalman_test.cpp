@@ -1,13 +1,4 @@
-// EIGEN_RUNTIME_NO_MALLOC must come before any Eigen header. Release builds compile
-// eigen_assert out, so route it to a counter: the "no allocation" check stays live.
-#define EIGEN_RUNTIME_NO_MALLOC
-namespace eh_test {
-inline int eigen_assert_failures = 0;
-}
-#define eigen_assert(x)                           \
-  do {                                            \
-    if (!(x)) ++::eh_test::eigen_assert_failures; \
-  } while (false)
+#include "alloc_counter.hpp"  // first: counts every heap allocation of this executable
 
 #include "endohaptics/estimation/steady_state_kalman.hpp"
 
@@ -16,27 +7,11 @@ inline int eigen_assert_failures = 0;
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <cmath>
-#include <cstddef>
-#include <cstdlib>
 #include <limits>
-#include <new>
 #include <random>
 #include <type_traits>
 
 #include "endohaptics/model/state_space.hpp"
-
-// Counts every global operator new in this executable: the tick loop must not allocate.
-namespace eh_test {
-inline long allocations = 0;
-inline int* volatile escape = nullptr;
-}  // namespace eh_test
-void* operator new(std::size_t size) {
-  ++eh_test::allocations;
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 namespace {
 
@@ -45,6 +20,7 @@ using endohaptics::estimation::DiscreteLinearModel;
 using endohaptics::estimation::KalmanStatus;
 using endohaptics::estimation::SteadyStateKalman;
 using endohaptics::model::StateSpace;
+using endohaptics::test::allocations_during;
 
 template <int R, int C, typename Scalar = double>
 using Mat = Eigen::Matrix<Scalar, R, C>;
@@ -381,39 +357,34 @@ TEST_CASE_TEMPLATE("random models: gain identities, convergence, no allocation p
   CHECK((plant.state() - filter.state()).norm() < 1e-9 * initial_error);
 
   // 10,000 ticks without one heap allocation (global operator new) or Eigen malloc.
-  const long allocations_before = eh_test::allocations;
-  const int eigen_failures_before = eh_test::eigen_assert_failures;
-  Eigen::internal::set_is_malloc_allowed(false);
   double sink = 0.0;
-  for (int k = 0; k < 10000; ++k) {
-    for (int i = 0; i < Nu; ++i) u[i] = std::cos(0.01 * k + i);
-    bad_status += filter.update(measure(plant.state(), u), u) != KalmanStatus::ok;
-    sink += filter.estimate_output(u)[0];
-    bad_status += filter.predict(u) != KalmanStatus::ok;
-    (void)plant.step(u);
-  }
-  Eigen::internal::set_is_malloc_allowed(true);
-  CHECK(eh_test::allocations == allocations_before);
-  CHECK(eh_test::eigen_assert_failures == eigen_failures_before);
+  const long allocations = allocations_during([&] {
+    for (int k = 0; k < 10000; ++k) {
+      for (int i = 0; i < Nu; ++i) u[i] = std::cos(0.01 * k + i);
+      bad_status += filter.update(measure(plant.state(), u), u) != KalmanStatus::ok;
+      sink += filter.estimate_output(u)[0];
+      bad_status += filter.predict(u) != KalmanStatus::ok;
+      (void)plant.step(u);
+    }
+  });
+  CHECK(allocations == 0);
   CHECK(bad_status == 0);
   CHECK(std::isfinite(sink));
 }
 
 TEST_CASE("the allocation probes see allocations (so the tick test can fail)") {
-  // operator new: what std containers and strings use. The pointer escapes through a volatile
-  // so the allocation cannot be elided.
-  const long allocations_before = eh_test::allocations;
-  eh_test::escape = new int(42);
-  const long allocations_after = eh_test::allocations;
-  delete eh_test::escape;
-  CHECK(allocations_after == allocations_before + 1);
+  // operator new: what std containers and strings use. The pointer is volatile so the
+  // allocation cannot be elided.
+  CHECK(allocations_during([] {
+          int* volatile p = new int(3);
+          delete p;
+        }) == 1);
 
   // Eigen allocates with malloc, not operator new: EIGEN_RUNTIME_NO_MALLOC sees that.
-  const int eigen_failures_before = eh_test::eigen_assert_failures;
-  Eigen::internal::set_is_malloc_allowed(false);
-  const Eigen::MatrixXd heap = Eigen::MatrixXd::Identity(3, 3);
-  Eigen::internal::set_is_malloc_allowed(true);
-  CHECK(eh_test::eigen_assert_failures > eigen_failures_before);
+  const long eigen_before = endohaptics::test::eigen_mallocs.load();
+  Eigen::MatrixXd heap;
+  CHECK(allocations_during([&] { heap = Eigen::MatrixXd::Identity(3, 3); }) >= 1);
+  CHECK(endohaptics::test::eigen_mallocs.load() > eigen_before);
   CHECK(heap.trace() == 3.0);
 }
 

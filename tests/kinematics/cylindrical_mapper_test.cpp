@@ -1,32 +1,17 @@
-// The no-allocation test below needs Eigen's malloc guard, which must be enabled before Eigen.
-#define EIGEN_RUNTIME_NO_MALLOC
+#include "alloc_counter.hpp"  // first: counts every heap allocation of this executable
+
 #include "endohaptics/kinematics/cylindrical_mapper.hpp"
 
 #include <doctest/doctest.h>
 
 #include <Eigen/Geometry>  // cross()
 
-#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
-#include <new>
 #include <numbers>
 #include <random>
 #include <string>
-
-// Counts every global allocation of this test executable (the no-allocation test reads it).
-namespace {
-std::atomic<long> allocations{0};
-}  // namespace
-
-void* operator new(std::size_t size) {
-  allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 namespace {
 
@@ -34,6 +19,7 @@ using endohaptics::kinematics::CylindricalMapper;
 using endohaptics::kinematics::CylindricalMapperConfig;
 using endohaptics::kinematics::MapperStatus;
 using endohaptics::kinematics::ToolJoint;
+using endohaptics::test::allocations_during;
 using Mapper = CylindricalMapper<double>;
 using Config = Mapper::Config;
 using Vector3 = Mapper::Vector3;
@@ -520,17 +506,16 @@ TEST_CASE("10000 ticks of position and force mapping allocate nothing") {
   Motors setpoint = Motors::Zero();
   Vector3 force = Vector3::Zero();
   double sink = 0;
-  const long before = allocations.load();
-  Eigen::internal::set_is_malloc_allowed(false);
-  for (int tick = 0; tick < 10000; ++tick) {
-    const double t = tick * 1e-3;
-    const Vector3 p(0.12 * std::cos(t), 0.12 * std::sin(t), 0.1 + 0.01 * std::sin(3 * t));
-    const auto position = mapper.map_position(p, setpoint);
-    const auto feedback = mapper.map_force(Motors(0.3, -0.2, 0.5, -0.5), force);
-    if (!position.ok() || !feedback.ok()) sink += 1000;
-    sink += setpoint.sum() + force.sum();
-  }
-  Eigen::internal::set_is_malloc_allowed(true);
-  CHECK(allocations.load() == before);
+  const long allocations = allocations_during([&] {
+    for (int tick = 0; tick < 10000; ++tick) {
+      const double t = tick * 1e-3;
+      const Vector3 p(0.12 * std::cos(t), 0.12 * std::sin(t), 0.1 + 0.01 * std::sin(3 * t));
+      const auto position = mapper.map_position(p, setpoint);
+      const auto feedback = mapper.map_force(Motors(0.3, -0.2, 0.5, -0.5), force);
+      if (!position.ok() || !feedback.ok()) sink += 1000;
+      sink += setpoint.sum() + force.sum();
+    }
+  });
+  CHECK(allocations == 0);
   CHECK(std::isfinite(sink));
 }

@@ -1,32 +1,17 @@
-// The no-allocation test below needs Eigen's malloc guard, which must be enabled before Eigen.
-#define EIGEN_RUNTIME_NO_MALLOC
+#include "alloc_counter.hpp"  // first: counts every heap allocation of this executable
+
 #include "endohaptics/kinematics/denavit_hartenberg.hpp"
 
 #include <doctest/doctest.h>
 
 #include <Eigen/Geometry>
 #include <array>
-#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
-#include <new>
 #include <numbers>
 #include <random>
 #include <string>
-
-// Counts every global allocation of this test executable (the no-allocation test reads it).
-namespace {
-std::atomic<long> allocations{0};
-}  // namespace
-
-void* operator new(std::size_t size) {
-  allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 namespace {
 
@@ -37,6 +22,7 @@ using endohaptics::kinematics::geomagic_touch_chain;
 using endohaptics::kinematics::JointKind;
 using endohaptics::kinematics::KinematicsStatus;
 using endohaptics::kinematics::TouchGeometry;
+using endohaptics::test::allocations_during;
 
 constexpr double pi = std::numbers::pi;
 constexpr double half_pi = pi / 2;
@@ -351,19 +337,18 @@ TEST_CASE("forward kinematics allocates nothing over 10000 ticks") {
   const Touch touch = geomagic_touch_chain();
   const Hand hand = davinci_hand_chain();
   Touch::Frames frames;
-  Eigen::Isometry3d end;
+  Eigen::Isometry3d end = Eigen::Isometry3d::Identity();
   Touch::JointVector q = Touch::JointVector::Constant(0.1);
   Hand::JointVector qh(0.1, -0.2, 0.05);
   double sink = 0;
-  const long before = allocations.load();
-  Eigen::internal::set_is_malloc_allowed(false);
-  for (int tick = 0; tick < 10000; ++tick) {
-    q[tick % 6] += 1e-4;
-    if (touch.forward(q, frames) != KinematicsStatus::ok) sink += 1;
-    if (hand.forward(qh, end) != KinematicsStatus::ok) sink += 1;
-    sink += frames[5].translation().x() + end.translation().z();
-  }
-  Eigen::internal::set_is_malloc_allowed(true);
-  CHECK(allocations.load() == before);
+  const long allocations = allocations_during([&] {
+    for (int tick = 0; tick < 10000; ++tick) {
+      q[tick % 6] += 1e-4;
+      if (touch.forward(q, frames) != KinematicsStatus::ok) sink += 1;
+      if (hand.forward(qh, end) != KinematicsStatus::ok) sink += 1;
+      sink += frames[5].translation().x() + end.translation().z();
+    }
+  });
+  CHECK(allocations == 0);
   CHECK(std::isfinite(sink));
 }

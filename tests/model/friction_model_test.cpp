@@ -1,37 +1,22 @@
-// Eigen's runtime allocation guard: every per-tick call below runs with malloc forbidden.
-#define EIGEN_RUNTIME_NO_MALLOC
+#include "alloc_counter.hpp"  // first: counts every heap allocation of this executable
+
 #include "endohaptics/model/friction_model.hpp"
 
 #include <doctest/doctest.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <limits>
-#include <new>
 #include <numbers>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "shared_data.hpp"
-
-// Counts every global allocation, so a test can prove that a tick allocates nothing.
-namespace {
-std::atomic<std::size_t> allocations{0};
-}  // namespace
-
-void* operator new(std::size_t size) {
-  allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 namespace {
 
@@ -42,6 +27,7 @@ using endohaptics::model::FrictionOptions;
 using endohaptics::model::FrictionStatus;
 using endohaptics::model::identify_friction;
 using endohaptics::model::JointFriction;
+using endohaptics::test::allocations_during;
 namespace friction_2016 = endohaptics::model::friction_2016;
 
 constexpr double not_a_number = std::numeric_limits<double>::quiet_NaN();
@@ -268,21 +254,19 @@ TEST_CASE("a tick allocates nothing (operator new counter, EIGEN_RUNTIME_NO_MALL
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   int statuses_ok = 0;
-  Eigen::internal::set_is_malloc_allowed(false);
-  const std::size_t before = allocations.load();
-  for (int k = 0; k < 10000; ++k) {
-    for (int j = 0; j < 4; ++j) {
-      current[j] = 0.8 * u(rng);
-      velocity[j] = 0.05 * u(rng);
+  const long allocations = allocations_during([&] {
+    for (int k = 0; k < 10000; ++k) {
+      for (int j = 0; j < 4; ++j) {
+        current[j] = 0.8 * u(rng);
+        velocity[j] = 0.05 * u(rng);
+      }
+      if (k % 100 == 0) velocity[1] = not_a_number;
+      statuses_ok += model.update(current, velocity, current, feedback) == FrictionStatus::ok;
+      statuses_ok += model.compensate(current, velocity, friction, external) == FrictionStatus::ok;
+      statuses_ok += model.breakaway_level(velocity, level) == FrictionStatus::ok;
     }
-    if (k % 100 == 0) velocity[1] = not_a_number;
-    statuses_ok += model.update(current, velocity, current, feedback) == FrictionStatus::ok;
-    statuses_ok += model.compensate(current, velocity, friction, external) == FrictionStatus::ok;
-    statuses_ok += model.breakaway_level(velocity, level) == FrictionStatus::ok;
-  }
-  const std::size_t after = allocations.load();
-  Eigen::internal::set_is_malloc_allowed(true);
-  CHECK(after - before == 0);
+  });
+  CHECK(allocations == 0);
   CHECK(statuses_ok == 3 * (10000 - 100));
 }
 

@@ -1,20 +1,4 @@
-// Eigen's own heap use goes through malloc, not operator new: count it through
-// EIGEN_RUNTIME_NO_MALLOC with an eigen_assert that records instead of aborting (this TU only).
-#include <atomic>
-#include <cstddef>
-#include <cstdlib>
-#include <new>
-
-namespace {
-std::atomic<long> g_new_calls{0};
-std::atomic<long> g_eigen_assert_failures{0};
-}  // namespace
-
-#define EIGEN_RUNTIME_NO_MALLOC
-#define eigen_assert(x)                             \
-  do {                                              \
-    if (!(x)) g_eigen_assert_failures.fetch_add(1); \
-  } while (false)
+#include "alloc_counter.hpp"  // first: counts every heap allocation of this executable
 
 #include "endohaptics/model/hammerstein_wiener.hpp"
 
@@ -26,15 +10,6 @@ std::atomic<long> g_eigen_assert_failures{0};
 
 #include "endohaptics/model/presets_2016.hpp"
 
-// Every allocation through operator new is counted (array forms forward to these).
-void* operator new(std::size_t size) {
-  g_new_calls.fetch_add(1);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-
 namespace {
 
 using endohaptics::model::Deadzone;
@@ -44,6 +19,7 @@ using endohaptics::model::PerChannel;
 using endohaptics::model::Saturation;
 using endohaptics::model::StateSpace;
 using endohaptics::model::StepStatus;
+using endohaptics::test::allocations_during;
 namespace m = endohaptics::model;
 
 template <typename M>
@@ -54,17 +30,6 @@ M random_matrix(std::mt19937_64& rng, double scale = 1.0) {
     out.data()[i] = static_cast<typename M::Scalar>(dist(rng));
   }
   return out;
-}
-
-// Counts operator-new calls and Eigen heap allocations made by `f`.
-template <typename F>
-long allocations_during(F&& f) {
-  const long before_new = g_new_calls.load();
-  const long before_eigen = g_eigen_assert_failures.load();
-  Eigen::internal::set_is_malloc_allowed(false);
-  f();
-  Eigen::internal::set_is_malloc_allowed(true);
-  return (g_new_calls.load() - before_new) + (g_eigen_assert_failures.load() - before_eigen);
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
-// Eigen's runtime allocation guard: the tick test runs with malloc forbidden.
-#define EIGEN_RUNTIME_NO_MALLOC
+#include "alloc_counter.hpp"  // first: counts every heap allocation of this executable
+
 #include "endohaptics/model/human_arm_model.hpp"
 
 #include <doctest/doctest.h>
@@ -8,27 +8,12 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cmath>
 #include <complex>
 #include <cstdlib>
 #include <limits>
-#include <new>
 #include <numbers>
 #include <vector>
-
-// Counts every global allocation, so a test can prove that a tick allocates nothing.
-namespace {
-std::atomic<std::size_t> allocations{0};
-}  // namespace
-
-void* operator new(std::size_t size) {
-  allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 namespace {
 
@@ -39,6 +24,7 @@ using endohaptics::model::HumanArm3;
 using endohaptics::model::HumanArmModel;
 using endohaptics::model::HumanArmParameters;
 using endohaptics::model::HumanArmStatus;
+using endohaptics::test::allocations_during;
 using cd = std::complex<double>;
 
 // Reference numbers from /usr/bin/python3 (numpy 1.24.2, scipy 1.10.1), built from eq. 5.3 and
@@ -333,21 +319,19 @@ TEST_CASE("a tick allocates nothing (operator new counter, EIGEN_RUNTIME_NO_MALL
   Eigen::Vector3d position, velocity, force;
   float x = 0, v = 0, f = 0;
   int ok = 0;
-  Eigen::internal::set_is_malloc_allowed(false);
-  const std::size_t before = allocations.load();
-  for (int k = 0; k < 10000; ++k) {
-    const Eigen::Vector3d applied = Eigen::Vector3d::Constant(std::sin(0.001 * k));
-    if (k % 2 == 0) {
-      ok += arm.apply_force(applied, position, velocity) == HumanArmStatus::ok;
-      ok += single.apply_force(static_cast<float>(applied[0]), x, v) == HumanArmStatus::ok;
-    } else {
-      ok += arm.impose_motion(position, velocity, force) == HumanArmStatus::ok;
-      ok += single.impose_motion(x, v, f) == HumanArmStatus::ok;
+  const long allocations = allocations_during([&] {
+    for (int k = 0; k < 10000; ++k) {
+      const Eigen::Vector3d applied = Eigen::Vector3d::Constant(std::sin(0.001 * k));
+      if (k % 2 == 0) {
+        ok += arm.apply_force(applied, position, velocity) == HumanArmStatus::ok;
+        ok += single.apply_force(static_cast<float>(applied[0]), x, v) == HumanArmStatus::ok;
+      } else {
+        ok += arm.impose_motion(position, velocity, force) == HumanArmStatus::ok;
+        ok += single.impose_motion(x, v, f) == HumanArmStatus::ok;
+      }
     }
-  }
-  const std::size_t after = allocations.load();
-  Eigen::internal::set_is_malloc_allowed(true);
-  CHECK(after - before == 0);
+  });
+  CHECK(allocations == 0);
   CHECK(ok == 20000);
   CHECK(position.allFinite());
 }

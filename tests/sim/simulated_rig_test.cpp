@@ -1,35 +1,21 @@
+#include "alloc_counter.hpp"  // first: counts every heap allocation of this executable
+
 #include <doctest/doctest.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <endohaptics/sim/simulated_rig.hpp>
 #include <limits>
-#include <new>
 #include <numbers>
 #include <string>
 #include <vector>
-
-// Counting global allocator: every heap allocation in this test executable is counted.
-namespace {
-std::atomic<long> g_allocations{0};
-}
-void* operator new(std::size_t size) {
-  ++g_allocations;
-  if (void* p = std::malloc(size ? size : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) { return operator new(size); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 
 namespace {
 
 namespace sim = endohaptics::sim;
 namespace protocol = endohaptics::protocol;
+using endohaptics::test::allocations_during;
 using sim::Environment;
 using sim::SimStatus;
 
@@ -414,13 +400,14 @@ TEST_CASE("no heap allocation in 10,000 advances") {
   sim::SimulatedRig<4> rig(sim::endowrist_2016_rig<4>(Environment::tissue));
   rig.command(setpoint_all<4>(0.5, 0x0F));
   REQUIRE(rig.advance(0.01) == SimStatus::ok);
-  const long before = g_allocations.load();
   double sink = 0.0;
-  for (int k = 0; k < 10000; ++k) {
-    rig.command(setpoint_all<4>(0.5 * std::sin(k * 1e-3), 0x0F));
-    if (rig.advance(50e-6) != SimStatus::ok) sink += 1.0;
-    sink += rig.state().effort[0] + rig.truth().contact_force[0];
-  }
-  CHECK(g_allocations.load() - before == 0);
+  const long allocations = allocations_during([&] {
+    for (int k = 0; k < 10000; ++k) {
+      rig.command(setpoint_all<4>(0.5 * std::sin(k * 1e-3), 0x0F));
+      if (rig.advance(50e-6) != SimStatus::ok) sink += 1.0;
+      sink += rig.state().effort[0] + rig.truth().contact_force[0];
+    }
+  });
+  CHECK(allocations == 0);
   CHECK(std::isfinite(sink));
 }

@@ -1,34 +1,20 @@
+#include "alloc_counter.hpp"  // first: counts every heap allocation of this executable
+
 #include <doctest/doctest.h>
 
-#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <endohaptics/io/fault_injecting_transport.hpp>
 #include <endohaptics/io/in_memory_transport.hpp>
 #include <endohaptics/kinematics/cylindrical_mapper.hpp>
 #include <endohaptics/teleop/teleop_loop.hpp>
-#include <new>
-
-// Counting global allocator: every heap allocation in this test executable is counted.
-namespace {
-std::atomic<long> g_allocations{0};
-}
-void* operator new(std::size_t size) {
-  ++g_allocations;
-  if (void* p = std::malloc(size ? size : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) { return operator new(size); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 
 namespace {
 
 namespace io = endohaptics::io;
 namespace tp = endohaptics::teleop;
 using Codec = endohaptics::protocol::PacketCodec<4>;
+using endohaptics::test::allocations_during;
 using namespace std::chrono_literals;
 
 // A minimal emulated sbRIO for the loop's tests: enabled motors move 5 % of the way to their
@@ -315,12 +301,13 @@ TEST_CASE("run() paces on absolute deadlines and stops on request") {
 TEST_CASE("no heap allocation in 10,000 ticks after warm-up") {
   Rig rig({.drop_receive = 0.05, .corrupt = 0.05, .truncate = 0.02}, {}, 3);
   for (int i = 0; i < 100; ++i) (void)rig.tick();
-  const long before = g_allocations.load();
-  for (int i = 0; i < 10000; ++i) {
-    const auto r = rig.loop.tick();
-    rig.clock.advance(1ms);
-    (void)r;
-  }
-  CHECK(g_allocations.load() - before == 0);
+  const long allocations = allocations_during([&] {
+    for (int i = 0; i < 10000; ++i) {
+      const auto r = rig.loop.tick();
+      rig.clock.advance(1ms);
+      (void)r;
+    }
+  });
+  CHECK(allocations == 0);
   CHECK(rig.loop.stats().ticks() == 10100);
 }

@@ -1,13 +1,20 @@
 //! @file
 //! Error handling shared by every component: `endohaptics::Error`, the base of all
-//! configuration-time exceptions (bad model, unreadable file, invalid option), and
-//! `ENDOHAPTICS_ASSERT` for programmer errors. Real-time code never throws: it returns a status.
+//! configuration-time exceptions (bad model, unreadable file, invalid option), the number format
+//! of their messages, and `ENDOHAPTICS_ASSERT` for programmer errors. Real-time code never
+//! throws: it returns a status.
 #pragma once
 
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <complex>
+#include <concepts>
 #include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 namespace endohaptics {
 
@@ -22,6 +29,26 @@ namespace detail {
 [[noreturn]] inline void fail_fast(const std::exception& e) noexcept {
   std::fprintf(stderr, "endohaptics: fatal configuration error: %s\n", e.what());
   std::abort();
+}
+
+//! An integer or floating-point type other than bool: what `format_number` accepts.
+template <typename T>
+concept RealOrInteger = std::is_arithmetic_v<T> && !std::is_same_v<T, bool>;
+
+//! Shortest text that reads back to the same `value` (std::to_chars), for error messages:
+//! "0.1", "-1e-05", "inf", "nan", "42" (std::to_string would round floats to 6 decimals).
+template <RealOrInteger Scalar>
+[[nodiscard]] std::string format_number(Scalar value) {
+  std::array<char, 64> buffer{};  // enough for any long double
+  const auto result = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
+  return std::string(buffer.data(), result.ptr);
+}
+
+//! A complex number as "1.2 + 0.5i" or "1.2 - 0.5i", each part round-trip as above.
+template <std::floating_point Scalar>
+[[nodiscard]] std::string format_number(const std::complex<Scalar>& value) {
+  return format_number(value.real()) + (value.imag() < Scalar(0) ? " - " : " + ") +
+         format_number(std::abs(value.imag())) + "i";
 }
 }  // namespace detail
 

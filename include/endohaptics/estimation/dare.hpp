@@ -13,7 +13,6 @@
 #include <cmath>
 #include <complex>
 #include <limits>
-#include <sstream>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -43,23 +42,7 @@ struct DareSolution {
 
 namespace detail {
 
-//! Formats a number with enough digits to round-trip, for error messages.
-template <typename Scalar>
-std::string format_number(Scalar value) {
-  std::ostringstream out;
-  out.precision(std::numeric_limits<Scalar>::max_digits10);
-  out << value;
-  return out.str();
-}
-
-template <typename Scalar>
-std::string format_number(const std::complex<Scalar>& value) {
-  std::ostringstream out;
-  out.precision(std::numeric_limits<Scalar>::max_digits10);
-  out << value.real() << (value.imag() < Scalar(0) ? " - " : " + ") << std::abs(value.imag())
-      << "i";
-  return out.str();
-}
+using endohaptics::detail::format_number;  // round-trip digits in error messages
 
 inline std::string entry_name(std::string_view what, Eigen::Index i, Eigen::Index j) {
   return std::string(what) + "(" + std::to_string(i) + "," + std::to_string(j) + ")";

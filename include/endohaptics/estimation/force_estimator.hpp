@@ -136,17 +136,6 @@ double ratio_tolerance(double ratio) noexcept {
                             std::max(1.0, std::abs(ratio)));
 }
 
-template <typename Scalar>
-std::string show(Scalar value) {
-  return model::detail::format_number(value);
-}
-
-template <typename Scalar>
-std::string show(const std::complex<Scalar>& value) {
-  return show(value.real()) + (value.imag() < Scalar(0) ? " - " : " + ") +
-         show(std::abs(value.imag())) + "i";
-}
-
 //! Principal matrix logarithm (Eigen unsupported MatrixFunctions). Precondition: no eigenvalue
 //! of `M` on the closed negative real axis.
 template <typename Scalar>
@@ -174,7 +163,6 @@ const auto& linear_block(const M& m) noexcept {
 template <int Nx, int Nu, int Ny, typename Scalar>
 [[nodiscard]] model::ContinuousStateSpace<Nx, Nu, Ny, Scalar> to_continuous_zoh(
     const model::StateSpace<Nx, Nu, Ny, Scalar>& discrete) {
-  using detail::force::show;
   const Scalar eps = std::numeric_limits<Scalar>::epsilon();
   // Dynamic size on purpose: configuration time only, and one instantiation of Eigen's
   // eigenvalue solver and matrix logarithm per Scalar instead of one per model size (they are
@@ -184,18 +172,20 @@ template <int Nx, int Nu, int Ny, typename Scalar>
   const Scalar norm = std::max(Scalar(1), A.norm());
   const Eigen::EigenSolver<Dynamic> solver(A, /*computeEigenvectors=*/false);
   if (solver.info() != Eigen::Success) {
-    model::detail::throw_error("to_continuous_zoh: eigenvalues of A did not converge");
+    ENDOHAPTICS_THROW(Error("to_continuous_zoh: eigenvalues of A did not converge"));
   }
   for (Eigen::Index i = 0; i < solver.eigenvalues().size(); ++i) {
     const std::complex<Scalar> lambda = solver.eigenvalues()[i];
     if (std::abs(lambda) <= Scalar(100) * eps * norm) {
-      model::detail::throw_error("to_continuous_zoh: A is singular (eigenvalue " + show(lambda) +
-                                 "), no matrix logarithm");
+      ENDOHAPTICS_THROW(Error("to_continuous_zoh: A is singular (eigenvalue " +
+                              endohaptics::detail::format_number(lambda) +
+                              "), no matrix logarithm"));
     }
     if (lambda.real() < Scalar(0) && std::abs(lambda.imag()) <= std::sqrt(eps) * std::abs(lambda)) {
-      model::detail::throw_error("to_continuous_zoh: A has the eigenvalue " + show(lambda) +
-                                 " on the negative real axis, no real matrix logarithm "
-                                 "(no continuous-time model has this discretisation)");
+      ENDOHAPTICS_THROW(Error("to_continuous_zoh: A has the eigenvalue " +
+                              endohaptics::detail::format_number(lambda) +
+                              " on the negative real axis, no real matrix logarithm "
+                              "(no continuous-time model has this discretisation)"));
     }
   }
   Dynamic M = Dynamic::Identity(Nx + Nu, Nx + Nu);
@@ -203,7 +193,7 @@ template <int Nx, int Nu, int Ny, typename Scalar>
   if constexpr (Nu > 0) M.topRightCorner(Nx, Nu) = discrete.B();
   const Dynamic L = detail::force::matrix_log(M) / discrete.sample_time();
   if (!L.allFinite()) {
-    model::detail::throw_error("to_continuous_zoh: the matrix logarithm is not finite");
+    ENDOHAPTICS_THROW(Error("to_continuous_zoh: the matrix logarithm is not finite"));
   }
   typename model::ContinuousStateSpace<Nx, Nu, Ny, Scalar>::MatrixB Bc;
   if constexpr (Nu > 0) Bc = L.topRightCorner(Nx, Nu);
@@ -367,9 +357,9 @@ class KalmanCorrected {
         sample_time_(model.sample_time()) {
     for (std::size_t i = 0; i < measured_.size(); ++i) {
       if (static_cast<unsigned>(measured_[i]) > static_cast<unsigned>(Measured::current)) {
-        model::detail::throw_error(
+        ENDOHAPTICS_THROW(Error(
             "KalmanCorrected: measured[" + std::to_string(i) +
-            "] is not a Measured signal: " + std::to_string(static_cast<unsigned>(measured_[i])));
+            "] is not a Measured signal: " + std::to_string(static_cast<unsigned>(measured_[i]))));
       }
     }
   }
@@ -532,9 +522,10 @@ requires(Mode != RateMode::resample || ResamplableJointForceModel<M>) class Rate
       try {
         return model.resampled(loop_period);
       } catch (const Error& error) {
-        model::detail::throw_error("ForceEstimator (rate::Resample): the " + std::string(joint) +
-                                   " model cannot be resampled at " + show(loop_period) +
-                                   " s: " + error.what());
+        ENDOHAPTICS_THROW(Error("ForceEstimator (rate::Resample): the " + std::string(joint) +
+                                " model cannot be resampled at " +
+                                endohaptics::detail::format_number(loop_period) +
+                                " s: " + error.what()));
       }
 #else
       return model.resampled(loop_period);
@@ -553,19 +544,22 @@ requires(Mode != RateMode::resample || ResamplableJointForceModel<M>) class Rate
         nearest >= 1 && nearest <= 1000000 &&
         std::abs(ratio - static_cast<double>(nearest)) <= ratio_tolerance<Scalar>(ratio);
     const std::string where = "ForceEstimator: the " + std::string(joint) +
-                              " model's sample time " + show(model.sample_time()) + " s";
+                              " model's sample time " +
+                              endohaptics::detail::format_number(model.sample_time()) + " s";
     if constexpr (Mode == RateMode::same) {
       if (!integer || nearest != 1) {
-        model::detail::throw_error(where + " differs from the loop period " + show(loop_period) +
-                                   " s (ratio " + show(ratio) +
-                                   "); choose a rate policy: rate::Decimate or rate::Resample");
+        ENDOHAPTICS_THROW(Error(where + " differs from the loop period " +
+                                endohaptics::detail::format_number(loop_period) + " s (ratio " +
+                                endohaptics::detail::format_number(ratio) +
+                                "); choose a rate policy: rate::Decimate or rate::Resample"));
       }
     } else {
       if (!integer) {
-        model::detail::throw_error(where + " is not an integer multiple of the loop period " +
-                                   show(loop_period) + " s (ratio " + show(ratio) +
-                                   ", tolerance 1e-9); rate::Decimate needs one, use "
-                                   "rate::Resample or change the loop period");
+        ENDOHAPTICS_THROW(Error(where + " is not an integer multiple of the loop period " +
+                                endohaptics::detail::format_number(loop_period) + " s (ratio " +
+                                endohaptics::detail::format_number(ratio) +
+                                ", tolerance 1e-9); rate::Decimate needs one, use "
+                                "rate::Resample or change the loop period"));
       }
     }
     return static_cast<int>(nearest);
@@ -877,38 +871,41 @@ class ForceEstimator {
   }
 
   static Settings validated(const Settings& s) {
-    using detail::force::show;
     auto name = [](int j) { return std::string(kinematics::to_string(static_cast<ToolJoint>(j))); };
     std::array<bool, 4> seen{};
     for (std::size_t m = 0; m < s.motor_order.size(); ++m) {
       const auto j = static_cast<unsigned>(s.motor_order[m]);
       if (j >= 4u) {
-        model::detail::throw_error("ForceEstimator: motor_order[" + std::to_string(m) +
-                                   "] is not a tool joint: " + std::to_string(j));
+        ENDOHAPTICS_THROW(Error("ForceEstimator: motor_order[" + std::to_string(m) +
+                                "] is not a tool joint: " + std::to_string(j)));
       }
       if (seen[j]) {
-        model::detail::throw_error(
-            "ForceEstimator: motor_order is not a permutation: " + name(static_cast<int>(j)) +
-            " appears twice (again at motor " + std::to_string(m) + ")");
+        ENDOHAPTICS_THROW(
+            Error("ForceEstimator: motor_order is not a permutation: " + name(static_cast<int>(j)) +
+                  " appears twice (again at motor " + std::to_string(m) + ")"));
       }
       seen[j] = true;
     }
     for (int j = 0; j < 4; ++j) {
       if (s.current_sign[j] != ScalarType(1) && s.current_sign[j] != ScalarType(-1)) {
-        model::detail::throw_error("ForceEstimator: current_sign[" + name(j) +
-                                   "] must be +1 or -1, got " + show(s.current_sign[j]));
+        ENDOHAPTICS_THROW(Error("ForceEstimator: current_sign[" + name(j) +
+                                "] must be +1 or -1, got " +
+                                endohaptics::detail::format_number(s.current_sign[j])));
       }
       if (!std::isfinite(s.unit_scale[j]) || !(s.unit_scale[j] > 0)) {
-        model::detail::throw_error("ForceEstimator: unit_scale[" + name(j) +
-                                   "] must be finite and > 0, got " + show(s.unit_scale[j]));
+        ENDOHAPTICS_THROW(Error("ForceEstimator: unit_scale[" + name(j) +
+                                "] must be finite and > 0, got " +
+                                endohaptics::detail::format_number(s.unit_scale[j])));
       }
       if (!std::isfinite(s.output_deadzone[j]) || s.output_deadzone[j] < 0) {
-        model::detail::throw_error("ForceEstimator: output_deadzone[" + name(j) +
-                                   "] must be finite and >= 0, got " + show(s.output_deadzone[j]));
+        ENDOHAPTICS_THROW(Error("ForceEstimator: output_deadzone[" + name(j) +
+                                "] must be finite and >= 0, got " +
+                                endohaptics::detail::format_number(s.output_deadzone[j])));
       }
       if (!std::isfinite(s.output_limit[j]) || !(s.output_limit[j] > 0)) {
-        model::detail::throw_error("ForceEstimator: output_limit[" + name(j) +
-                                   "] must be finite and > 0, got " + show(s.output_limit[j]));
+        ENDOHAPTICS_THROW(Error("ForceEstimator: output_limit[" + name(j) +
+                                "] must be finite and > 0, got " +
+                                endohaptics::detail::format_number(s.output_limit[j])));
       }
     }
     return s;

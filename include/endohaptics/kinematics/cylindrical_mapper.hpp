@@ -9,8 +9,6 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 #include <numbers>
 #include <string>
 #include <string_view>
@@ -249,25 +247,11 @@ class CylindricalMapper {
     return theta;
   }
 
-  [[noreturn]] static void fail(const std::string& what) {
-    const std::string message = "CylindricalMapper: " + what;
-#if defined(__cpp_exceptions)
-    throw Error(message);
-#else
-    std::fputs(message.c_str(), stderr);
-    std::fputc('\n', stderr);
-    std::abort();
-#endif
-  }
-
-  static std::string show(Scalar value) {
-    char buffer[32];
-    std::snprintf(buffer, sizeof buffer, "%.17g", static_cast<double>(value));
-    return buffer;
-  }
-
   static void require_finite(Scalar value, const char* field) {
-    if (!std::isfinite(value)) fail(std::string(field) + " must be finite, got " + show(value));
+    if (!std::isfinite(value)) {
+      ENDOHAPTICS_THROW(Error(std::string("CylindricalMapper: ") + field + " must be finite, got " +
+                              endohaptics::detail::format_number(value)));
+    }
   }
 
   void validate() {
@@ -282,35 +266,43 @@ class CylindricalMapper {
       require_finite(config_.lower[j], ("lower[" + name + "]").c_str());
       require_finite(config_.upper[j], ("upper[" + name + "]").c_str());
       if (config_.lower[j] > config_.upper[j]) {
-        fail("range of " + name + " is empty: lower " + show(config_.lower[j]) + " > upper " +
-             show(config_.upper[j]));
+        ENDOHAPTICS_THROW(Error("CylindricalMapper: range of " + name + " is empty: lower " +
+                                endohaptics::detail::format_number(config_.lower[j]) + " > upper " +
+                                endohaptics::detail::format_number(config_.upper[j])));
       }
     }
     std::array<bool, num_joints> seen{};
     for (std::size_t m = 0; m < config_.motor_order.size(); ++m) {
       const auto j = static_cast<unsigned>(config_.motor_order[m]);
       if (j >= static_cast<unsigned>(num_joints)) {
-        fail("motor_order[" + std::to_string(m) + "] is not a tool joint: " + std::to_string(j));
+        ENDOHAPTICS_THROW(Error("CylindricalMapper: motor_order[" + std::to_string(m) +
+                                "] is not a tool joint: " + std::to_string(j)));
       }
       if (seen[j]) {
-        fail("motor_order is not a permutation: " + std::string(to_string(config_.motor_order[m])) +
-             " appears twice (again at motor " + std::to_string(m) + ")");
+        ENDOHAPTICS_THROW(Error("CylindricalMapper: motor_order is not a permutation: " +
+                                std::string(to_string(config_.motor_order[m])) +
+                                " appears twice (again at motor " + std::to_string(m) + ")"));
       }
       seen[j] = true;
       motor_of_joint_[j] = static_cast<int>(m);
     }
     require_finite(config_.min_radius, "min_radius");
-    if (config_.min_radius < 0) fail("min_radius must be >= 0 m, got " + show(config_.min_radius));
+    if (config_.min_radius < 0) {
+      ENDOHAPTICS_THROW(Error("CylindricalMapper: min_radius must be >= 0 m, got " +
+                              endohaptics::detail::format_number(config_.min_radius)));
+    }
     require_finite(config_.theta_neutral, "theta_neutral");
     if (std::fabs(config_.theta_neutral) > std::numbers::pi_v<Scalar>) {
-      fail("theta_neutral must be in [-pi, pi] rad, got " + show(config_.theta_neutral));
+      ENDOHAPTICS_THROW(Error("CylindricalMapper: theta_neutral must be in [-pi, pi] rad, got " +
+                              endohaptics::detail::format_number(config_.theta_neutral)));
     }
     for (int k = 0; k < 3; ++k) {
       require_finite(config_.force_scale[k], ("force_scale[" + std::to_string(k) + "]").c_str());
     }
     require_finite(config_.force_limit, "force_limit");
     if (!(config_.force_limit > 0)) {
-      fail("force_limit must be > 0 N, got " + show(config_.force_limit));
+      ENDOHAPTICS_THROW(Error("CylindricalMapper: force_limit must be > 0 N, got " +
+                              endohaptics::detail::format_number(config_.force_limit)));
     }
   }
 

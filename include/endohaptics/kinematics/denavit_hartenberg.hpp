@@ -10,8 +10,6 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 #include <numbers>
 #include <string>
 #include <string_view>
@@ -75,8 +73,8 @@ class DhChain {
       check(rows_[i].alpha, i, "alpha");
       check(rows_[i].theta_offset, i, "theta_offset");
       if (rows_[i].kind != JointKind::revolute && rows_[i].kind != JointKind::prismatic) {
-        fail("row " + std::to_string(i + 1) + ": unknown joint kind " +
-             std::to_string(static_cast<unsigned>(rows_[i].kind)));
+        ENDOHAPTICS_THROW(Error("DhChain: row " + std::to_string(i + 1) + ": unknown joint kind " +
+                                std::to_string(static_cast<unsigned>(rows_[i].kind))));
       }
     }
   }
@@ -125,22 +123,10 @@ class DhChain {
   }
 
  private:
-  [[noreturn]] static void fail(const std::string& what) {
-    const std::string message = "DhChain: " + what;
-#if defined(__cpp_exceptions)
-    throw Error(message);
-#else
-    std::fputs(message.c_str(), stderr);
-    std::fputc('\n', stderr);
-    std::abort();
-#endif
-  }
-
   static void check(Scalar value, std::size_t row, const char* field) {
     if (std::isfinite(value)) return;
-    char buffer[32];
-    std::snprintf(buffer, sizeof buffer, "%.17g", static_cast<double>(value));
-    fail("row " + std::to_string(row + 1) + ": " + field + " must be finite, got " + buffer);
+    ENDOHAPTICS_THROW(Error("DhChain: row " + std::to_string(row + 1) + ": " + field +
+                            " must be finite, got " + endohaptics::detail::format_number(value)));
   }
 
   Rows rows_;

@@ -15,7 +15,6 @@
 #include <limits>
 #include <numbers>
 #include <span>
-#include <sstream>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -42,17 +41,6 @@ enum class FrictionStatus : std::uint8_t {
   }
   return "unknown status";
 }
-
-namespace detail::friction {
-//! Round-trip formatting of a number for error messages (std::to_string rounds to 6 decimals).
-template <typename Scalar>
-std::string format(Scalar value) {
-  std::ostringstream out;
-  out.precision(std::numeric_limits<Scalar>::max_digits10);
-  out << value;
-  return out.str();
-}
-}  // namespace detail::friction
 
 //! Friction constants of one joint, all >= 0 (signs: docs/models/friction_model.md).
 template <typename Scalar = double>
@@ -117,11 +105,11 @@ class FrictionModel {
     if (!std::isfinite(options_.standstill_velocity) || options_.standstill_velocity < 0) {
       ENDOHAPTICS_THROW(
           Error("FrictionModel: standstill_velocity must be finite and >= 0 rad/s, got " +
-                detail::friction::format(options_.standstill_velocity)));
+                endohaptics::detail::format_number(options_.standstill_velocity)));
     }
     if (!(options_.release_fraction > 0 && options_.release_fraction <= 1)) {
       ENDOHAPTICS_THROW(Error("FrictionModel: release_fraction must lie in (0, 1], got " +
-                              detail::friction::format(options_.release_fraction)));
+                              endohaptics::detail::format_number(options_.release_fraction)));
     }
   }
 
@@ -221,7 +209,7 @@ class FrictionModel {
     if (!std::isfinite(value) || value < 0) {
       ENDOHAPTICS_THROW(Error("FrictionModel: joint " + std::to_string(j) + " " +
                               std::string(field) + " must be finite and >= 0, got " +
-                              detail::friction::format(value)));
+                              endohaptics::detail::format_number(value)));
     }
   }
 
@@ -344,7 +332,8 @@ inline std::array<double, 2> huber_line(const std::vector<double>& x, const std:
 inline void require_positive(double value, std::string_view name) {
   if (!std::isfinite(value) || !(value > 0)) {
     ENDOHAPTICS_THROW(Error("identify_friction: option " + std::string(name) +
-                            " must be finite and > 0, got " + detail::friction::format(value)));
+                            " must be finite and > 0, got " +
+                            endohaptics::detail::format_number(value)));
   }
 }
 
@@ -375,7 +364,7 @@ inline void require_positive(double value, std::string_view name) {
       options.standstill_velocity >= options.moving_velocity) {
     ENDOHAPTICS_THROW(
         Error("identify_friction: standstill_velocity must lie in [0, moving_velocity), got " +
-              detail::friction::format(options.standstill_velocity)));
+              endohaptics::detail::format_number(options.standstill_velocity)));
   }
   if (options.min_fit_samples < 2) {
     ENDOHAPTICS_THROW(Error("identify_friction: min_fit_samples must be >= 2, got " +
@@ -492,11 +481,11 @@ inline void require_positive(double value, std::string_view name) {
     }
   }
   if (!result.positive.valid() && !result.negative.valid()) {
-    ENDOHAPTICS_THROW(Error("identify_friction: too little sliding motion (" +
-                            std::to_string(result.positive.samples) + " samples with omega > +" +
-                            detail::friction::format(options.moving_velocity) + " rad/s, " +
-                            std::to_string(result.negative.samples) + " below -, need " +
-                            std::to_string(options.min_fit_samples) + " in one direction)"));
+    ENDOHAPTICS_THROW(Error(
+        "identify_friction: too little sliding motion (" + std::to_string(result.positive.samples) +
+        " samples with omega > +" + endohaptics::detail::format_number(options.moving_velocity) +
+        " rad/s, " + std::to_string(result.negative.samples) + " below -, need " +
+        std::to_string(options.min_fit_samples) + " in one direction)"));
   }
 
   // 7. Combine: sample-weighted over valid directions; Ks = largest onset current.

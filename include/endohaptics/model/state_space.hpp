@@ -8,13 +8,9 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <algorithm>
-#include <array>
-#include <charconv>
 #include <cmath>
 #include <complex>
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 #include <limits>
 #include <string>
 #include <string_view>
@@ -27,24 +23,7 @@ namespace endohaptics::model {
 
 namespace detail {
 
-//! Throws Error(message); in a -fno-exceptions build prints it and aborts (configuration only).
-[[noreturn]] inline void throw_error(const std::string& message) {
-#if defined(__cpp_exceptions)
-  throw Error(message);
-#else
-  std::fputs(message.c_str(), stderr);
-  std::fputc('\n', stderr);
-  std::abort();
-#endif
-}
-
-//! Formats a number with enough digits to round-trip, for error messages.
-template <typename Scalar>
-std::string format_number(Scalar value) {
-  std::array<char, 64> buffer{};  // shortest representation that reads back to the same value
-  const auto result = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
-  return std::string(buffer.data(), result.ptr);
-}
+using endohaptics::detail::format_number;  // round-trip digits in error messages
 
 //! Throws Error naming `what`(row,col) when a matrix holds NaN or +-Inf.
 template <typename Derived>
@@ -53,8 +32,9 @@ void require_finite(const Eigen::MatrixBase<Derived>& m, std::string_view owner,
   for (Eigen::Index j = 0; j < m.cols(); ++j) {
     for (Eigen::Index i = 0; i < m.rows(); ++i) {
       if (!std::isfinite(m(i, j))) {
-        throw_error(std::string(owner) + ": " + std::string(what) + "(" + std::to_string(i) + "," +
-                    std::to_string(j) + ") is not finite (" + format_number(m(i, j)) + ")");
+        ENDOHAPTICS_THROW(Error(std::string(owner) + ": " + std::string(what) + "(" +
+                                std::to_string(i) + "," + std::to_string(j) + ") is not finite (" +
+                                format_number(m(i, j)) + ")"));
       }
     }
   }
@@ -64,8 +44,8 @@ void require_finite(const Eigen::MatrixBase<Derived>& m, std::string_view owner,
 template <typename Scalar>
 void require_sample_time(Scalar sample_time, std::string_view owner) {
   if (!std::isfinite(sample_time) || !(sample_time > Scalar(0))) {
-    throw_error(std::string(owner) + ": sample time must be finite and > 0 s, got " +
-                format_number(sample_time));
+    ENDOHAPTICS_THROW(Error(std::string(owner) + ": sample time must be finite and > 0 s, got " +
+                            format_number(sample_time)));
   }
 }
 
@@ -202,7 +182,7 @@ class StateSpace {
   [[nodiscard]] Eigenvalues eigenvalues() const {
     Eigen::EigenSolver<MatrixA> solver(A_, /*computeEigenvectors=*/false);
     if (solver.info() != Eigen::Success) {
-      detail::throw_error("StateSpace: eigenvalue computation of A did not converge");
+      ENDOHAPTICS_THROW(Error("StateSpace: eigenvalue computation of A did not converge"));
     }
     return solver.eigenvalues();
   }
@@ -219,9 +199,9 @@ class StateSpace {
     const MatrixA I_minus_A = MatrixA::Identity() - A_;
     const Eigen::FullPivLU<MatrixA> lu(I_minus_A);
     if (!lu.isInvertible()) {
-      detail::throw_error("StateSpace: DC gain undefined, I - A is singular (rank " +
-                          std::to_string(lu.rank()) + " of " + std::to_string(Nx) +
-                          "; A has a pole at z = 1)");
+      ENDOHAPTICS_THROW(Error("StateSpace: DC gain undefined, I - A is singular (rank " +
+                              std::to_string(lu.rank()) + " of " + std::to_string(Nx) +
+                              "; A has a pole at z = 1)"));
     }
     if constexpr (Nu == 0) {
       return MatrixD{};
@@ -314,8 +294,9 @@ template <int Nx, int Nu, int Ny, typename Scalar>
   const typename SS::MatrixA M = I - continuous.A() * half;
   const Eigen::FullPivLU<typename SS::MatrixA> lu(M);
   if (!lu.isInvertible()) {
-    detail::throw_error("discretize_tustin: I - A Ts/2 is singular for Ts = " +
-                        detail::format_number(sample_time) + " s (A has an eigenvalue at 2/Ts)");
+    ENDOHAPTICS_THROW(Error(
+        "discretize_tustin: I - A Ts/2 is singular for Ts = " + detail::format_number(sample_time) +
+        " s (A has an eigenvalue at 2/Ts)"));
   }
   const typename SS::MatrixA Ad = lu.solve(I + continuous.A() * half);
   typename SS::MatrixB Bd;
@@ -339,9 +320,9 @@ template <int Nx1, int Nu1, int Ny1, int Nx2, int Nu2, int Ny2, typename Scalar>
     const StateSpace<Nx1, Nu1, Ny1, Scalar>& first,
     const StateSpace<Nx2, Nu2, Ny2, Scalar>& second) {
   if (!detail::same_sample_time(first.sample_time(), second.sample_time())) {
-    detail::throw_error("parallel: sample times differ (" +
-                        detail::format_number(first.sample_time()) + " s and " +
-                        detail::format_number(second.sample_time()) + " s)");
+    ENDOHAPTICS_THROW(Error("parallel: sample times differ (" +
+                            detail::format_number(first.sample_time()) + " s and " +
+                            detail::format_number(second.sample_time()) + " s)"));
   }
   using SS = StateSpace<Nx1 + Nx2, Nu1 + Nu2, Ny1 + Ny2, Scalar>;
   typename SS::MatrixA A = SS::MatrixA::Zero();
@@ -376,9 +357,9 @@ requires(Ny1 == Nu2) [[nodiscard]] StateSpace<Nx1 + Nx2, Nu1, Ny2, Scalar> serie
     const StateSpace<Nx1, Nu1, Ny1, Scalar>& first,
     const StateSpace<Nx2, Nu2, Ny2, Scalar>& second) {
   if (!detail::same_sample_time(first.sample_time(), second.sample_time())) {
-    detail::throw_error("series: sample times differ (" +
-                        detail::format_number(first.sample_time()) + " s and " +
-                        detail::format_number(second.sample_time()) + " s)");
+    ENDOHAPTICS_THROW(Error("series: sample times differ (" +
+                            detail::format_number(first.sample_time()) + " s and " +
+                            detail::format_number(second.sample_time()) + " s)"));
   }
   using SS = StateSpace<Nx1 + Nx2, Nu1, Ny2, Scalar>;
   typename SS::MatrixA A = SS::MatrixA::Zero();

@@ -7,13 +7,10 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <array>
-#include <charconv>
 #include <cmath>
 #include <concepts>
 #include <cstddef>
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 #include <limits>
 #include <span>
 #include <string>
@@ -36,36 +33,22 @@ concept StaticNonlinearity = requires(const NL& nl, typename NL::ScalarType u) {
 
 namespace detail::nl {
 
-//! Throws Error(message); in a -fno-exceptions build prints it and aborts (configuration only).
-[[noreturn]] inline void fail(const std::string& message) {
-#if defined(__cpp_exceptions)
-  throw Error(message);
-#else
-  std::fputs(message.c_str(), stderr);
-  std::fputc('\n', stderr);
-  std::abort();
-#endif
-}
-
-template <typename Scalar>
-std::string str(Scalar value) {
-  std::array<char, 64> buffer{};  // shortest representation that reads back to the same value
-  const auto result = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
-  return std::string(buffer.data(), result.ptr);
-}
-
 template <typename Scalar>
 void require_finite(Scalar value, const char* owner, const char* what) {
-  if (!std::isfinite(value))
-    fail(std::string(owner) + ": " + what + " is not finite (" + str(value) + ")");
+  if (!std::isfinite(value)) {
+    ENDOHAPTICS_THROW(Error(std::string(owner) + ": " + what + " is not finite (" +
+                            endohaptics::detail::format_number(value) + ")"));
+  }
 }
 
 //! Returns `value` if finite and >= 0, throws Error otherwise.
 template <typename Scalar>
 Scalar non_negative(Scalar value, const char* owner, const char* what) {
   require_finite(value, owner, what);
-  if (value < Scalar(0))
-    fail(std::string(owner) + ": " + what + " must be >= 0, got " + str(value));
+  if (value < Scalar(0)) {
+    ENDOHAPTICS_THROW(Error(std::string(owner) + ": " + what + " must be >= 0, got " +
+                            endohaptics::detail::format_number(value)));
+  }
   return value;
 }
 
@@ -74,8 +57,9 @@ void require_ordered(Scalar lower, Scalar upper, const char* owner) {
   require_finite(lower, owner, "lower breakpoint");
   require_finite(upper, owner, "upper breakpoint");
   if (!(lower <= upper)) {
-    fail(std::string(owner) + ": lower breakpoint " + str(lower) +
-         " is greater than upper breakpoint " + str(upper));
+    ENDOHAPTICS_THROW(Error(
+        std::string(owner) + ": lower breakpoint " + endohaptics::detail::format_number(lower) +
+        " is greater than upper breakpoint " + endohaptics::detail::format_number(upper)));
   }
 }
 
@@ -178,23 +162,25 @@ class PiecewiseLinear {
                   Extrapolation extrapolation = Extrapolation::linear)
       : extrapolation_(extrapolation) {
     if (x.size() != y.size()) {
-      detail::nl::fail("PiecewiseLinear: " + std::to_string(x.size()) + " breakpoints but " +
-                       std::to_string(y.size()) + " values");
+      ENDOHAPTICS_THROW(Error("PiecewiseLinear: " + std::to_string(x.size()) + " breakpoints but " +
+                              std::to_string(y.size()) + " values"));
     }
     if (x.size() < 2 || x.size() > static_cast<std::size_t>(MaxPoints)) {
-      detail::nl::fail("PiecewiseLinear: needs 2 to " + std::to_string(MaxPoints) +
-                       " points, got " + std::to_string(x.size()));
+      ENDOHAPTICS_THROW(Error("PiecewiseLinear: needs 2 to " + std::to_string(MaxPoints) +
+                              " points, got " + std::to_string(x.size())));
     }
     count_ = static_cast<int>(x.size());
     for (std::size_t i = 0; i < x.size(); ++i) {
       if (!std::isfinite(x[i]) || !std::isfinite(y[i])) {
-        detail::nl::fail("PiecewiseLinear: point " + std::to_string(i) + " is not finite (" +
-                         detail::nl::str(x[i]) + ", " + detail::nl::str(y[i]) + ")");
+        ENDOHAPTICS_THROW(Error("PiecewiseLinear: point " + std::to_string(i) + " is not finite (" +
+                                endohaptics::detail::format_number(x[i]) + ", " +
+                                endohaptics::detail::format_number(y[i]) + ")"));
       }
       if (i > 0 && !(x[i] > x[i - 1])) {
-        detail::nl::fail("PiecewiseLinear: breakpoints must increase strictly, x[" +
-                         std::to_string(i) + "] = " + detail::nl::str(x[i]) + " <= x[" +
-                         std::to_string(i - 1) + "] = " + detail::nl::str(x[i - 1]));
+        ENDOHAPTICS_THROW(
+            Error("PiecewiseLinear: breakpoints must increase strictly, x[" + std::to_string(i) +
+                  "] = " + endohaptics::detail::format_number(x[i]) + " <= x[" +
+                  std::to_string(i - 1) + "] = " + endohaptics::detail::format_number(x[i - 1])));
       }
       x_[i] = x[i];
       y_[i] = y[i];

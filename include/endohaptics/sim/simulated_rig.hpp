@@ -14,7 +14,6 @@
 #include <cstdint>
 #include <limits>
 #include <numbers>
-#include <sstream>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -144,18 +143,10 @@ struct RigConfig {
 namespace detail::rig {
 
 template <typename Scalar>
-std::string format(Scalar value) {
-  std::ostringstream out;
-  out.precision(std::numeric_limits<Scalar>::max_digits10);
-  out << value;
-  return out.str();
-}
-
-template <typename Scalar>
 void require(bool ok, const std::string& field, Scalar value, std::string_view rule) {
   if (!ok) {
-    ENDOHAPTICS_THROW(
-        Error("RigConfig: " + field + " must be " + std::string(rule) + ", got " + format(value)));
+    ENDOHAPTICS_THROW(Error("RigConfig: " + field + " must be " + std::string(rule) + ", got " +
+                            endohaptics::detail::format_number(value)));
   }
 }
 
