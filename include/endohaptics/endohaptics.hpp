@@ -1,6 +1,8 @@
 //! @file
 //! Umbrella header: everything endohaptics offers. Include single component headers instead
-//! to keep compile times down.
+//! to keep compile times down. The JSON model files (io/model_file.hpp,
+//! identification/workflow.hpp) are not included: they need nlohmann-json, which the target
+//! endohaptics::model_files brings (find_package(endohaptics COMPONENTS model_files)).
 #pragma once
 
 #include "endohaptics/core/error.hpp"
@@ -8,8 +10,13 @@
 #include "endohaptics/estimation/force_estimator.hpp"
 #include "endohaptics/estimation/paced_estimator.hpp"
 #include "endohaptics/estimation/steady_state_kalman.hpp"
+#include "endohaptics/identification/fit_metrics.hpp"
+#include "endohaptics/identification/hammerstein_wiener_fit.hpp"
+#include "endohaptics/identification/signal.hpp"
+#include "endohaptics/identification/subspace.hpp"
 #include "endohaptics/io/fault_injecting_transport.hpp"
 #include "endohaptics/io/in_memory_transport.hpp"
+#include "endohaptics/io/log_reader.hpp"
 #include "endohaptics/io/transport.hpp"
 #include "endohaptics/io/udp_server_transport.hpp"
 #include "endohaptics/io/udp_transport.hpp"

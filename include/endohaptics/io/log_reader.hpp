@@ -112,6 +112,7 @@ struct LogReport {
   //! Multi-line summary for a terminal or a log file.
   [[nodiscard]] std::string to_string() const {
     std::ostringstream out;
+    out.precision(10);
     out << source << ": " << rows << " rows kept from " << lines << " lines"
         << (header ? "; header line" : "; no header line") << "; CRLF " << crlf_lines << "; blank "
         << blank_lines << (byte_order_mark ? "; byte order mark removed" : "") << '\n';
@@ -139,7 +140,7 @@ struct LogReadOptions {
   bool allow_extra_fields = true;         //!< false: a row with extra fields throws
   bool rebase_time = true;                //!< subtract the first kept time stamp
   double gap_threshold = 0;               //!< s; 0: 5 x the median time step
-  std::size_t min_rows = 2;               //!< fewer usable rows throw
+  std::size_t min_rows = 2;               //!< fewer usable rows throw (0 acts as 1)
   std::size_t max_issues = 20;            //!< defects recorded with their line in the report
 
   //! Every defect throws (extra fields too); gaps are still only reported.
@@ -199,6 +200,14 @@ struct Log {
 namespace detail::log_reader {
 
 using identification::detail::signal::format;
+
+//! Ten significant digits: enough for the logs' time stamps, short enough to read.
+inline std::string readable(double value) {
+  std::ostringstream out;
+  out.precision(10);
+  out << value;
+  return out.str();
+}
 
 //! The file's text, split into lines (offsets into `content`, CR of CR LF removed).
 struct Text {
@@ -415,7 +424,7 @@ inline Rows parse_rows(const Text& text, std::size_t first, const Layout& layout
       const bool repeated = t == rows.time.back();
       const LogIssueKind time_kind =
           repeated ? LogIssueKind::repeated_time : LogIssueKind::backward_time;
-      std::string time_detail = "time " + format(t) + " after " + format(rows.time.back()) +
+      std::string time_detail = "time " + readable(t) + " after " + readable(rows.time.back()) +
                                 " (line " + std::to_string(rows.line.back()) + ")";
       if (options.on_bad_time == OnBadRow::throw_error) {
         ENDOHAPTICS_THROW(Error(where(layout, report.source, line.number) +
@@ -470,7 +479,7 @@ inline Rows read_rows(const Text& text, std::size_t first, const Layout& layout,
     if (report.gap_threshold > 0 && step > report.gap_threshold) {
       ++report.gaps;
       record(report, options, rows.line[k], LogIssueKind::gap,
-             format(step) + " s after line " + std::to_string(rows.line[k - 1]));
+             readable(step) + " s after line " + std::to_string(rows.line[k - 1]));
     }
   }
   std::stable_sort(report.issues.begin(), report.issues.end(),
@@ -615,7 +624,7 @@ struct Endowrist2016Options {
           lr::record(
               report, options.read, rows.line[static_cast<std::size_t>(r)],
               LogIssueKind::force_mismatch,
-              lr::format(log.data(r, 1)) + " N, voltage gives " + lr::format(expected) + " N");
+              lr::readable(log.data(r, 1)) + " N, voltage gives " + lr::readable(expected) + " N");
         }
       }
       std::stable_sort(report.issues.begin(), report.issues.end(),

@@ -1,0 +1,116 @@
+//! @file
+//! Goodness of fit of a model output: MATLAB's NRMSE fit, 100 (1 - ||y - yhat|| / ||y - mean y||)
+//! in %, per output column; Pearson correlation; RMSE (output units). `compare` simulates a model
+//! like MATLAB's compare (x0 by least squares or zero) and reports all three.
+//! Configuration time (validation tools): dynamic sizes, throws Error on mismatched data.
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <string_view>
+
+#include "endohaptics/core/error.hpp"
+#include "endohaptics/identification/subspace.hpp"
+
+namespace endohaptics::identification {
+
+namespace detail::fit {
+
+//! Throws Error unless y and yhat are both N x ny with N >= 1 and finite.
+inline void check_pair(const Eigen::MatrixXd& y, const Eigen::MatrixXd& y_hat, const char* where) {
+  using subspace::fail;
+  using subspace::idx;
+  if (y.rows() != y_hat.rows() || y.cols() != y_hat.cols()) {
+    fail(std::string(where) + ": y is " + idx(y.rows()) + " x " + idx(y.cols()) + ", yhat " +
+         idx(y_hat.rows()) + " x " + idx(y_hat.cols()));
+  }
+  if (y.rows() < 1) fail(std::string(where) + ": no samples");
+  subspace::require_finite(y, std::string(where) + ": y");
+  subspace::require_finite(y_hat, std::string(where) + ": yhat");
+}
+
+}  // namespace detail::fit
+
+//! NRMSE fit per output, %: 100 (1 - ||y_i - yhat_i|| / ||y_i - mean(y_i)||) (MATLAB goodnessOfFit
+//! 'NRMSE' as 100 (1 - cost), what compare prints). 100 is perfect, 0 is as good as the mean,
+//! negative is worse; -Inf when y_i is constant and yhat_i differs from it, 100 when equal.
+//! y and yhat are N x ny. Throws Error on mismatched sizes, no samples, non-finite values.
+[[nodiscard]] inline Eigen::VectorXd nrmse_fit(const Eigen::MatrixXd& y,
+                                               const Eigen::MatrixXd& y_hat) {
+  detail::fit::check_pair(y, y_hat, "nrmse_fit");
+  Eigen::VectorXd fit(y.cols());
+  for (Eigen::Index i = 0; i < y.cols(); ++i) {
+    const double error = (y.col(i) - y_hat.col(i)).norm();
+    const double spread = (y.col(i).array() - y.col(i).mean()).matrix().norm();
+    if (spread > 0.0) {
+      fit[i] = 100.0 * (1.0 - error / spread);
+    } else {
+      fit[i] = error == 0.0 ? 100.0 : -std::numeric_limits<double>::infinity();
+    }
+  }
+  return fit;
+}
+
+//! Root-mean-square error per output, output units: sqrt(mean((y_i - yhat_i)^2)).
+//! Throws Error as `nrmse_fit`.
+[[nodiscard]] inline Eigen::VectorXd rmse(const Eigen::MatrixXd& y, const Eigen::MatrixXd& y_hat) {
+  detail::fit::check_pair(y, y_hat, "rmse");
+  return ((y - y_hat).colwise().squaredNorm() / static_cast<double>(y.rows()))
+      .cwiseSqrt()
+      .transpose();
+}
+
+//! Pearson correlation per output, in [-1, 1]; NaN when either column is constant.
+//! Throws Error as `nrmse_fit`.
+[[nodiscard]] inline Eigen::VectorXd correlation(const Eigen::MatrixXd& y,
+                                                 const Eigen::MatrixXd& y_hat) {
+  detail::fit::check_pair(y, y_hat, "correlation");
+  Eigen::VectorXd r(y.cols());
+  for (Eigen::Index i = 0; i < y.cols(); ++i) {
+    const Eigen::VectorXd a = y.col(i).array() - y.col(i).mean();
+    const Eigen::VectorXd b = y_hat.col(i).array() - y_hat.col(i).mean();
+    const double denominator = a.norm() * b.norm();
+    r[i] = denominator > 0.0 ? a.dot(b) / denominator : std::numeric_limits<double>::quiet_NaN();
+  }
+  return r;
+}
+
+//! How `compare` sets the initial state (MATLAB compareOptions InitialCondition).
+enum class InitialState : std::uint8_t {
+  estimate = 0,  //!< least squares on the compared data ('e', MATLAB's default)
+  zero,          //!< x0 = 0 ('z')
+};
+
+//! What `compare` returns: the simulated output and its fit to the measured one.
+struct Comparison {
+  Eigen::MatrixXd y_hat;        //!< simulated output, N x ny
+  Eigen::VectorXd x0;           //!< initial state used
+  Eigen::VectorXd fit;          //!< NRMSE fit per output, %
+  Eigen::VectorXd rmse;         //!< per output, output units
+  Eigen::VectorXd correlation;  //!< per output
+};
+
+//! Simulates `model` on u (N x nu) from x0 (estimated or zero) and compares with y (N x ny),
+//! like MATLAB compare. Throws Error on mismatched sizes or non-finite data.
+template <IdentifiableModel M>
+[[nodiscard]] Comparison compare(const M& model, const Eigen::MatrixXd& u, const Eigen::MatrixXd& y,
+                                 InitialState initial_state = InitialState::estimate) {
+  Comparison result;
+  const auto matrices = detail::subspace::matrices_of(model);
+  if (initial_state == InitialState::estimate) {
+    result.x0 = detail::subspace::estimate_initial_state(matrices, u, y, "compare");
+  } else {
+    detail::subspace::check_input(matrices, u, "compare");
+    result.x0 = Eigen::VectorXd::Zero(matrices.A.rows());
+  }
+  result.y_hat = detail::subspace::simulate(matrices, u, result.x0);
+  result.fit = nrmse_fit(y, result.y_hat);
+  result.rmse = rmse(y, result.y_hat);
+  result.correlation = correlation(y, result.y_hat);
+  return result;
+}
+
+}  // namespace endohaptics::identification

@@ -1,0 +1,265 @@
+#include "endohaptics/io/model_file.hpp"
+
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <type_traits>
+
+#include "endohaptics/estimation/force_estimator.hpp"
+#include "endohaptics/identification/subspace.hpp"
+#include "endohaptics/model/presets_2016.hpp"
+
+namespace {
+
+namespace id = endohaptics::identification;
+namespace io = endohaptics::io;
+namespace est = endohaptics::estimation;
+namespace model = endohaptics::model;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+using endohaptics::Error;
+using nlohmann::json;
+
+// A file in the temp directory, removed at scope exit; one name per test case (CTest may run
+// the cases in parallel).
+struct TempFile {
+  explicit TempFile(const std::string& name)
+      : path(std::filesystem::temp_directory_path() /
+             ("endohaptics_model_file_" + name + ".json")) {}
+  ~TempFile() {
+    std::error_code ec;
+    std::filesystem::remove(path, ec);
+  }
+  TempFile(const TempFile&) = delete;
+  TempFile& operator=(const TempFile&) = delete;
+  std::filesystem::path path;
+};
+
+void write_text(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+}
+
+std::string message_of(const auto& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "no exception";
+}
+
+const std::vector<io::SignalInfo> yaw_inputs{{"current", "A"}, {"velocity", "rad/s"}};
+const std::vector<io::SignalInfo> yaw_outputs{{"force", "N"}};
+
+// A valid 2-state, 1-input, 1-output model as JSON, to break one field at a time.
+json valid_json() {
+  io::ModelFile f;
+  f.sample_time = 0.02;
+  f.A = (MatrixXd(2, 2) << 0.9, 0.1, 0.0, 0.5).finished();
+  f.B = (MatrixXd(2, 1) << 1.0, 0.5).finished();
+  f.C = (MatrixXd(1, 2) << 1.0, 0.0).finished();
+  f.D = MatrixXd::Zero(1, 1);
+  f.x0 = VectorXd::Zero(2);
+  f.inputs = {{"current", "A"}};
+  f.outputs = {{"force", "N"}};
+  f.input_nonlinearity = {{id::StaticMapKind::deadzone, -0.2, 0.2}};
+  f.output_nonlinearity = {{}};
+  f.provenance.method = "moesp";
+  f.provenance.date = "2016-05-01";
+  return io::to_json(f);
+}
+
+}  // namespace
+
+TEST_CASE("an identified model round-trips through a file bit for bit, with provenance") {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> normal;
+  MatrixXd u(600, 2);
+  for (Eigen::Index i = 0; i < u.size(); ++i) u.data()[i] = normal(rng);
+  id::SubspaceModel truth;
+  truth.A = (MatrixXd(2, 2) << 0.9, 0.3, -0.3, 0.9).finished();
+  truth.B = (MatrixXd(2, 2) << 1.0, -0.2, 0.4, 0.3).finished();
+  truth.C = (MatrixXd(1, 2) << 1.0, -0.5).finished();
+  truth.D = MatrixXd::Zero(1, 2);
+  const MatrixXd y = id::simulate(truth, u, VectorXd::Zero(2));
+  id::SubspaceOptions options;
+  options.sample_time = 0.02;
+  const auto m = id::identify(u, y, options);
+
+  io::ModelProvenance provenance;
+  provenance.files = {"yaw_grip_01.csv", "yaw_grip_02.csv"};
+  provenance.fit_percent = {id::compare(m, u, y).fit[0]};
+  provenance.notes = "synthetic";
+  const io::ModelFile file = io::make_model_file(m, yaw_inputs, yaw_outputs, provenance);
+  CHECK(file.provenance.method == "moesp");
+  CHECK(file.provenance.order == 2);
+  CHECK(file.provenance.block_rows == 15);
+  CHECK(file.provenance.date.size() == 10);  // YYYY-MM-DD, today (UTC)
+
+  TempFile tmp("roundtrip");
+  io::save_model(tmp.path, file);
+  const io::ModelFile back = io::load_model(tmp.path);
+  CHECK(back.A == file.A);  // shortest round-trip decimal: bit-exact
+  CHECK(back.B == file.B);
+  CHECK(back.C == file.C);
+  CHECK(back.D == file.D);
+  CHECK(back.x0 == file.x0);
+  CHECK(back.sample_time == 0.02);
+  CHECK(back.inputs[1].name == "velocity");
+  CHECK(back.inputs[1].unit == "rad/s");
+  CHECK(back.outputs[0].unit == "N");
+  CHECK(back.provenance.files == provenance.files);
+  CHECK(back.provenance.fit_percent == provenance.fit_percent);
+  CHECK(back.provenance.notes == "synthetic");
+  CHECK(back.provenance.date == file.provenance.date);
+  CHECK_FALSE(back.is_hammerstein_wiener());
+  const json j = json::parse(std::ifstream(tmp.path));
+  CHECK(j.at("kind") == "state_space");
+  CHECK(j.at("states") == 2);
+  CHECK_FALSE(j.contains("input_nonlinearity"));
+
+  auto ss = io::load_state_space<2, 2, 1>(tmp.path);
+  CHECK(ss.sample_time() == 0.02);
+  CHECK(ss.state() == Eigen::Vector2d(m.x0));
+  const auto ssf = io::load_state_space<2, 2, 1, float>(tmp.path);
+  CHECK(ssf.A()(0, 0) == static_cast<float>(m.A(0, 0)));
+  CHECK(message_of([&] { (void)io::load_state_space<4, 2, 1>(tmp.path); }) ==
+        "model file " + tmp.path.string() +
+            ": to_state_space: the model has 2 states, 2 inputs, 1 outputs; the target type 4, "
+            "2, 1");
+}
+
+TEST_CASE("a loaded yaw Hammerstein-Wiener model drives OpenLoop and the ForceEstimator") {
+  // The appendix C yaw model with the 0.21 A dead zone, saved and loaded again.
+  const auto preset = model::yaw_force_2016_hw();
+  io::ModelProvenance provenance;
+  provenance.method = "worksheet appendix C (MATLAB n4sid + idDeadZone)";
+  provenance.date = "2016-06-01";
+  TempFile tmp("yaw_hw");
+  io::save_model(tmp.path, io::make_model_file(preset, yaw_inputs, yaw_outputs, provenance));
+  const io::ModelFile file = io::load_model(tmp.path);
+  REQUIRE(file.is_hammerstein_wiener());
+  CHECK(file.input_nonlinearity[0].kind == id::StaticMapKind::deadzone);
+  CHECK(file.input_nonlinearity[0].upper == 0.21);
+  CHECK(file.input_nonlinearity[1].upper == 0.0);
+  CHECK(file.output_nonlinearity[0].kind == id::StaticMapKind::none);
+
+  auto loaded = io::load_hammerstein_wiener<6, 2, 1>(tmp.path);
+  static_assert(std::is_same_v<decltype(loaded), model::YawForceHW2016<double>>,
+                "the default loader gives the yaw preset's own type");
+  CHECK(loaded.linear().A() == preset.linear().A());
+  CHECK(loaded.input_nonlinearity().channel(0).lower() == -0.21);
+
+  // OpenLoop on the loaded model = OpenLoop on the preset.
+  est::OpenLoop<model::YawForceHW2016<double>> from_file(loaded);
+  est::OpenLoop<model::YawForceHW2016<double>> from_preset(preset);
+  for (int k = 0; k < 200; ++k) {
+    const est::JointSignals<double> s{0.0, 1.5 * std::sin(0.03 * k), 0.5 * std::sin(0.02 * k), 0.0};
+    REQUIRE(from_file.force(s) == from_preset.force(s));
+    REQUIRE(from_file.advance(s) == model::StepStatus::ok);
+    REQUIRE(from_preset.advance(s) == model::StepStatus::ok);
+  }
+  CHECK(from_file.force({0.0, 0.5, 0.6, 0.0}) != 0.0);
+
+  // Clamp 1 of a ForceEstimator from the file: the same forces as the 2016 defaults, whose
+  // clamp 1 is this preset with 0.21 A (clamp 2 keeps its default 0.20 A preset).
+  auto models = est::models_2016<double>();
+  models.clamp1 = est::ClampModel2016<double>(loaded);
+  est::ForceEstimator<est::rate::Decimate> with_file(models, {});
+  est::ForceEstimator<est::rate::Decimate> defaults;
+  est::JointState<double> in;
+  est::ForceEstimator<est::rate::Decimate>::Forces f_file;
+  est::ForceEstimator<est::rate::Decimate>::Forces f_default;
+  double largest = 0.0;
+  for (int k = 0; k < 400; ++k) {
+    in.current = Eigen::Vector4d::Constant(0.8 * std::sin(0.004 * k));
+    in.velocity = Eigen::Vector4d::Constant(std::cos(0.004 * k));
+    REQUIRE(with_file.step(in, f_file) == est::ForceStatus::ok);
+    REQUIRE(defaults.step(in, f_default) == est::ForceStatus::ok);
+    REQUIRE(f_file == f_default);
+    largest = std::max(largest, std::abs(f_file[2]));
+  }
+  CHECK(largest > 0.0);  // the clamp estimate is not trivially zero
+}
+
+TEST_CASE("load errors name the file, the field and the value") {
+  const std::string src = "model file test";
+  auto broken = [](auto edit) {
+    json j = valid_json();
+    edit(j);
+    return message_of([&] { (void)io::model_from_json(j, "test"); });
+  };
+  CHECK(io::model_from_json(valid_json(), "test").is_hammerstein_wiener());
+  CHECK(broken([](json& j) { j.erase("C"); }) == src + ": missing field \"C\"");
+  CHECK(broken([](json& j) { j.erase("sample_time_s"); }) ==
+        src + ": missing field \"sample_time_s\"");
+  CHECK(broken([](json& j) { j["provenance"].erase("date"); }) ==
+        src + ": provenance: missing field \"date\"");
+  CHECK(broken([](json& j) { j["B"].push_back(json::array({1.0})); }) ==
+        src + ": field \"B\" has 3 rows, expected 2 (states)");
+  CHECK(broken([](json& j) {
+          j["A"][1] = json::array({1.0, 2.0, 3.0});
+        }) == src + ": field \"A[1]\" has 3 columns, expected 2 (states)");
+  CHECK(broken([](json& j) { j["x0"] = json::array({0.0}); }) ==
+        src + ": field \"x0\" must be an array of 2 numbers (states), got [0.0]");
+  // NaN: nlohmann writes NaN as null; a null entry is refused by name.
+  CHECK(broken([](json& j) { j["A"][1][0] = std::nan(""); }) ==
+        src + ": field \"A[1][0]\" is not finite (nan)");
+  CHECK(broken([](json& j) {
+          j["A"][1][0] = std::nan("");
+          j = json::parse(j.dump());  // as written to a file
+        }) == src + ": field \"A[1][0]\" is not a number (null)");
+  CHECK(broken([](json& j) { j["sample_time_s"] = -0.02; }) ==
+        src + ": field \"sample_time_s\" must be finite and > 0, got -0.02");
+  CHECK(broken([](json& j) { j["input_nonlinearity"][0]["lower"] = 0.5; }) ==
+        src + ": field \"input_nonlinearity[0]\": lower 0.5 is greater than upper 0.2");
+  CHECK(broken([](json& j) { j["input_nonlinearity"][0]["type"] = "relay"; }) ==
+        src +
+            ": field \"input_nonlinearity[0].type\" is \"relay\", expected none, deadzone or "
+            "saturation");
+  CHECK(broken([](json& j) { j["output_nonlinearity"] = json::array(); }) ==
+        src + ": field \"output_nonlinearity\" has 0 entries, expected 1 (outputs)");
+  CHECK(broken([](json& j) { j["version"] = 2; }) == src + ": field \"version\" is 2, expected 1");
+  CHECK(broken([](json& j) { j["kind"] = "arx"; }) ==
+        src + ": field \"kind\" is \"arx\", expected \"state_space\" or \"hammerstein_wiener\"");
+  CHECK(broken([](json& j) { j["inputs"][0].erase("unit"); }) ==
+        src + ": inputs[0]: missing field \"unit\"");
+
+  // Files: unreadable, not JSON (a bare NaN literal is not JSON), a type the loader cannot hold.
+  CHECK(message_of([] { (void)io::load_model("/nonexistent/model.json"); }) ==
+        "model file /nonexistent/model.json: cannot be opened");
+  TempFile tmp("errors");
+  std::string text = valid_json().dump();
+  text.replace(text.find("0.9"), 3, "NaN");
+  write_text(tmp.path, text);
+  const std::string nan_message = message_of([&] { (void)io::load_model(tmp.path); });
+  CHECK(nan_message.find("model file " + tmp.path.string() + ": [json.exception.parse_error") == 0);
+  write_text(tmp.path, valid_json().dump());
+  CHECK(message_of([&] {
+          (void)io::load_hammerstein_wiener<2, 1, 1, double, model::Saturation<double>>(tmp.path);
+        }) == "model file " + tmp.path.string() +
+                  ": to_hammerstein_wiener: input 0 is a deadzone, which the requested "
+                  "nonlinearity type cannot represent");
+  const auto hw = io::load_hammerstein_wiener<2, 1, 1>(tmp.path);
+  CHECK(hw.input_nonlinearity().channel(0).upper() == 0.2);
+}
+
+TEST_CASE("saving refuses NaN and mismatched sizes, naming the field") {
+  io::ModelFile f = io::model_from_json(valid_json());
+  f.A(0, 1) = std::nan("");
+  CHECK(message_of([&] { (void)io::to_json(f); }) ==
+        "to_json: field \"A[0][1]\" is not finite (nan)");
+  f = io::model_from_json(valid_json());
+  f.D = MatrixXd::Zero(2, 1);
+  CHECK(message_of([&] { (void)io::to_json(f); }) ==
+        "to_json: field \"D\" is 2 x 1, expected 1 x 1 (outputs x inputs)");
+  f = io::model_from_json(valid_json());
+  TempFile tmp("save_errors");
+  CHECK(message_of([&] { io::save_model("/nonexistent/dir/model.json", f); }) ==
+        "save_model: cannot open /nonexistent/dir/model.json for writing");
+}
