@@ -8,6 +8,7 @@
 #include <endohaptics/kinematics/cylindrical_mapper.hpp>
 #include <endohaptics/sim/scripted_operator.hpp>
 #include <endohaptics/teleop/teleop_loop.hpp>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -21,6 +22,7 @@ struct Config {
   endohaptics::teleop::SafetyConfig safety{};
   endohaptics::estimation::ForceEstimatorSettings<double> estimator{};
   endohaptics::sim::OperatorScript operator_script{};
+  std::string clamp_model;  // model file (JSON) for both clamps; empty: the appendix C yaw model
   double receive_timeout = 1e-3;  // s
 };
 
@@ -144,6 +146,17 @@ inline Config load_config(const std::string& path) {
       }
       if (e.contains("output_limit"))
         vector(e["output_limit"], "estimator.output_limit", o.output_limit);
+      if (e.contains("clamp_model")) {
+        if (!e["clamp_model"].is_string()) {
+          throw Error("config: 'estimator.clamp_model' must be a file name, got " +
+                      e["clamp_model"].dump());
+        }
+        // Relative to the configuration file's folder.
+        const std::filesystem::path model = e["clamp_model"].get<std::string>();
+        c.clamp_model =
+            (model.is_absolute() ? model : std::filesystem::path(path).parent_path() / model)
+                .string();
+      }
       if (e.contains("friction_level")) {
         Eigen::Vector4d levels;
         vector(e["friction_level"], "estimator.friction_level", levels);

@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <endohaptics/estimation/force_estimator.hpp>
 #include <endohaptics/estimation/paced_estimator.hpp>
+#include <endohaptics/io/model_file.hpp>
 #include <endohaptics/io/udp_transport.hpp>
 #include <endohaptics/kinematics/cylindrical_mapper.hpp>
 #include <endohaptics/sim/scripted_operator.hpp>
@@ -98,7 +99,13 @@ int run_bridge(Device& device, tp::SteadyClock& clock, const Options& opt,
   // keeps that grid whatever the loop rate (--rate max) and through lost packets.
   auto settings = cfg.estimator;
   settings.loop_period = 1e-3;
-  est::ForceEstimator<est::rate::Decimate> estimator(settings);
+  auto models = est::models_2016<double>();
+  if (!cfg.clamp_model.empty()) {  // an identified model (endohaptics-identify) for both clamps
+    using Clamp = est::ClampModel2016<double>;
+    models.clamp1 = Clamp(eio::load_hammerstein_wiener<6, 2, 1>(cfg.clamp_model));
+    models.clamp2 = models.clamp1;
+  }
+  est::ForceEstimator<est::rate::Decimate> estimator(models, settings);
   est::PacedEstimator paced(estimator, clock, std::chrono::milliseconds(1));
   endohaptics::kinematics::CylindricalMapper<> mapper(cfg.mapping);
 
@@ -159,8 +166,9 @@ int run_bridge(Device& device, tp::SteadyClock& clock, const Options& opt,
     }
   });
 
-  fmt::print("bridge: sbRIO {}:{}, rate {}, device {}, estimator 2016 models (paced at 1 kHz)\n",
-             host, port, opt.rate == "max" ? "max" : opt.rate + " Hz", opt.device);
+  fmt::print("bridge: sbRIO {}:{}, rate {}, device {}, clamp model {} (paced at 1 kHz)\n", host,
+             port, opt.rate == "max" ? "max" : opt.rate + " Hz", opt.device,
+             cfg.clamp_model.empty() ? "appendix C yaw (2016)" : cfg.clamp_model);
   std::fflush(stdout);
   const auto start = clock.now();
   const auto end = opt.duration > 0 ? start + std::chrono::duration_cast<nanoseconds>(

@@ -1,0 +1,182 @@
+// endohaptics-identify: identifies a force model from logs (worksheet 4.2): reads each log and
+// prints what the reader dropped, resamples to --ts, low-pass/offset as 4.2.1, identifies with
+// N4SID/MOESP/CVA (or all three, keeping the best mean fit), optionally with input dead zones,
+// prints the Hankel singular values, the order and the fit per file, and writes a JSON model.
+// Workflow: endohaptics/identification/workflow.hpp; results: docs/identification_results.md.
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <charconv>
+#include <endohaptics/identification/workflow.hpp>
+#include <exception>
+#include <string>
+#include <vector>
+
+namespace id = endohaptics::identification;
+namespace eio = endohaptics::io;
+
+int main(int argc, char** argv) {
+  CLI::App app{"endohaptics identify: subspace (+ dead zone) model from logs"};
+  std::vector<std::string> logs, inputs, outputs;
+  std::string format = "endowrist-2016", order = "auto", method = "moesp", deadzone = "none";
+  std::string offset = "none", input_offset = "none", x0 = "estimate", out_path;
+  double ts = 0.0;
+  int max_order = 10;
+  id::Preprocessing pre;
+  bool drop_non_finite = false;
+  app.add_option("--log", logs, "log file (repeat for several experiments)")->required();
+  app.add_option("--format", format, "endowrist-2016 or csv (header line names the columns)")
+      ->capture_default_str();
+  app.add_option("--input", inputs, "input signal (repeat; default for endowrist-2016: current)");
+  app.add_option("--output", outputs, "output signal (repeat; default for endowrist-2016: force)");
+  app.add_option("--order", order,
+                 "model order N, or auto (largest log gap of the singular values)")
+      ->capture_default_str();
+  app.add_option("--max-order", max_order, "largest order --order auto considers")
+      ->capture_default_str();
+  app.add_option("--method", method, "n4sid, moesp, cva, best (highest mean fit) or static")
+      ->capture_default_str();
+  app.add_option("--deadzone", deadzone,
+                 "input dead zone: auto, none or half width (or one per input, comma-separated)")
+      ->capture_default_str();
+  app.add_option("--ts", ts,
+                 "resampling period, s (csv without time column: the row time, default 1; else "
+                 "default: median step of the first log)");
+  app.add_option("--lowpass", pre.cutoff,
+                 "zero-phase Butterworth low-pass cutoff, Hz (0: none; worksheet 4.2.1 used 20)")
+      ->capture_default_str();
+  app.add_option("--filter-order", pre.filter_order, "Butterworth order")->capture_default_str();
+  app.add_option("--offset", offset,
+                 "output offset removal: none, start, median or mean (per file)")
+      ->capture_default_str();
+  app.add_option("--input-offset", input_offset,
+                 "input offset removal: none, start, median or mean")
+      ->capture_default_str();
+  app.add_option("--offset-window", pre.offset_duration, "s at the start used by --offset start")
+      ->capture_default_str();
+  app.add_flag("--detrend", pre.detrend,
+               "remove a least-squares line from the outputs of each segment");
+  app.add_option("--max-gap", pre.max_gap,
+                 "s; longer time steps split a log (0: 5 x max(ts, median step))")
+      ->capture_default_str();
+  app.add_option("--min-segment", pre.min_segment,
+                 "samples; shorter gap-free stretches are dropped")
+      ->capture_default_str();
+  app.add_flag("--drop-non-finite", drop_non_finite,
+               "drop rows holding NaN/Inf instead of failing");
+  app.add_option("--x0", x0, "initial state of the per-file fits: estimate or zero")
+      ->capture_default_str();
+  app.add_option("--out", out_path, "write the model here (JSON)");
+  CLI11_PARSE(app, argc, argv);
+
+  try {
+    id::LogSelection sel;
+    sel.format = eio::parse_log_format(format);
+    sel.drop_non_finite = drop_non_finite;
+    const bool endowrist = sel.format == eio::LogFormat::endowrist_2016;
+    sel.inputs = !inputs.empty() ? inputs
+                 : endowrist     ? std::vector<std::string>{"current"}
+                                 : inputs;
+    sel.outputs = !outputs.empty() ? outputs
+                  : endowrist      ? std::vector<std::string>{"force"}
+                                   : outputs;
+    if (sel.inputs.empty() || sel.outputs.empty()) {
+      throw endohaptics::Error("--format csv needs --input and --output column names");
+    }
+    pre.output_offset = id::offset_mode_from_string(offset);
+    pre.input_offset = id::offset_mode_from_string(input_offset);
+    id::WorkflowOptions options;
+    options.max_order = max_order;
+    if (order != "auto") {
+      const auto [end, ec] =
+          std::from_chars(order.data(), order.data() + order.size(), options.order);
+      if (ec != std::errc{} || end != order.data() + order.size() || options.order < 1) {
+        throw endohaptics::Error("--order must be a positive integer or auto, got '" + order + "'");
+      }
+    }
+    if (method == "best") {
+      options.candidates = {id::Weighting::n4sid, id::Weighting::moesp, id::Weighting::cva};
+    } else if (method == "static") {
+      options.static_gain = true;
+    } else {
+      options.candidates = {id::weighting_from_string(method)};
+    }
+    options.deadzone = id::parse_deadzone(deadzone, sel.inputs.size());
+    options.initial_state = id::initial_state_from_string(x0);
+    if (options.initial_state == id::InitialStateMode::stored) {
+      throw endohaptics::Error("--x0 must be estimate or zero here");
+    }
+
+    // Sample time: given, else the median step of the first log (a CSV without time column:
+    // its row time, 1 s unless --ts says otherwise).
+    sel.csv_row_time = ts > 0.0 ? ts : 1.0;
+    if (ts <= 0.0) ts = id::default_sample_time(logs.front(), sel);
+    std::vector<id::PreparedLog> prepared;
+    for (const auto& path : logs) {
+      prepared.push_back(id::prepare_log(path, sel, ts, pre));
+      fmt::print("{}", id::summary(prepared.back()));
+    }
+    fmt::print("preprocessing: {}\n", id::describe(pre));
+
+    auto units = [&](const std::vector<std::string>& names) {
+      std::vector<eio::SignalInfo> info;
+      const eio::Log first = endowrist ? eio::read_endowrist_2016(logs.front()) : eio::Log{};
+      for (const auto& n : names) {
+        std::string unit;
+        for (std::size_t i = 0; i < first.names.size(); ++i) {
+          if (first.names[i] == n) unit = first.units[i];
+        }
+        info.push_back({n, unit});
+      }
+      return info;
+    };
+    const auto in_info = units(sel.inputs);
+    const auto out_info = units(sel.outputs);
+    const id::WorkflowResult result = id::identify_logs(prepared, in_info, out_info, options);
+
+    for (const id::CandidateModel& c : result.candidates) {
+      if (!options.static_gain) {
+        const auto& sv = c.linear.order_singular_values;
+        std::string line;
+        for (Eigen::Index i = 0; i < std::min<Eigen::Index>(sv.size(), max_order + 5); ++i) {
+          line += fmt::format(" {:.4g}", sv[i]);
+        }
+        fmt::print("{}: Hankel singular values (MOESP, {} block rows):{}\n", c.method,
+                   c.linear.block_rows, line);
+        fmt::print("{}: order {} ({}), spectral radius {:.5f}{}\n", c.method, c.linear.order,
+                   options.order == 0 ? "automatic" : "given", c.spectral_radius,
+                   c.spectral_radius >= 1.0 ? " (NOT STABLE)" : "");
+      }
+      for (std::size_t j = 0; j < c.model.input_nonlinearity.size(); ++j) {
+        const auto& m = c.model.input_nonlinearity[j];
+        fmt::print("{}: input {} dead zone [{:.4g}, {:.4g}]\n", c.method, sel.inputs[j], m.lower,
+                   m.upper);
+      }
+      fmt::print("{}: mean fit {:.2f} %\n", c.method, c.mean_fit);
+    }
+    for (const std::string& f : result.failures) fmt::print("failed: {}\n", f);
+    const id::CandidateModel& best = result.chosen();
+    fmt::print("chosen: {} (order {}){}\n", best.method, best.model.A.rows(),
+               best.spectral_radius >= 1.0 ? ", NOT STABLE: no stable candidate" : "");
+    for (const id::FileComparison& f : best.files) {
+      std::string fits;
+      for (Eigen::Index i = 0; i < f.fit.size(); ++i) {
+        fits += fmt::format(" {} {:.2f} %", sel.outputs[static_cast<std::size_t>(i)], f.fit[i]);
+      }
+      fmt::print("fit {}:{}\n", f.source, fits);
+    }
+    fmt::print("mean fit: {:.2f}%\n", best.mean_fit);
+    if (!out_path.empty()) {
+      eio::ModelFile model = best.model;
+      model.provenance.notes = "preprocessing: " + id::describe(pre) +
+                               "\nfit_percent: mean over the identification logs, x0 " + x0 +
+                               "\ntool: endohaptics-identify";
+      eio::save_model(out_path, model);
+      fmt::print("model written to {}\n", out_path);
+    }
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "endohaptics-identify: error: {}\n", e.what());
+    return 1;
+  }
+  return 0;
+}

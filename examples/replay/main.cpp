@@ -1,0 +1,162 @@
+// endohaptics-replay: replays a model (JSON file or preset) on logs like MATLAB's compare:
+// resamples each log to the model's sample time, preprocesses it as recorded in the model file
+// (or as the flags say), estimates x0 by least squares, and prints fit %, correlation and RMSE
+// per file and output; the last line is `mean fit: X%`. --plot draws measured vs simulated.
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <endohaptics/identification/workflow.hpp>
+#include <exception>
+#include <string>
+#include <vector>
+
+namespace id = endohaptics::identification;
+namespace eio = endohaptics::io;
+
+namespace {
+
+// Measured vs simulated, one panel per file (gnuplot, pngcairo); segments break the lines.
+void plot(const std::string& png, const std::vector<id::FileComparison>& files,
+          const std::vector<std::string>& outputs) {
+  const std::string data = png + ".dat";
+  std::FILE* out = std::fopen(data.c_str(), "w");
+  if (out == nullptr) throw endohaptics::Error("--plot: cannot write " + data);
+  for (const auto& f : files) {
+    for (std::size_t s = 0; s < f.y.size(); ++s) {
+      for (Eigen::Index k = 0; k < f.y[s].rows(); ++k) {
+        fmt::print(out, "{:.6f}", f.start_time[s] + static_cast<double>(k) * f.sample_time);
+        for (Eigen::Index i = 0; i < f.y[s].cols(); ++i) {
+          fmt::print(out, " {:.9g} {:.9g}", f.y[s](k, i), f.y_hat[s](k, i));
+        }
+        fmt::print(out, "\n");
+      }
+      fmt::print(out, "\n");
+    }
+    fmt::print(out, "\n");
+  }
+  std::fclose(out);
+  std::string script = fmt::format(
+      "set terminal pngcairo size 1400,{} noenhanced\nset output '{}'\nset multiplot layout {},1\n"
+      "set grid\nset xlabel 'time (s)'\n",
+      300 * files.size() + 100, png, files.size());
+  for (std::size_t f = 0; f < files.size(); ++f) {
+    script +=
+        fmt::format("set title '{} (fit {:.1f} %)'\nplot ", files[f].source, files[f].mean_fit());
+    for (std::size_t i = 0; i < outputs.size(); ++i) {
+      script += fmt::format(
+          "{}'{}' index {} using 1:{} with lines lw 2 title '{} measured', '{}' index {} using "
+          "1:{} with lines lw 2 title '{} simulated'",
+          i > 0 ? ", " : "", data, f, 2 + 2 * i, outputs[i], data, f, 3 + 2 * i, outputs[i]);
+    }
+    script += "\n";
+  }
+  script += "unset multiplot\n";
+  std::FILE* gp = popen("gnuplot", "w");
+  if (gp == nullptr) throw endohaptics::Error("--plot: cannot run gnuplot");
+  std::fputs(script.c_str(), gp);
+  if (pclose(gp) != 0) throw endohaptics::Error("--plot: gnuplot failed (is it installed?)");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"endohaptics replay: a model on logs, fit as MATLAB compare"};
+  std::vector<std::string> logs, inputs, outputs;
+  std::string model_arg, format = "endowrist-2016", x0 = "estimate", plot_path;
+  std::string offset = "none", input_offset = "none";
+  double ts = 0.0;
+  id::Preprocessing pre;
+  bool drop_non_finite = false;
+  app.add_option("--model", model_arg, "model file (JSON), preset:yaw2016 or preset:pitch2016")
+      ->required();
+  app.add_option("--log", logs, "log file (repeatable)")->required();
+  app.add_option("--format", format, "endowrist-2016 or csv")->capture_default_str();
+  app.add_option("--input", inputs, "input signal per model input (default: the model's names)");
+  app.add_option("--output", outputs, "output signal per model output (default: the model's)");
+  app.add_option("--x0", x0, "initial state: estimate (least squares), zero or stored")
+      ->capture_default_str();
+  app.add_option("--ts", ts, "csv without time column: s per row (default: the model's Ts)");
+  // Preprocessing: default what the model file records (identify writes it), else none.
+  auto* lowpass = app.add_option("--lowpass", pre.cutoff, "low-pass cutoff, Hz (0: none)");
+  auto* filter_order = app.add_option("--filter-order", pre.filter_order, "Butterworth order");
+  auto* offset_opt = app.add_option("--offset", offset, "output offset: none, start, median, mean");
+  auto* input_offset_opt =
+      app.add_option("--input-offset", input_offset, "input offset: none, start, median, mean");
+  auto* window = app.add_option("--offset-window", pre.offset_duration, "s for --offset start");
+  auto* detrend = app.add_flag("--detrend", pre.detrend, "remove a line from each output segment");
+  auto* max_gap = app.add_option("--max-gap", pre.max_gap, "s; longer steps split a log");
+  auto* min_segment = app.add_option("--min-segment", pre.min_segment, "samples per segment");
+  app.add_flag("--drop-non-finite", drop_non_finite,
+               "drop rows holding NaN/Inf instead of failing");
+  app.add_option("--plot", plot_path, "measured vs simulated as PNG (gnuplot pngcairo)");
+  CLI11_PARSE(app, argc, argv);
+
+  try {
+    const eio::ModelFile model = model_arg.starts_with("preset:")
+                                     ? id::preset_model(model_arg.substr(7))
+                                     : eio::load_model(model_arg);
+    const std::string name = model_arg.starts_with("preset:") ? model_arg : "model " + model_arg;
+    std::vector<std::string> model_in, model_out;
+    for (const auto& s : model.inputs) model_in.push_back(s.name);
+    for (const auto& s : model.outputs) model_out.push_back(s.name);
+    id::LogSelection sel;
+    sel.format = eio::parse_log_format(format);
+    sel.drop_non_finite = drop_non_finite;
+    sel.inputs = inputs.empty() ? model_in : inputs;
+    sel.outputs = outputs.empty() ? model_out : outputs;
+    if (sel.inputs.size() != model_in.size() || sel.outputs.size() != model_out.size()) {
+      throw endohaptics::Error(fmt::format(
+          "{} has {} input(s) ({}) and {} output(s) ({}); the command line names {} and {}", name,
+          model_in.size(), fmt::join(model_in, ", "), model_out.size(), fmt::join(model_out, ", "),
+          sel.inputs.size(), sel.outputs.size()));
+    }
+    sel.csv_row_time = ts > 0.0 ? ts : model.sample_time;
+
+    // Flags given on the command line win over the recorded preprocessing.
+    const id::Preprocessing given = pre;
+    const auto recorded = id::recorded_preprocessing(model);
+    if (recorded) pre = *recorded;
+    if (lowpass->count() > 0) pre.cutoff = given.cutoff;
+    if (filter_order->count() > 0) pre.filter_order = given.filter_order;
+    if (window->count() > 0) pre.offset_duration = given.offset_duration;
+    if (detrend->count() > 0) pre.detrend = given.detrend;
+    if (max_gap->count() > 0) pre.max_gap = given.max_gap;
+    if (min_segment->count() > 0) pre.min_segment = given.min_segment;
+    if (offset_opt->count() > 0) pre.output_offset = id::offset_mode_from_string(offset);
+    if (input_offset_opt->count() > 0) {
+      pre.input_offset = id::offset_mode_from_string(input_offset);
+    }
+    const id::InitialStateMode mode = id::initial_state_from_string(x0);
+    fmt::print("{}: {} states, {} -> {}, Ts {} s, {}\n", name, model.A.rows(),
+               fmt::join(model_in, ", "), fmt::join(model_out, ", "), model.sample_time,
+               model.provenance.method);
+    fmt::print("preprocessing ({}): {}\n", recorded ? "model file, flags override" : "flags",
+               id::describe(pre));
+
+    std::vector<id::FileComparison> results;
+    double sum = 0.0;
+    for (const auto& path : logs) {
+      const id::PreparedLog log = id::prepare_log(path, sel, model.sample_time, pre);
+      fmt::print("{}", id::summary(log));
+      results.push_back(id::compare_log(model, log, mode));
+      const id::FileComparison& c = results.back();
+      for (Eigen::Index i = 0; i < c.fit.size(); ++i) {
+        const auto& o = model.outputs[static_cast<std::size_t>(i)];
+        fmt::print("{}: {} fit {:.2f} %, correlation {:.4f}, RMSE {:.4g}{}{}\n", path,
+                   sel.outputs[static_cast<std::size_t>(i)], c.fit[i], c.correlation[i], c.rmse[i],
+                   o.unit.empty() ? "" : " ", o.unit);
+      }
+      sum += c.mean_fit();
+    }
+    if (!plot_path.empty()) {
+      plot(plot_path, results, sel.outputs);
+      fmt::print("plot written to {}\n", plot_path);
+    }
+    fmt::print("mean fit: {:.2f}%\n", sum / static_cast<double>(logs.size()));
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "endohaptics-replay: error: {}\n", e.what());
+    return 1;
+  }
+  return 0;
+}
