@@ -12,20 +12,20 @@
 #include <chrono>
 #include <endohaptics/estimation/force_estimator.hpp>
 #include <endohaptics/estimation/paced_estimator.hpp>
-#include <endohaptics/io/udp_server_transport.hpp>
-#include <endohaptics/io/udp_transport.hpp>
 #include <endohaptics/kinematics/cylindrical_mapper.hpp>
 #include <endohaptics/sim/sbrio_emulator.hpp>
 #include <endohaptics/sim/scripted_operator.hpp>
 #include <endohaptics/sim/simulated_rig.hpp>
 #include <endohaptics/teleop/realtime.hpp>
 #include <endohaptics/teleop/teleop_loop.hpp>
+#include <endohaptics/transport/udp_server_transport.hpp>
+#include <endohaptics/transport/udp_transport.hpp>
 #include <memory>
 #include <thread>
 
 namespace {
 
-namespace io = endohaptics::io;
+namespace transport = endohaptics::transport;
 namespace sim = endohaptics::sim;
 namespace tp = endohaptics::teleop;
 namespace est = endohaptics::estimation;
@@ -51,10 +51,10 @@ class EmulatorThread {
   [[nodiscard]] std::uint16_t port() const { return server_.local_endpoint().port(); }
 
  private:
-  io::UdpServerTransport server_;
-  tp::SteadyClock clock_;
+  transport::UdpServerTransport server_;
+  endohaptics::SteadyClock clock_;
   sim::SimulatedRig<4> rig_;
-  sim::SbrioEmulator<io::UdpServerTransport, sim::SimulatedRig<4>> emulator_;
+  sim::SbrioEmulator<transport::UdpServerTransport, sim::SimulatedRig<4>> emulator_;
   std::atomic<bool> stop_{false};
   std::thread thread_;
 };
@@ -76,11 +76,11 @@ void run_loop(benchmark::State& st, nanoseconds period, nanoseconds busy_tail, b
   for (auto _ : st) {
     st.PauseTiming();
     auto emulator = std::make_unique<EmulatorThread>(rt.fifo ? 70 : 0);
-    io::UdpTransport transport({.local_address = "127.0.0.1",
-                                .remote_address = "127.0.0.1",
-                                .remote_port = emulator->port()});
-    tp::SteadyClock clock;
-    sim::ScriptedOperator<tp::SteadyClock> hand(clock);
+    transport::UdpTransport transport({.local_address = "127.0.0.1",
+                                       .remote_address = "127.0.0.1",
+                                       .remote_port = emulator->port()});
+    endohaptics::SteadyClock clock;
+    sim::ScriptedOperator<endohaptics::SteadyClock> hand(clock);
     est::ForceEstimator<est::rate::Decimate> estimator;
     est::PacedEstimator paced(estimator, clock, std::chrono::milliseconds(1));
     endohaptics::kinematics::CylindricalMapper<> mapper;
@@ -130,7 +130,7 @@ void BM_Baseline_clock_nanosleep_1kHz(benchmark::State& st) {
   const auto ticks = st.range(0);
   (void)tp::apply_realtime({.timer_slack_ns = 1});
   for (auto _ : st) {
-    tp::SteadyClock clock;
+    endohaptics::SteadyClock clock;
     tp::LoopStats stats(std::chrono::milliseconds(1));
     auto next = clock.now();
     for (std::int64_t i = 0; i < ticks; ++i) {

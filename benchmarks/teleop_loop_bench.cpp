@@ -7,15 +7,15 @@
 #include <unistd.h>
 
 #include <array>
-#include <endohaptics/io/in_memory_transport.hpp>
-#include <endohaptics/io/udp_transport.hpp>
 #include <endohaptics/kinematics/cylindrical_mapper.hpp>
 #include <endohaptics/teleop/teleop_loop.hpp>
+#include <endohaptics/transport/in_memory_transport.hpp>
+#include <endohaptics/transport/udp_transport.hpp>
 #include <thread>
 
 namespace {
 
-namespace io = endohaptics::io;
+namespace transport = endohaptics::transport;
 namespace tp = endohaptics::teleop;
 using Codec = endohaptics::protocol::PacketCodec<4>;
 
@@ -56,11 +56,11 @@ struct EffortEstimator {
 };
 
 void BM_TeleopLoop_tick(benchmark::State& st) {
-  io::RespondingTransport<CannedSbrio> transport{CannedSbrio{}};
+  transport::RespondingTransport<CannedSbrio> transport{CannedSbrio{}};
   StillDevice device;
   EffortEstimator estimator;
   endohaptics::kinematics::CylindricalMapper<> mapper;
-  tp::SteadyClock clock;
+  endohaptics::SteadyClock clock;
   tp::TeleopLoop loop(transport, device, estimator, mapper, clock);
   for (auto _ : st) {
     const auto r = loop.tick();
@@ -116,7 +116,7 @@ class Echo {
 
 void BM_UdpTransport_round_trip(benchmark::State& st) {
   Echo echo;
-  io::UdpTransport transport(
+  transport::UdpTransport transport(
       {.local_address = "127.0.0.1", .remote_address = "127.0.0.1", .remote_port = echo.port()});
   Codec::SetpointBytes out{};
   std::array<std::byte, 128> in{};
@@ -124,7 +124,7 @@ void BM_UdpTransport_round_trip(benchmark::State& st) {
   for (auto _ : st) {
     (void)transport.send(out);
     const auto r = transport.receive(in, std::chrono::milliseconds(100));
-    if (r.status != io::TransportStatus::ok) ++lost;
+    if (r.status != transport::TransportStatus::ok) ++lost;
   }
   st.counters["lost"] = static_cast<double>(lost);
 }

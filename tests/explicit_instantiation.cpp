@@ -39,19 +39,18 @@ template class eh::kinematics::CylindricalMapper<float>;
 template class eh::kinematics::DhChain<6>;
 template class eh::kinematics::DhChain<3, float>;
 
-template class eh::io::DatagramQueue<128, 16>;
-template class eh::io::InMemoryTransport<128, 16>;
-template class eh::io::InMemoryLink<64, 4>;
-template class eh::io::FaultInjectingTransport<eh::io::InMemoryTransport<128, 16>>;
+template class eh::transport::DatagramQueue<128, 16>;
+template class eh::transport::InMemoryTransport<128, 16>;
+template class eh::transport::InMemoryLink<64, 4>;
+template class eh::transport::FaultInjectingTransport<eh::transport::InMemoryTransport<128, 16>>;
 template class eh::teleop::DurationStats<100, 1000>;
 template class eh::teleop::SetpointRateLimiter<4>;
 template class eh::sim::SimulatedRig<1, float>;
 template class eh::sim::SimulatedRig<4>;
-template class eh::sim::ScriptedOperator<eh::teleop::ManualClock>;
-template class eh::sim::SbrioEmulator<eh::io::InMemoryTransport<128, 16>, eh::sim::SimulatedRig<4>,
-                                      eh::teleop::ManualClock>;
-template class eh::estimation::PacedEstimator<eh::teleop::NoForceEstimator,
-                                              eh::teleop::ManualClock>;
-template class eh::teleop::TeleopLoop<
-    eh::io::InMemoryTransport<128, 16>, InstantiationDevice, eh::teleop::NoForceEstimator,
-    eh::kinematics::CylindricalMapper<double>, eh::teleop::ManualClock>;
+template class eh::sim::ScriptedOperator<eh::ManualClock>;
+template class eh::sim::SbrioEmulator<eh::transport::InMemoryTransport<128, 16>,
+                                      eh::sim::SimulatedRig<4>, eh::ManualClock>;
+template class eh::estimation::PacedEstimator<eh::teleop::NoForceEstimator, eh::ManualClock>;
+template class eh::teleop::TeleopLoop<eh::transport::InMemoryTransport<128, 16>,
+                                      InstantiationDevice, eh::teleop::NoForceEstimator,
+                                      eh::kinematics::CylindricalMapper<double>, eh::ManualClock>;

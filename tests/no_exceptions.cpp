@@ -44,11 +44,11 @@ int main() {
     if (Codec::encode_state(s, out) == endohaptics::protocol::CodecStatus::ok)
       (void)reply.send(out);
   };
-  endohaptics::io::RespondingTransport<decltype(echo)> transport(echo);
+  endohaptics::transport::RespondingTransport<decltype(echo)> transport(echo);
   Hand hand;
   endohaptics::teleop::NoForceEstimator estimator;
   endohaptics::kinematics::CylindricalMapper<> mapper;
-  endohaptics::teleop::ManualClock clock;
+  endohaptics::ManualClock clock;
   endohaptics::teleop::TeleopLoop loop(transport, hand, estimator, mapper, clock);
   int ok = 0;
   for (int i = 0; i < 100; ++i) {

@@ -9,7 +9,7 @@
 #include <endohaptics/teleop/teleop_loop.hpp>
 
 namespace tp = endohaptics::teleop;
-namespace eio = endohaptics::io;
+namespace transport = endohaptics::transport;
 using Codec = endohaptics::protocol::PacketCodec<4>;
 
 // Your transport: send() hands the datagram to the toy sbRIO, receive() returns its answer.
@@ -18,10 +18,10 @@ struct MailboxTransport {
   Codec::StateBytes reply{};
   bool has_reply = false;
 
-  eio::TransportStatus send(std::span<const std::byte> datagram) noexcept {
+  transport::TransportStatus send(std::span<const std::byte> datagram) noexcept {
     Codec::Setpoint sp;
     if (Codec::decode_setpoint(datagram, sp) != endohaptics::protocol::CodecStatus::ok) {
-      return eio::TransportStatus::ok;  // the sbRIO ignores garbage
+      return transport::TransportStatus::ok;  // the sbRIO ignores garbage
     }
     const Eigen::Vector4d enabled =
         Eigen::Vector4d(sp.enable_mask & 1, (sp.enable_mask >> 1) & 1, (sp.enable_mask >> 2) & 1,
@@ -31,16 +31,16 @@ struct MailboxTransport {
     robot.effort = 3.0 * (sp.position - robot.position);
     robot.active_mask = sp.enable_mask;
     has_reply = Codec::encode_state(robot, reply) == endohaptics::protocol::CodecStatus::ok;
-    return eio::TransportStatus::ok;
+    return transport::TransportStatus::ok;
   }
-  eio::ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds) noexcept {
+  transport::ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds) noexcept {
     if (!has_reply) return {};  // timeout
     has_reply = false;
     std::copy(reply.begin(), reply.end(), buffer.begin());
-    return {eio::TransportStatus::ok, reply.size(), 0};
+    return {transport::TransportStatus::ok, reply.size(), 0};
   }
 };
-static_assert(eio::Transport<MailboxTransport>);
+static_assert(transport::Transport<MailboxTransport>);
 
 // Your haptic device: a hand closing the stylus towards the base, then holding.
 struct ScriptedHand {
@@ -68,7 +68,7 @@ int main(int argc, char** argv) {
   ScriptedHand hand;
   tp::NoForceEstimator estimator;  // or your own: estimate(measured, setpoint, force) noexcept
   endohaptics::kinematics::CylindricalMapper<> mapper;
-  tp::ManualClock clock;  // simulated time; use tp::SteadyClock on a real rig
+  endohaptics::ManualClock clock;  // simulated time; use endohaptics::SteadyClock on a real rig
   tp::TeleopLoop loop(transport, hand, estimator, mapper, clock);
 
   int n = 0;

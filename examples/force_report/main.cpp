@@ -7,23 +7,23 @@
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
-#include <endohaptics/io/log_reader.hpp>
+#include <endohaptics/files/log_reader.hpp>
 #include <endohaptics/sim/force_accuracy.hpp>
 #include <filesystem>
 #include <string>
 #include <vector>
 
-namespace eio = endohaptics::io;
+namespace files = endohaptics::files;
 namespace sim = endohaptics::sim;
 
 namespace {
 
 std::vector<double> to_vector(const Eigen::VectorXd& v) { return {v.data(), v.data() + v.size()}; }
 
-eio::Log read(const std::string& path) {
-  eio::CsvOptions options;
+files::Log read(const std::string& path) {
+  files::CsvOptions options;
   options.read.rebase_time = false;  // both logs use CLOCK_MONOTONIC: keep them aligned
-  eio::Log log = eio::read_csv(path, options);
+  files::Log log = files::read_csv(path, options);
   if (log.report.dropped() > 0) {
     fmt::print("force-report: {}: {} rows dropped\n{}", path, log.report.dropped(),
                log.report.to_string());
@@ -61,8 +61,8 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   try {
-    const eio::Log truth = read(truth_path);
-    const eio::Log ticks = read(log_path);
+    const files::Log truth = read(truth_path);
+    const files::Log ticks = read(log_path);
     const std::string j = std::to_string(joint);
     const Eigen::VectorXd t_truth = truth.time;
     const Eigen::VectorXd f_truth = truth.signal("force" + j);

@@ -2,18 +2,19 @@
 // prints what the reader dropped, resamples to --ts, low-pass/offset as 4.2.1, identifies with
 // N4SID/MOESP/CVA (or all three, keeping the best mean fit), optionally with input dead zones,
 // prints the Hankel singular values, the order and the fit per file, and writes a JSON model.
-// Workflow: endohaptics/identification/workflow.hpp; results: docs/identification_results.md.
+// Workflow: endohaptics/workflow/workflow.hpp; results: docs/identification_results.md.
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
 #include <charconv>
-#include <endohaptics/identification/workflow.hpp>
+#include <endohaptics/workflow/workflow.hpp>
 #include <exception>
 #include <string>
 #include <vector>
 
 namespace id = endohaptics::identification;
-namespace eio = endohaptics::io;
+namespace wf = endohaptics::workflow;
+namespace files = endohaptics::files;
 
 int main(int argc, char** argv) {
   CLI::App app{"endohaptics identify: subspace (+ dead zone) model from logs"};
@@ -22,7 +23,7 @@ int main(int argc, char** argv) {
   std::string offset = "none", input_offset = "none", x0 = "estimate", out_path;
   double ts = 0.0;
   int max_order = 10;
-  id::Preprocessing pre;
+  wf::Preprocessing pre;
   bool drop_non_finite = false;
   app.add_option("--log", logs, "log file (repeat for several experiments)")->required();
   app.add_option("--format", format, "endowrist-2016 or csv (header line names the columns)")
@@ -70,10 +71,10 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   try {
-    id::LogSelection sel;
-    sel.format = eio::parse_log_format(format);
+    wf::LogSelection sel;
+    sel.format = files::parse_log_format(format);
     sel.drop_non_finite = drop_non_finite;
-    const bool endowrist = sel.format == eio::LogFormat::endowrist_2016;
+    const bool endowrist = sel.format == files::LogFormat::endowrist_2016;
     sel.inputs = !inputs.empty() ? inputs
                  : endowrist     ? std::vector<std::string>{"current"}
                                  : inputs;
@@ -83,9 +84,9 @@ int main(int argc, char** argv) {
     if (sel.inputs.empty() || sel.outputs.empty()) {
       throw endohaptics::Error("--format csv needs --input and --output column names");
     }
-    pre.output_offset = id::offset_mode_from_string(offset);
-    pre.input_offset = id::offset_mode_from_string(input_offset);
-    id::WorkflowOptions options;
+    pre.output_offset = wf::offset_mode_from_string(offset);
+    pre.input_offset = wf::offset_mode_from_string(input_offset);
+    wf::WorkflowOptions options;
     options.max_order = max_order;
     if (order != "auto") {
       const auto [end, ec] =
@@ -101,26 +102,26 @@ int main(int argc, char** argv) {
     } else {
       options.candidates = {id::weighting_from_string(method)};
     }
-    options.deadzone = id::parse_deadzone(deadzone, sel.inputs.size());
-    options.initial_state = id::initial_state_from_string(x0);
-    if (options.initial_state == id::InitialStateMode::stored) {
+    options.deadzone = wf::parse_deadzone(deadzone, sel.inputs.size());
+    options.initial_state = wf::initial_state_from_string(x0);
+    if (options.initial_state == wf::InitialStateMode::stored) {
       throw endohaptics::Error("--x0 must be estimate or zero here");
     }
 
     // Sample time: given, else the median step of the first log (a CSV without time column:
     // its row time, 1 s unless --ts says otherwise).
     sel.csv_row_time = ts > 0.0 ? ts : 1.0;
-    if (ts <= 0.0) ts = id::default_sample_time(logs.front(), sel);
-    std::vector<id::PreparedLog> prepared;
+    if (ts <= 0.0) ts = wf::default_sample_time(logs.front(), sel);
+    std::vector<wf::PreparedLog> prepared;
     for (const auto& path : logs) {
-      prepared.push_back(id::prepare_log(path, sel, ts, pre));
-      fmt::print("{}", id::summary(prepared.back()));
+      prepared.push_back(wf::prepare_log(path, sel, ts, pre));
+      fmt::print("{}", wf::summary(prepared.back()));
     }
-    fmt::print("preprocessing: {}\n", id::describe(pre));
+    fmt::print("preprocessing: {}\n", wf::describe(pre));
 
     auto units = [&](const std::vector<std::string>& names) {
-      std::vector<eio::SignalInfo> info;
-      const eio::Log first = endowrist ? eio::read_endowrist_2016(logs.front()) : eio::Log{};
+      std::vector<files::SignalInfo> info;
+      const files::Log first = endowrist ? files::read_endowrist_2016(logs.front()) : files::Log{};
       for (const auto& n : names) {
         std::string unit;
         for (std::size_t i = 0; i < first.names.size(); ++i) {
@@ -132,9 +133,9 @@ int main(int argc, char** argv) {
     };
     const auto in_info = units(sel.inputs);
     const auto out_info = units(sel.outputs);
-    const id::WorkflowResult result = id::identify_logs(prepared, in_info, out_info, options);
+    const wf::WorkflowResult result = wf::identify_logs(prepared, in_info, out_info, options);
 
-    for (const id::CandidateModel& c : result.candidates) {
+    for (const wf::CandidateModel& c : result.candidates) {
       if (!options.static_gain) {
         const auto& sv = c.linear.order_singular_values;
         std::string line;
@@ -155,10 +156,10 @@ int main(int argc, char** argv) {
       fmt::print("{}: mean fit {:.2f} %\n", c.method, c.mean_fit);
     }
     for (const std::string& f : result.failures) fmt::print("failed: {}\n", f);
-    const id::CandidateModel& best = result.chosen();
+    const wf::CandidateModel& best = result.chosen();
     fmt::print("chosen: {} (order {}){}\n", best.method, best.model.A.rows(),
                best.spectral_radius >= 1.0 ? ", NOT STABLE: no stable candidate" : "");
-    for (const id::FileComparison& f : best.files) {
+    for (const wf::FileComparison& f : best.files) {
       std::string fits;
       for (Eigen::Index i = 0; i < f.fit.size(); ++i) {
         fits += fmt::format(" {} {:.2f} %", sel.outputs[static_cast<std::size_t>(i)], f.fit[i]);
@@ -167,11 +168,11 @@ int main(int argc, char** argv) {
     }
     fmt::print("mean fit: {:.2f}%\n", best.mean_fit);
     if (!out_path.empty()) {
-      eio::ModelFile model = best.model;
-      model.provenance.notes = "preprocessing: " + id::describe(pre) +
+      files::ModelFile model = best.model;
+      model.provenance.notes = "preprocessing: " + wf::describe(pre) +
                                "\nfit_percent: mean over the identification logs, x0 " + x0 +
                                "\ntool: endohaptics-identify";
-      eio::save_model(out_path, model);
+      files::save_model(out_path, model);
       fmt::print("model written to {}\n", out_path);
     }
   } catch (const std::exception& e) {

@@ -6,18 +6,19 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
-#include <endohaptics/identification/workflow.hpp>
+#include <endohaptics/workflow/workflow.hpp>
 #include <exception>
 #include <string>
 #include <vector>
 
 namespace id = endohaptics::identification;
-namespace eio = endohaptics::io;
+namespace wf = endohaptics::workflow;
+namespace files = endohaptics::files;
 
 namespace {
 
 // Measured vs simulated, one panel per file (gnuplot, pngcairo); segments break the lines.
-void plot(const std::string& png, const std::vector<id::FileComparison>& files,
+void plot(const std::string& png, const std::vector<wf::FileComparison>& files,
           const std::vector<std::string>& outputs) {
   const std::string data = png + ".dat";
   std::FILE* out = std::fopen(data.c_str(), "w");
@@ -66,7 +67,7 @@ int main(int argc, char** argv) {
   std::string model_arg, format = "endowrist-2016", x0 = "estimate", plot_path;
   std::string offset = "none", input_offset = "none";
   double ts = 0.0;
-  id::Preprocessing pre;
+  wf::Preprocessing pre;
   bool drop_non_finite = false;
   app.add_option("--model", model_arg, "model file (JSON), preset:yaw2016 or preset:pitch2016")
       ->required();
@@ -93,15 +94,15 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   try {
-    const eio::ModelFile model = model_arg.starts_with("preset:")
-                                     ? id::preset_model(model_arg.substr(7))
-                                     : eio::load_model(model_arg);
+    const files::ModelFile model = model_arg.starts_with("preset:")
+                                       ? wf::preset_model(model_arg.substr(7))
+                                       : files::load_model(model_arg);
     const std::string name = model_arg.starts_with("preset:") ? model_arg : "model " + model_arg;
     std::vector<std::string> model_in, model_out;
     for (const auto& s : model.inputs) model_in.push_back(s.name);
     for (const auto& s : model.outputs) model_out.push_back(s.name);
-    id::LogSelection sel;
-    sel.format = eio::parse_log_format(format);
+    wf::LogSelection sel;
+    sel.format = files::parse_log_format(format);
     sel.drop_non_finite = drop_non_finite;
     sel.inputs = inputs.empty() ? model_in : inputs;
     sel.outputs = outputs.empty() ? model_out : outputs;
@@ -114,8 +115,8 @@ int main(int argc, char** argv) {
     sel.csv_row_time = ts > 0.0 ? ts : model.sample_time;
 
     // Flags given on the command line win over the recorded preprocessing.
-    const id::Preprocessing given = pre;
-    const auto recorded = id::recorded_preprocessing(model);
+    const wf::Preprocessing given = pre;
+    const auto recorded = wf::recorded_preprocessing(model);
     if (recorded) pre = *recorded;
     if (lowpass->count() > 0) pre.cutoff = given.cutoff;
     if (filter_order->count() > 0) pre.filter_order = given.filter_order;
@@ -123,24 +124,24 @@ int main(int argc, char** argv) {
     if (detrend->count() > 0) pre.detrend = given.detrend;
     if (max_gap->count() > 0) pre.max_gap = given.max_gap;
     if (min_segment->count() > 0) pre.min_segment = given.min_segment;
-    if (offset_opt->count() > 0) pre.output_offset = id::offset_mode_from_string(offset);
+    if (offset_opt->count() > 0) pre.output_offset = wf::offset_mode_from_string(offset);
     if (input_offset_opt->count() > 0) {
-      pre.input_offset = id::offset_mode_from_string(input_offset);
+      pre.input_offset = wf::offset_mode_from_string(input_offset);
     }
-    const id::InitialStateMode mode = id::initial_state_from_string(x0);
+    const wf::InitialStateMode mode = wf::initial_state_from_string(x0);
     fmt::print("{}: {} states, {} -> {}, Ts {} s, {}\n", name, model.A.rows(),
                fmt::join(model_in, ", "), fmt::join(model_out, ", "), model.sample_time,
                model.provenance.method);
     fmt::print("preprocessing ({}): {}\n", recorded ? "model file, flags override" : "flags",
-               id::describe(pre));
+               wf::describe(pre));
 
-    std::vector<id::FileComparison> results;
+    std::vector<wf::FileComparison> results;
     double sum = 0.0;
     for (const auto& path : logs) {
-      const id::PreparedLog log = id::prepare_log(path, sel, model.sample_time, pre);
-      fmt::print("{}", id::summary(log));
-      results.push_back(id::compare_log(model, log, mode));
-      const id::FileComparison& c = results.back();
+      const wf::PreparedLog log = wf::prepare_log(path, sel, model.sample_time, pre);
+      fmt::print("{}", wf::summary(log));
+      results.push_back(wf::compare_log(model, log, mode));
+      const wf::FileComparison& c = results.back();
       for (Eigen::Index i = 0; i < c.fit.size(); ++i) {
         const auto& o = model.outputs[static_cast<std::size_t>(i)];
         fmt::print("{}: {} fit {:.2f} %, correlation {:.4f}, RMSE {:.4g}{}{}\n", path,

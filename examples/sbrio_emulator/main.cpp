@@ -9,16 +9,16 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
-#include <endohaptics/io/udp_server_transport.hpp>
 #include <endohaptics/sim/sbrio_emulator.hpp>
 #include <endohaptics/sim/simulated_rig.hpp>
 #include <endohaptics/teleop/realtime.hpp>
+#include <endohaptics/transport/udp_server_transport.hpp>
 #include <map>
 #include <memory>
 #include <string>
 
 namespace sim = endohaptics::sim;
-namespace eio = endohaptics::io;
+namespace transport = endohaptics::transport;
 namespace tp = endohaptics::teleop;
 
 namespace {
@@ -77,8 +77,8 @@ int main(int argc, char** argv) {
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
     (void)endohaptics::teleop::apply_realtime({.timer_slack_ns = 1});  // prompt poll timeouts
-    eio::UdpServerTransport transport(eio::UdpServerConfig{bind, port});
-    tp::SteadyClock clock;
+    transport::UdpServerTransport transport(transport::UdpServerConfig{bind, port});
+    endohaptics::SteadyClock clock;
     sim::SimulatedRig<4> rig(sim::endowrist_2016_rig<4>(environments.at(environment)));
     sim::EmulatorConfig config;
     config.watchdog_timeout = std::chrono::microseconds(static_cast<long>(watchdog_ms * 1e3));

@@ -12,13 +12,13 @@
 #include <cstdio>
 #include <endohaptics/estimation/force_estimator.hpp>
 #include <endohaptics/estimation/paced_estimator.hpp>
-#include <endohaptics/io/model_file.hpp>
-#include <endohaptics/io/udp_transport.hpp>
+#include <endohaptics/files/model_file.hpp>
 #include <endohaptics/kinematics/cylindrical_mapper.hpp>
 #include <endohaptics/sim/scripted_operator.hpp>
 #include <endohaptics/teleop/realtime.hpp>
 #include <endohaptics/teleop/teleop_loop.hpp>
 #include <endohaptics/teleop/tick_recorder.hpp>
+#include <endohaptics/transport/udp_transport.hpp>
 #include <memory>
 #include <optional>
 #include <string>
@@ -31,7 +31,8 @@
 
 namespace tp = endohaptics::teleop;
 namespace est = endohaptics::estimation;
-namespace eio = endohaptics::io;
+namespace transport = endohaptics::transport;
+namespace files = endohaptics::files;
 using std::chrono::nanoseconds;
 
 namespace {
@@ -86,14 +87,14 @@ std::pair<std::string, std::uint16_t> parse_endpoint(const std::string& s) {
 }
 
 template <typename Device>
-int run_bridge(Device& device, tp::SteadyClock& clock, const Options& opt,
+int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& opt,
                const bridge::Config& cfg) {
   const auto [host, port] = parse_endpoint(opt.sbrio);
-  eio::UdpConfig udp;
+  transport::UdpConfig udp;
   udp.remote_address = host;
   udp.remote_port = port;
   udp.local_address = host.find(':') != std::string::npos ? "::" : "0.0.0.0";
-  eio::UdpTransport transport(udp);
+  transport::UdpTransport transport(udp);
 
   // The 2016 models run at their own rates (rate::Decimate) on a 1 kHz grid; PacedEstimator
   // keeps that grid whatever the loop rate (--rate max) and through lost packets.
@@ -102,7 +103,7 @@ int run_bridge(Device& device, tp::SteadyClock& clock, const Options& opt,
   auto models = est::models_2016<double>();
   if (!cfg.clamp_model.empty()) {  // an identified model (endohaptics-identify) for both clamps
     using Clamp = est::ClampModel2016<double>;
-    models.clamp1 = Clamp(eio::load_hammerstein_wiener<6, 2, 1>(cfg.clamp_model));
+    models.clamp1 = Clamp(files::load_hammerstein_wiener<6, 2, 1>(cfg.clamp_model));
     models.clamp2 = models.clamp1;
   }
   est::ForceEstimator<est::rate::Decimate> estimator(models, settings);
@@ -262,9 +263,10 @@ int main(int argc, char** argv) {
     std::signal(SIGTERM, on_signal);
     const bridge::Config cfg =
         opt.config_path.empty() ? bridge::Config{} : bridge::load_config(opt.config_path);
-    tp::SteadyClock clock;
+    endohaptics::SteadyClock clock;
     if (opt.device == "sim") {
-      endohaptics::sim::ScriptedOperator<tp::SteadyClock> device(clock, cfg.operator_script);
+      endohaptics::sim::ScriptedOperator<endohaptics::SteadyClock> device(clock,
+                                                                          cfg.operator_script);
       return run_bridge(device, clock, opt, cfg);
     }
 #ifdef ENDOHAPTICS_HAVE_OPENHAPTICS

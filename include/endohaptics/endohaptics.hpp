@@ -1,25 +1,21 @@
 //! @file
 //! Umbrella header: everything endohaptics offers. Include single component headers instead
-//! to keep compile times down. The JSON model files (io/model_file.hpp,
-//! identification/workflow.hpp) are not included: they need nlohmann-json, which the target
+//! to keep compile times down. The JSON model files (files/model_file.hpp,
+//! workflow/workflow.hpp) are not included: they need nlohmann-json, which the target
 //! endohaptics::model_files brings (find_package(endohaptics COMPONENTS model_files)).
 #pragma once
 
+#include "endohaptics/core/clock.hpp"
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/estimation/dare.hpp"
 #include "endohaptics/estimation/force_estimator.hpp"
 #include "endohaptics/estimation/paced_estimator.hpp"
 #include "endohaptics/estimation/steady_state_kalman.hpp"
+#include "endohaptics/files/log_reader.hpp"
 #include "endohaptics/identification/fit_metrics.hpp"
 #include "endohaptics/identification/hammerstein_wiener_fit.hpp"
 #include "endohaptics/identification/signal.hpp"
 #include "endohaptics/identification/subspace.hpp"
-#include "endohaptics/io/fault_injecting_transport.hpp"
-#include "endohaptics/io/in_memory_transport.hpp"
-#include "endohaptics/io/log_reader.hpp"
-#include "endohaptics/io/transport.hpp"
-#include "endohaptics/io/udp_server_transport.hpp"
-#include "endohaptics/io/udp_transport.hpp"
 #include "endohaptics/kinematics/cylindrical_mapper.hpp"
 #include "endohaptics/kinematics/denavit_hartenberg.hpp"
 #include "endohaptics/model/friction_model.hpp"
@@ -33,10 +29,14 @@
 #include "endohaptics/sim/sbrio_emulator.hpp"
 #include "endohaptics/sim/scripted_operator.hpp"
 #include "endohaptics/sim/simulated_rig.hpp"
-#include "endohaptics/teleop/clock.hpp"
 #include "endohaptics/teleop/haptic_device.hpp"
 #include "endohaptics/teleop/loop_stats.hpp"
 #include "endohaptics/teleop/realtime.hpp"
 #include "endohaptics/teleop/safety.hpp"
 #include "endohaptics/teleop/teleop_loop.hpp"
 #include "endohaptics/teleop/tick_recorder.hpp"
+#include "endohaptics/transport/fault_injecting_transport.hpp"
+#include "endohaptics/transport/in_memory_transport.hpp"
+#include "endohaptics/transport/transport.hpp"
+#include "endohaptics/transport/udp_server_transport.hpp"
+#include "endohaptics/transport/udp_transport.hpp"

@@ -25,7 +25,7 @@ namespace est = endohaptics::estimation;
 namespace m = endohaptics::model;
 namespace rate = endohaptics::estimation::rate;
 using endohaptics::Error;
-using endohaptics::kinematics::ToolJoint;
+using endohaptics::protocol::Motor;
 using endohaptics::test::allocations_during;
 using est::ForceEstimator;
 using est::ForceEstimator2016;
@@ -125,7 +125,7 @@ TEST_CASE("a model sample time that differs from the loop period is refused with
   est::ForceEstimatorSettings<double> settings;
   settings.loop_period = 0.02;
   ForceEstimator<rate::SameRate> estimator(settings);
-  CHECK(estimator.ticks_per_model_step(ToolJoint::pitch) == 1);
+  CHECK(estimator.ticks_per_model_step(Motor::pitch) == 1);
   auto roll = m::roll_torque_2016();
   auto pitch = m::pitch_force_2016();
   auto clamp1 = m::yaw_force_2016_hw(0.21);
@@ -155,13 +155,13 @@ TEST_CASE("rate::Decimate needs an integer ratio within 1e-9; rate::Resample ref
   settings.loop_period = 0.02 / (20.0 + 5e-8);  // ratio 20.00000005: off by 5e-8 > 1e-9
   CHECK_THROWS_AS((void)Decimated(settings), Error);
   settings.loop_period = 0.02 / (20.0 + 5e-10);  // within 1e-9
-  CHECK(Decimated(settings).ticks_per_model_step(ToolJoint::clamp1) == 20);
+  CHECK(Decimated(settings).ticks_per_model_step(Motor::clamp1) == 20);
   settings.loop_period = 0.0008;  // 25 ticks per model step
   const Decimated at_1250_hz(settings);
-  CHECK(at_1250_hz.ticks_per_model_step(ToolJoint::pitch) == 25);
-  CHECK(at_1250_hz.ticks_per_model_step(ToolJoint::clamp2) == 25);
-  CHECK(at_1250_hz.ticks_per_model_step(ToolJoint::roll) == 1);  // memoryless: every tick
-  CHECK(Decimated().ticks_per_model_step(ToolJoint::clamp1) == 20);
+  CHECK(at_1250_hz.ticks_per_model_step(Motor::pitch) == 25);
+  CHECK(at_1250_hz.ticks_per_model_step(Motor::clamp2) == 25);
+  CHECK(at_1250_hz.ticks_per_model_step(Motor::roll) == 1);  // memoryless: every tick
+  CHECK(Decimated().ticks_per_model_step(Motor::clamp1) == 20);
 
   // scipy: numpy.linalg.eigvals of C.4 gives -0.0952137 (real) among the pitch poles.
   const std::string what = message_of([] { (void)ForceEstimator<rate::Resample>(); });
@@ -170,9 +170,9 @@ TEST_CASE("rate::Decimate needs an integer ratio within 1e-9; rate::Resample ref
   CHECK(what.find("negative real axis") != std::string::npos);
   // With a resamplable pitch model every joint runs at the loop period.
   const ForceEstimator<rate::Resample> resampled(resamplable_models(), {});
-  CHECK(resampled.ticks_per_model_step(ToolJoint::clamp1) == 1);
-  CHECK(resampled.joint_model<ToolJoint::clamp1>().sample_time() == 0.001);
-  CHECK(resampled.joint_model<ToolJoint::roll>().sample_time() == 0.02);  // memoryless: kept
+  CHECK(resampled.ticks_per_model_step(Motor::clamp1) == 1);
+  CHECK(resampled.joint_model<Motor::clamp1>().sample_time() == 0.001);
+  CHECK(resampled.joint_model<Motor::roll>().sample_time() == 0.02);  // memoryless: kept
 }
 
 TEST_CASE("resample_zoh: the yaw model stepped 20 times at 1 ms equals one step at 20 ms") {
@@ -520,7 +520,7 @@ TEST_CASE("clamp sign convention: a grip pushes the stylus open, along +e_r") {
 
 TEST_CASE("motor_order: the same signals in other motor slots give the same tool-joint forces") {
   est::ForceEstimatorSettings<double> permuted;
-  permuted.motor_order = {ToolJoint::clamp2, ToolJoint::clamp1, ToolJoint::roll, ToolJoint::pitch};
+  permuted.motor_order = {Motor::clamp2, Motor::clamp1, Motor::roll, Motor::pitch};
   Decimated reference;
   Decimated other(permuted);
   for (int k = 0; k < 3000; ++k) {
@@ -569,7 +569,7 @@ TEST_CASE("Kalman correction hook: a synthetic augmented model recovers an unmod
   WithKalman with_kalman({presets.roll, corrected, presets.clamp1, presets.clamp2}, settings);
   OpenLoopEstimator open_loop(
       {presets.roll, est::OpenLoop<Aug>(augmented), presets.clamp1, presets.clamp2}, settings);
-  CHECK(with_kalman.ticks_per_model_step(ToolJoint::pitch) == 1);
+  CHECK(with_kalman.ticks_per_model_step(Motor::pitch) == 1);
 
   // The true joint: f = 1.5 N pushes on it while the motor draws 0.5 A.
   const double f_true = 1.5;
@@ -589,7 +589,7 @@ TEST_CASE("Kalman correction hook: a synthetic augmented model recovers an unmod
   CHECK(fk[1] == doctest::Approx(f_true).epsilon(1e-6));  // -current_sign = +1: y0 = f
   CHECK(fo[1] == 0.0);                                    // open loop: f stays 0
   CHECK(fk[2] == fo[2]);                                  // other joints unaffected
-  CHECK(with_kalman.joint_model<ToolJoint::pitch>().filter().gain().norm() > 0.0);
+  CHECK(with_kalman.joint_model<Motor::pitch>().filter().gain().norm() > 0.0);
 
   CHECK(message_of([&] {
           (void)Corrected(augmented, {static_cast<est::Measured>(9)}, Eigen::Matrix2d::Identity(),
@@ -652,9 +652,9 @@ TEST_CASE("settings are validated; errors name the field, the joint and the valu
     change(s);
     return message_of([&] { (void)Decimated(s); });
   };
-  CHECK(error_for([](auto& s) { s.motor_order[3] = ToolJoint::pitch; }) ==
+  CHECK(error_for([](auto& s) { s.motor_order[3] = Motor::pitch; }) ==
         "ForceEstimator: motor_order is not a permutation: pitch appears twice (again at motor 3)");
-  CHECK(error_for([](auto& s) { s.motor_order[0] = static_cast<ToolJoint>(7); }) ==
+  CHECK(error_for([](auto& s) { s.motor_order[0] = static_cast<Motor>(7); }) ==
         "ForceEstimator: motor_order[0] is not a tool joint: 7");
   CHECK(error_for([](auto& s) { s.current_sign[2] = 0.5; }) ==
         "ForceEstimator: current_sign[clamp1] must be +1 or -1, got 0.5");
@@ -680,7 +680,7 @@ TEST_CASE("TeleopLoop interface: estimate() = step() on the packet, forces in mo
   static_assert(
       endohaptics::teleop::JointForceEstimator<ForceEstimator2016<rate::Decimate, float>>);
   est::ForceEstimatorSettings<double> settings;
-  settings.motor_order = {ToolJoint::pitch, ToolJoint::roll, ToolJoint::clamp2, ToolJoint::clamp1};
+  settings.motor_order = {Motor::pitch, Motor::roll, Motor::clamp2, Motor::clamp1};
   Decimated via_step(settings);
   Decimated via_estimate(settings);
   for (int k = 0; k < 500; ++k) {

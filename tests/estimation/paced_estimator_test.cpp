@@ -8,7 +8,7 @@
 namespace {
 
 namespace est = endohaptics::estimation;
-namespace tp = endohaptics::teleop;
+namespace tp = endohaptics::estimation;
 using namespace std::chrono_literals;
 
 // Counts its steps; the force is the step count (so a test sees which step it came from).
@@ -31,7 +31,7 @@ struct CountingEstimator {
 
 TEST_CASE("faster ticks than the period hold the force; one step per elapsed period") {
   CountingEstimator inner;
-  tp::ManualClock clock(10s);
+  endohaptics::ManualClock clock(10s);
   est::PacedEstimator paced(inner, clock, 1ms);
   tp::MotorState4 state;
   tp::MotorVector force;
@@ -47,7 +47,7 @@ TEST_CASE("faster ticks than the period hold the force; one step per elapsed per
 
 TEST_CASE("a late call catches up the missed periods with the newest signals, bounded") {
   CountingEstimator inner;
-  tp::ManualClock clock(1s);
+  endohaptics::ManualClock clock(1s);
   est::PacedEstimator paced(inner, clock, 1ms, 20);
   tp::MotorState4 state;
   tp::MotorVector force;
@@ -68,7 +68,7 @@ TEST_CASE("a late call catches up the missed periods with the newest signals, bo
 
 TEST_CASE("a refused step is reported, and reset restarts the grid and the wrapped estimator") {
   CountingEstimator inner;
-  tp::ManualClock clock(1s);
+  endohaptics::ManualClock clock(1s);
   est::PacedEstimator paced(inner, clock, 1ms);
   tp::MotorState4 state;
   tp::MotorVector force;
@@ -88,7 +88,7 @@ TEST_CASE("a refused step is reported, and reset restarts the grid and the wrapp
 
 TEST_CASE("pacing allocates nothing") {
   CountingEstimator inner;
-  tp::ManualClock clock(1s);
+  endohaptics::ManualClock clock(1s);
   est::PacedEstimator paced(inner, clock, 1ms);
   tp::MotorState4 state;
   tp::MotorVector force;

@@ -8,7 +8,7 @@
 #include <utility>
 #include <vector>
 
-#include "endohaptics/io/log_reader.hpp"
+#include "endohaptics/files/log_reader.hpp"
 #include "shared_data.hpp"
 
 namespace {
@@ -388,7 +388,7 @@ TEST_CASE("preprocess: resample, zero-phase low-pass, output offset from the fir
 
 TEST_CASE("real log: pitch-down-02 force filtered at 20 Hz as worksheet 4.2.1" *
           doctest::skip(!endohaptics::test::has_shared_data("endowrist-2016"))) {
-  const auto log = endohaptics::io::read_endowrist_2016(
+  const auto log = endohaptics::files::read_endowrist_2016(
       endohaptics::test::shared_data("endowrist-2016/pitch/pitch-down-02.csv").string());
   id::PreprocessOptions o;
   o.sample_time = 0.02;

@@ -18,7 +18,7 @@ namespace {
 using endohaptics::kinematics::CylindricalMapper;
 using endohaptics::kinematics::CylindricalMapperConfig;
 using endohaptics::kinematics::MapperStatus;
-using endohaptics::kinematics::ToolJoint;
+using endohaptics::protocol::Motor;
 using endohaptics::test::allocations_during;
 using Mapper = CylindricalMapper<double>;
 using Config = Mapper::Config;
@@ -28,7 +28,7 @@ using Motors = Mapper::MotorVector;
 constexpr double pi = std::numbers::pi;
 constexpr double not_a_number = std::numeric_limits<double>::quiet_NaN();
 constexpr double inf = std::numeric_limits<double>::infinity();
-constexpr std::uint8_t bit(ToolJoint j) {
+constexpr std::uint8_t bit(Motor j) {
   return static_cast<std::uint8_t>(1u << static_cast<unsigned>(j));
 }
 
@@ -97,9 +97,9 @@ TEST_CASE("eq. 5.9 with the 2016 defaults at hand-computed points") {
     CHECK(out[1] == exact(-0.147));
     CHECK(out[2] == exact(-0.1076));
     CHECK(out[3] == exact(0.1076));
-    CHECK(result.clamped_mask == bit(ToolJoint::roll));
-    CHECK(result.clamped(ToolJoint::roll));
-    CHECK_FALSE(result.clamped(ToolJoint::clamp1));
+    CHECK(result.clamped_mask == bit(Motor::roll));
+    CHECK(result.clamped(Motor::roll));
+    CHECK_FALSE(result.clamped(Motor::clamp1));
   }
   SUBCASE("theta = pi (stylus along -y): roll 1.1213 is above the range and is clamped") {
     Motors out = Motors::Zero();
@@ -107,7 +107,7 @@ TEST_CASE("eq. 5.9 with the 2016 defaults at hand-computed points") {
     REQUIRE(result.ok());
     CHECK(result.coordinates.theta == exact(pi));
     CHECK(out[0] == 1.028);
-    CHECK(result.clamped_mask == bit(ToolJoint::roll));
+    CHECK(result.clamped_mask == bit(Motor::roll));
   }
 }
 
@@ -136,7 +136,7 @@ TEST_CASE(
 
 TEST_CASE("per-joint range limits: each joint is limited and reported") {
   Config config;
-  // Index = ToolJoint: roll, pitch, clamp1, clamp2.
+  // Index = Motor: roll, pitch, clamp1, clamp2.
   config.lower << -2.0, -0.1, -0.5, -0.05;
   config.upper << 2.0, 0.1, 0.5, 0.05;
   Mapper mapper(config);
@@ -149,7 +149,7 @@ TEST_CASE("per-joint range limits: each joint is limited and reported") {
   CHECK(out[1] == 0.1);
   CHECK(out[2] == exact(-0.3768));
   CHECK(out[3] == 0.05);
-  CHECK(result.clamped_mask == (bit(ToolJoint::pitch) | bit(ToolJoint::clamp2)));
+  CHECK(result.clamped_mask == (bit(Motor::pitch) | bit(Motor::clamp2)));
 
   // Opening the jaws too far (worksheet 6.2): r = 0.4 m gives clamp2 = 1.4536, clamp1 = -1.4536;
   // with the default +-1.028 rad both stop at the range.
@@ -157,12 +157,12 @@ TEST_CASE("per-joint range limits: each joint is limited and reported") {
   const auto wide = defaults.map_position(Vector3(0.4, 0.0, 0.137), out);
   CHECK(out[2] == -1.028);
   CHECK(out[3] == 1.028);
-  CHECK(wide.clamped_mask == (bit(ToolJoint::clamp1) | bit(ToolJoint::clamp2)));
+  CHECK(wide.clamped_mask == (bit(Motor::clamp1) | bit(Motor::clamp2)));
 }
 
 TEST_CASE("motor order is a configurable permutation") {
   Config config;
-  config.motor_order = {ToolJoint::clamp2, ToolJoint::roll, ToolJoint::clamp1, ToolJoint::pitch};
+  config.motor_order = {Motor::clamp2, Motor::roll, Motor::clamp1, Motor::pitch};
   Mapper mapper(config);
   const Motors out = map(mapper, Vector3(0.1, 0.0, 0.2));
   CHECK(out[0] == exact(-0.1616));                // clamp2
@@ -409,7 +409,7 @@ TEST_CASE("non-finite input is refused and leaves outputs and theta untouched") 
   }
   CHECK(to_string(MapperStatus::non_finite) == "non-finite value");
   CHECK(to_string(MapperStatus::ok) == "ok");
-  CHECK(to_string(ToolJoint::clamp2) == "clamp2");
+  CHECK(to_string(Motor::clamp2) == "clamp2");
 }
 
 TEST_CASE("huge finite positions are clamped and never NaN") {
@@ -421,8 +421,7 @@ TEST_CASE("huge finite positions are clamped and never NaN") {
   CHECK(out[1] == 1.028);
   CHECK(out[2] == -1.028);
   CHECK(out[3] == 1.028);
-  CHECK(result.clamped_mask ==
-        (bit(ToolJoint::pitch) | bit(ToolJoint::clamp1) | bit(ToolJoint::clamp2)));
+  CHECK(result.clamped_mask == (bit(Motor::pitch) | bit(Motor::clamp1) | bit(Motor::clamp2)));
 
   // With a zero clamp scale, 0 * inf would be NaN: refused instead of sent.
   Config config;
@@ -447,12 +446,12 @@ TEST_CASE("invalid configurations throw endohaptics::Error naming field and valu
   CHECK(message(c) == "no error");
 
   c = Config{};
-  c.motor_order = {ToolJoint::roll, ToolJoint::roll, ToolJoint::clamp1, ToolJoint::clamp2};
+  c.motor_order = {Motor::roll, Motor::roll, Motor::clamp1, Motor::clamp2};
   CHECK(message(c) ==
         "CylindricalMapper: motor_order is not a permutation: roll appears twice (again at motor "
         "1)");
   c = Config{};
-  c.motor_order[2] = static_cast<ToolJoint>(4);
+  c.motor_order[2] = static_cast<Motor>(4);
   CHECK(message(c) == "CylindricalMapper: motor_order[2] is not a tool joint: 4");
   c = Config{};
   c.lower[1] = 0.5;

@@ -1,7 +1,7 @@
 // Built against an installed endohaptics: includes the umbrella header and round-trips a packet,
 // then (component model_files) round-trips the appendix C yaw model through its JSON form.
 #include <endohaptics/endohaptics.hpp>
-#include <endohaptics/io/model_file.hpp>
+#include <endohaptics/files/model_file.hpp>
 
 #include <cstdio>
 
@@ -17,11 +17,11 @@ int main() {
   std::printf("consumer: %zu-byte setpoint packet round trip ok\n", bytes.size());
   if (back.enable_mask != 0x0F) return 1;
 
-  namespace io = endohaptics::io;
+  namespace files = endohaptics::files;
   const auto yaw = endohaptics::model::yaw_force_2016();
-  const io::ModelFile file =
-      io::make_model_file(yaw, {{"current", "A"}, {"velocity", "rad/s"}}, {{"force", "N"}});
-  const auto loaded = io::to_state_space<6, 2, 1>(io::model_from_json(io::to_json(file)));
+  const files::ModelFile file =
+      files::make_model_file(yaw, {{"current", "A"}, {"velocity", "rad/s"}}, {{"force", "N"}});
+  const auto loaded = files::to_state_space<6, 2, 1>(files::model_from_json(files::to_json(file)));
   if (!loaded.A().isApprox(yaw.A())) return 1;
   std::printf("consumer: model file JSON round trip ok\n");
   return 0;

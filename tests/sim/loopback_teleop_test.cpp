@@ -8,62 +8,62 @@
 #include <chrono>
 #include <endohaptics/estimation/force_estimator.hpp>
 #include <endohaptics/estimation/paced_estimator.hpp>
-#include <endohaptics/io/in_memory_transport.hpp>
 #include <endohaptics/kinematics/cylindrical_mapper.hpp>
 #include <endohaptics/sim/sbrio_emulator.hpp>
 #include <endohaptics/sim/scripted_operator.hpp>
 #include <endohaptics/sim/simulated_rig.hpp>
 #include <endohaptics/teleop/teleop_loop.hpp>
+#include <endohaptics/transport/in_memory_transport.hpp>
 #include <memory>
 
 namespace {
 
-namespace io = endohaptics::io;
+namespace transport = endohaptics::transport;
 namespace sim = endohaptics::sim;
 namespace tp = endohaptics::teleop;
 namespace est = endohaptics::estimation;
 using namespace std::chrono_literals;
 
 using Rig = sim::SimulatedRig<4>;
-using Emulator = sim::SbrioEmulator<io::InMemoryTransport<>, Rig, tp::ManualClock>;
+using Emulator = sim::SbrioEmulator<transport::InMemoryTransport<>, Rig, endohaptics::ManualClock>;
 
 // The PC's transport: sending hands the datagram to the emulator, which answers at once (the
 // wire and the sbRIO take `latency` of simulated time).
 struct EmulatedWire {
-  io::InMemoryTransport<>* pc;
+  transport::InMemoryTransport<>* pc;
   Emulator* emulator;
-  tp::ManualClock* clock;
+  endohaptics::ManualClock* clock;
   std::chrono::nanoseconds latency = 100us;
   bool unplugged = false;
 
-  io::TransportStatus send(std::span<const std::byte> datagram) noexcept {
-    if (unplugged) return io::TransportStatus::ok;  // lost on the wire
+  transport::TransportStatus send(std::span<const std::byte> datagram) noexcept {
+    if (unplugged) return transport::TransportStatus::ok;  // lost on the wire
     const auto status = pc->send(datagram);
     clock->advance(latency);
     (void)emulator->poll(0ns);
     return status;
   }
-  io::ReceiveResult receive(std::span<std::byte> buffer,
-                            std::chrono::nanoseconds timeout) noexcept {
+  transport::ReceiveResult receive(std::span<std::byte> buffer,
+                                   std::chrono::nanoseconds timeout) noexcept {
     const auto r = pc->receive(buffer, timeout);
-    if (r.status == io::TransportStatus::timeout) clock->advance(timeout);  // waited it out
+    if (r.status == transport::TransportStatus::timeout) clock->advance(timeout);  // waited it out
     return r;
   }
 };
 
 struct Rigged {
-  io::InMemoryLink<> link;
-  tp::ManualClock clock{1s};
+  transport::InMemoryLink<> link;
+  endohaptics::ManualClock clock{1s};
   Rig rig{sim::endowrist_2016_rig<4>(sim::Environment::tissue)};
   Emulator emulator{link.b(), rig, clock};
   EmulatedWire wire{&link.a(), &emulator, &clock};
-  sim::ScriptedOperator<tp::ManualClock> hand{clock};
+  sim::ScriptedOperator<endohaptics::ManualClock> hand{clock};
   est::ForceEstimator<est::rate::Decimate> estimator{};
-  est::PacedEstimator<est::ForceEstimator<est::rate::Decimate>, tp::ManualClock> paced{estimator,
-                                                                                       clock, 1ms};
+  est::PacedEstimator<est::ForceEstimator<est::rate::Decimate>, endohaptics::ManualClock> paced{
+      estimator, clock, 1ms};
   endohaptics::kinematics::CylindricalMapper<> mapper{};
-  tp::TeleopLoop<EmulatedWire, sim::ScriptedOperator<tp::ManualClock>, decltype(paced),
-                 endohaptics::kinematics::CylindricalMapper<>, tp::ManualClock>
+  tp::TeleopLoop<EmulatedWire, sim::ScriptedOperator<endohaptics::ManualClock>, decltype(paced),
+                 endohaptics::kinematics::CylindricalMapper<>, endohaptics::ManualClock>
       loop{wire, hand, paced, mapper, clock};
 };
 

@@ -4,15 +4,14 @@
 
 #include <array>
 #include <chrono>
-#include <endohaptics/io/in_memory_transport.hpp>
 #include <endohaptics/sim/sbrio_emulator.hpp>
+#include <endohaptics/transport/in_memory_transport.hpp>
 #include <vector>
 
 namespace {
 
-namespace io = endohaptics::io;
+namespace transport = endohaptics::transport;
 namespace sim = endohaptics::sim;
-namespace tp = endohaptics::teleop;
 using Codec = endohaptics::protocol::PacketCodec<4>;
 using namespace std::chrono_literals;
 
@@ -49,11 +48,11 @@ struct FakeRig {
 static_assert(sim::EmulatedRig<FakeRig, 4>);
 
 struct Fixture {
-  io::InMemoryLink<> link;
-  tp::ManualClock clock{1s};
+  transport::InMemoryLink<> link;
+  endohaptics::ManualClock clock{1s};
   FakeRig rig;
-  sim::SbrioEmulator<io::InMemoryTransport<>, FakeRig, tp::ManualClock> emulator{link.b(), rig,
-                                                                                 clock};
+  sim::SbrioEmulator<transport::InMemoryTransport<>, FakeRig, endohaptics::ManualClock> emulator{
+      link.b(), rig, clock};
 
   void send_setpoint(const Eigen::Vector4d& position, std::uint8_t mask) {
     Codec::Setpoint sp;
@@ -61,12 +60,12 @@ struct Fixture {
     sp.enable_mask = mask;
     Codec::SetpointBytes bytes{};
     REQUIRE(Codec::encode_setpoint(sp, bytes) == endohaptics::protocol::CodecStatus::ok);
-    REQUIRE(link.a().send(bytes) == io::TransportStatus::ok);
+    REQUIRE(link.a().send(bytes) == transport::TransportStatus::ok);
   }
   bool receive_state(Codec::State& state) {
     std::array<std::byte, 128> buffer{};
     const auto r = link.a().receive(buffer, 0ns);
-    if (r.status != io::TransportStatus::ok) return false;
+    if (r.status != transport::TransportStatus::ok) return false;
     return Codec::decode_state(std::span<const std::byte>(buffer.data(), r.size), state) ==
            endohaptics::protocol::CodecStatus::ok;
   }
@@ -98,18 +97,18 @@ TEST_CASE("garbled, short and long datagrams are rejected, counted and not answe
   const std::array<std::size_t, 4> sizes{0, 16, 18, 49};
   for (const std::size_t n : sizes) {
     std::vector<std::byte> junk(n, std::byte{0x7f});
-    REQUIRE(f.link.a().send(junk) == io::TransportStatus::ok);
+    REQUIRE(f.link.a().send(junk) == transport::TransportStatus::ok);
     CHECK(f.emulator.poll(0ns) == sim::PollEvent::rejected);
   }
   // Right size, but a NaN setpoint (0x7fc00000) and a mask bit above motor 3.
   std::array<std::byte, Codec::setpoint_packet_size> nan{};
   nan[0] = std::byte{0x7f};
   nan[1] = std::byte{0xc0};
-  REQUIRE(f.link.a().send(nan) == io::TransportStatus::ok);
+  REQUIRE(f.link.a().send(nan) == transport::TransportStatus::ok);
   CHECK(f.emulator.poll(0ns) == sim::PollEvent::rejected);
   std::array<std::byte, Codec::setpoint_packet_size> mask{};
   mask.back() = std::byte{0x10};
-  REQUIRE(f.link.a().send(mask) == io::TransportStatus::ok);
+  REQUIRE(f.link.a().send(mask) == transport::TransportStatus::ok);
   CHECK(f.emulator.poll(0ns) == sim::PollEvent::rejected);
   CHECK(f.emulator.counters().rejected == 6);
   CHECK(f.emulator.counters().answered == 0);
@@ -157,12 +156,13 @@ TEST_CASE("a disabled rig does not trip the watchdog, and long pauses run in bou
 }
 
 TEST_CASE("a bad configuration is refused with a message") {
-  io::InMemoryLink<> link;
-  tp::ManualClock clock;
+  transport::InMemoryLink<> link;
+  endohaptics::ManualClock clock;
   FakeRig rig;
   sim::EmulatorConfig config;
   config.watchdog_timeout = 0ns;
-  using Emulator = sim::SbrioEmulator<io::InMemoryTransport<>, FakeRig, tp::ManualClock>;
+  using Emulator =
+      sim::SbrioEmulator<transport::InMemoryTransport<>, FakeRig, endohaptics::ManualClock>;
   CHECK_THROWS_WITH_AS(Emulator(link.b(), rig, clock, config),
                        doctest::Contains("watchdog_timeout must be > 0"), endohaptics::Error);
 }

@@ -9,7 +9,7 @@ namespace tp = endohaptics::teleop;
 using namespace std::chrono_literals;
 
 TEST_CASE("the default script opens and closes clamp 1 through the default mapping") {
-  tp::ManualClock clock(5s);
+  endohaptics::ManualClock clock(5s);
   sim::ScriptedOperator op(clock);
   endohaptics::kinematics::CylindricalMapper<> mapper;
   Eigen::Vector4d setpoint;
@@ -32,7 +32,7 @@ TEST_CASE("the default script opens and closes clamp 1 through the default mappi
 }
 
 TEST_CASE("the rendered force moves the stylus by the arm's static compliance (eq. 5.3 at DC)") {
-  tp::ManualClock clock(0s);
+  endohaptics::ManualClock clock(0s);
   sim::OperatorScript script;
   script.close_time = 1e3;  // keep the intent still for the test
   script.open_time = 1e3;
@@ -53,7 +53,7 @@ TEST_CASE("the rendered force moves the stylus by the arm's static compliance (e
 }
 
 TEST_CASE("a non-finite force is refused; a bad script is refused with the field's name") {
-  tp::ManualClock clock;
+  endohaptics::ManualClock clock;
   sim::ScriptedOperator op(clock);
   CHECK(op.command_force(Eigen::Vector3d(std::nan(""), 0, 0)) == tp::DeviceStatus::error);
   CHECK(op.force().isZero());

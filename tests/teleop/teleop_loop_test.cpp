@@ -4,14 +4,14 @@
 
 #include <cmath>
 #include <cstdlib>
-#include <endohaptics/io/fault_injecting_transport.hpp>
-#include <endohaptics/io/in_memory_transport.hpp>
 #include <endohaptics/kinematics/cylindrical_mapper.hpp>
 #include <endohaptics/teleop/teleop_loop.hpp>
+#include <endohaptics/transport/fault_injecting_transport.hpp>
+#include <endohaptics/transport/in_memory_transport.hpp>
 
 namespace {
 
-namespace io = endohaptics::io;
+namespace transport = endohaptics::transport;
 namespace tp = endohaptics::teleop;
 using Codec = endohaptics::protocol::PacketCodec<4>;
 using endohaptics::test::allocations_during;
@@ -80,10 +80,11 @@ struct EffortEstimator {
   void reset() noexcept {}
 };
 
-using Responder = io::RespondingTransport<FakeSbrio>;
-using Faulty = io::FaultInjectingTransport<Responder>;
+using Responder = transport::RespondingTransport<FakeSbrio>;
+using Faulty = transport::FaultInjectingTransport<Responder>;
 using Mapper = endohaptics::kinematics::CylindricalMapper<>;
-using Loop = tp::TeleopLoop<Faulty, ScriptedDevice, EffortEstimator, Mapper, tp::ManualClock>;
+using Loop =
+    tp::TeleopLoop<Faulty, ScriptedDevice, EffortEstimator, Mapper, endohaptics::ManualClock>;
 
 struct Rig {
   Responder link{FakeSbrio{}};
@@ -91,9 +92,9 @@ struct Rig {
   ScriptedDevice device;
   EffortEstimator estimator;
   Mapper mapper;
-  tp::ManualClock clock{1s};
+  endohaptics::ManualClock clock{1s};
   Loop loop;
-  explicit Rig(const io::FaultRates& rates = {}, const tp::TeleopLoopConfig& config = {},
+  explicit Rig(const transport::FaultRates& rates = {}, const tp::TeleopLoopConfig& config = {},
                std::uint64_t seed = 1)
       : faulty(link, rates, seed), loop(faulty, device, estimator, mapper, clock, config) {}
 
@@ -156,7 +157,7 @@ TEST_CASE("clean link: every tick ok, force ramps in, stats exact") {
 TEST_CASE("every fault kind: never a non-finite or over-limit output, counters consistent") {
   struct Case {
     const char* name;
-    io::FaultRates rates;
+    transport::FaultRates rates;
   };
   const Case cases[] = {
       {"drop send", {.drop_send = 0.2}},

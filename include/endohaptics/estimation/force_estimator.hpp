@@ -23,17 +23,17 @@
 
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/estimation/steady_state_kalman.hpp"
-#include "endohaptics/kinematics/cylindrical_mapper.hpp"
 #include "endohaptics/model/friction_model.hpp"
 #include "endohaptics/model/hammerstein_wiener.hpp"
 #include "endohaptics/model/presets_2016.hpp"
 #include "endohaptics/model/state_space.hpp"
 #include "endohaptics/model/static_nonlinearity.hpp"
+#include "endohaptics/protocol/motor_order.hpp"
 #include "endohaptics/protocol/packet_codec.hpp"
 
 namespace endohaptics::estimation {
 
-using kinematics::ToolJoint;
+using protocol::Motor;
 
 //! Outcome of `ForceEstimator::step`. On anything but `ok` the output and all internal state
 //! (model states, decimation windows, friction gates) are left untouched.
@@ -652,7 +652,7 @@ models_2016() {
               static_cast<Scalar>(model::clamp_static_friction_2016)))};
 }
 
-//! Everything but the models. Vectors are per tool joint (index = ToolJoint: roll, pitch,
+//! Everything but the models. Vectors are per tool joint (index = Motor: roll, pitch,
 //! clamp1, clamp2). Defaults and their sources: docs/models.md, section ForceEstimator.
 template <typename Scalar = double>
 struct ForceEstimatorSettings {
@@ -663,8 +663,7 @@ struct ForceEstimatorSettings {
   Scalar loop_period = Scalar(0.001);
   //! motor_order[m]: the tool joint of motor slot m in JointState (a permutation), as in
   //! CylindricalMapperConfig.
-  std::array<ToolJoint, 4> motor_order = {ToolJoint::roll, ToolJoint::pitch, ToolJoint::clamp1,
-                                          ToolJoint::clamp2};
+  std::array<Motor, 4> motor_order = {Motor::roll, Motor::pitch, Motor::clamp1, Motor::clamp2};
   //! +-1: +1 when positive motor current drives the joint towards positive setpoints. The 2016
   //! rig: -1 on every joint (the P controller's current opposes the position error in 40 of 41
   //! logs; identify_friction's current_sign is -1 on every free-movement log).
@@ -707,7 +706,7 @@ class ForceEstimator {
                 "ForceEstimator: all joint models must use the same Scalar");
   static constexpr int joints = 4;
   using Input = JointState<ScalarType>;            //!< motor order
-  using Forces = Eigen::Matrix<ScalarType, 4, 1>;  //!< tool-joint order (index = ToolJoint)
+  using Forces = Eigen::Matrix<ScalarType, 4, 1>;  //!< tool-joint order (index = Motor)
   using Settings = ForceEstimatorSettings<ScalarType>;
   using Models = ForceModels<RollModel, PitchModel, ClampModel>;
   using Friction = model::FrictionModel<4, ScalarType>;
@@ -788,7 +787,7 @@ class ForceEstimator {
     return ForceStatus::ok;
   }
 
-  //! The interface of teleop::JointForceEstimator (TeleopLoop): one `step` on the decoded sbRIO
+  //! The interface of JointForceEstimator (TeleopLoop): one `step` on the decoded sbRIO
   //! state and the setpoint that was sent, `force` written in motor order (for map_force).
   //! Returns true and writes `force` only when the step is ok; `last_status()` says why not.
   bool estimate(const protocol::MotorState<4>& measured,
@@ -831,21 +830,21 @@ class ForceEstimator {
   //! Friction gate per tool joint: true while that joint's estimate is passed on.
   [[nodiscard]] const GateState& gate_open() const noexcept { return friction_.gate_open(); }
   //! Loop ticks per model step of a joint (rate::Decimate: Ts / loop period; otherwise 1).
-  [[nodiscard]] int ticks_per_model_step(ToolJoint joint) const noexcept {
+  [[nodiscard]] int ticks_per_model_step(Motor joint) const noexcept {
     switch (joint) {
-      case ToolJoint::roll:
+      case Motor::roll:
         return std::get<0>(steppers_).ratio();
-      case ToolJoint::pitch:
+      case Motor::pitch:
         return std::get<1>(steppers_).ratio();
-      case ToolJoint::clamp1:
+      case Motor::clamp1:
         return std::get<2>(steppers_).ratio();
-      case ToolJoint::clamp2:
+      case Motor::clamp2:
         return std::get<3>(steppers_).ratio();
     }
     return 0;
   }
   //! The model of tool joint `J` as it runs (e.g. resampled at the loop period).
-  template <ToolJoint J>
+  template <Motor J>
   [[nodiscard]] const auto& joint_model() const noexcept {
     return std::get<static_cast<std::size_t>(J)>(steppers_).model();
   }
@@ -871,7 +870,7 @@ class ForceEstimator {
   }
 
   static Settings validated(const Settings& s) {
-    auto name = [](int j) { return std::string(kinematics::to_string(static_cast<ToolJoint>(j))); };
+    auto name = [](int j) { return std::string(protocol::to_string(static_cast<Motor>(j))); };
     std::array<bool, 4> seen{};
     for (std::size_t m = 0; m < s.motor_order.size(); ++m) {
       const auto j = static_cast<unsigned>(s.motor_order[m]);

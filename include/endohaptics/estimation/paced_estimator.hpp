@@ -8,9 +8,9 @@
 #include <chrono>
 #include <cstdint>
 
+#include "endohaptics/core/clock.hpp"
 #include "endohaptics/core/error.hpp"
-#include "endohaptics/teleop/clock.hpp"
-#include "endohaptics/teleop/teleop_loop.hpp"
+#include "endohaptics/estimation/joint_force_estimator.hpp"
 
 namespace endohaptics::estimation {
 
@@ -23,14 +23,14 @@ struct PacingCounters {
   std::uint64_t rejected = 0;  //!< steps the wrapped estimator refused
 };
 
-//! Satisfies teleop::JointForceEstimator. `Estimator` must be stepped every `period` (e.g. a
+//! Satisfies JointForceEstimator. `Estimator` must be stepped every `period` (e.g. a
 //! ForceEstimator with settings.loop_period = period). Each call steps it floor(elapsed/period)
 //! times (at most `max_catch_up`; older periods are dropped and counted, the model then runs
 //! behind real time by that much) with the newest measured state, and returns the newest force.
-template <teleop::JointForceEstimator Estimator, teleop::Clock ClockT = teleop::SteadyClock>
+template <JointForceEstimator Estimator, endohaptics::Clock ClockT = endohaptics::SteadyClock>
 class PacedEstimator {
  public:
-  using MotorVector = teleop::MotorVector;
+  using MotorVector = estimation::MotorVector;
 
   //! Precondition: period > 0, max_catch_up >= 1. `estimator` and `clock` must outlive this.
   PacedEstimator(Estimator& estimator, ClockT& clock, std::chrono::nanoseconds period,
@@ -39,8 +39,8 @@ class PacedEstimator {
     ENDOHAPTICS_ASSERT(period.count() > 0 && max_catch_up >= 1);
   }
 
-  //! teleop::JointForceEstimator: true when `force` holds a finite estimate (fresh or held).
-  bool estimate(const teleop::MotorState4& measured, const MotorVector& setpoint,
+  //! JointForceEstimator: true when `force` holds a finite estimate (fresh or held).
+  bool estimate(const MotorState4& measured, const MotorVector& setpoint,
                 MotorVector& force) noexcept {
     ++counters_.calls;
     const auto now = clock_->now();

@@ -14,26 +14,11 @@
 #include <string_view>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/protocol/motor_order.hpp"
 
 namespace endohaptics::kinematics {
 
-//! The EndoWrist joints the mapping drives; the value is the index into tool-joint vectors.
-enum class ToolJoint : std::uint8_t { roll = 0, pitch = 1, clamp1 = 2, clamp2 = 3 };
-
-//! Human-readable name of a tool joint.
-[[nodiscard]] constexpr std::string_view to_string(ToolJoint joint) noexcept {
-  switch (joint) {
-    case ToolJoint::roll:
-      return "roll";
-    case ToolJoint::pitch:
-      return "pitch";
-    case ToolJoint::clamp1:
-      return "clamp1";
-    case ToolJoint::clamp2:
-      return "clamp2";
-  }
-  return "unknown joint";
-}
+using protocol::Motor;
 
 //! Outcome of a mapping. On anything but `ok` the caller's output is left untouched.
 enum class MapperStatus : std::uint8_t {
@@ -70,7 +55,7 @@ struct [[nodiscard]] PositionResult {
 
   [[nodiscard]] constexpr bool ok() const noexcept { return status == MapperStatus::ok; }
   //! True when `joint` was limited to its range.
-  [[nodiscard]] constexpr bool clamped(ToolJoint joint) const noexcept {
+  [[nodiscard]] constexpr bool clamped(Motor joint) const noexcept {
     return ((clamped_mask >> static_cast<unsigned>(joint)) & 1u) != 0;
   }
 };
@@ -97,9 +82,8 @@ struct CylindricalMapperConfig {
   Scalar a_clamp = Scalar(5.384);  //!< rad/m: P_clamp1 = -a_clamp r + b_clamp, P_clamp2 = -P_clamp1
   Scalar b_clamp = Scalar(0.7);    //!< rad
   //! motor_order[m]: the tool joint driven by motor slot m (a permutation).
-  std::array<ToolJoint, 4> motor_order = {ToolJoint::roll, ToolJoint::pitch, ToolJoint::clamp1,
-                                          ToolJoint::clamp2};
-  //! rad, per tool joint (index = ToolJoint); assumption: the +-1.028 rad of the 2016 tuning logs.
+  std::array<Motor, 4> motor_order = {Motor::roll, Motor::pitch, Motor::clamp1, Motor::clamp2};
+  //! rad, per tool joint (index = Motor); assumption: the +-1.028 rad of the 2016 tuning logs.
   Vector4 lower = Vector4::Constant(Scalar(-1.028));
   Vector4 upper = Vector4::Constant(Scalar(1.028));  //!< rad, per tool joint
   Scalar min_radius = Scalar(1e-3);  //!< m; at r <= min_radius theta is held (undefined at 0)
@@ -146,10 +130,10 @@ class CylindricalMapper {
       result.theta_held = true;
     }
     std::array<Scalar, num_joints> p{};
-    p[index(ToolJoint::roll)] = config_.a_roll * theta + config_.b_roll;
-    p[index(ToolJoint::pitch)] = config_.a_pitch * position.z() + config_.b_pitch;
-    p[index(ToolJoint::clamp1)] = -config_.a_clamp * r + config_.b_clamp;
-    p[index(ToolJoint::clamp2)] = config_.a_clamp * r - config_.b_clamp;
+    p[index(Motor::roll)] = config_.a_roll * theta + config_.b_roll;
+    p[index(Motor::pitch)] = config_.a_pitch * position.z() + config_.b_pitch;
+    p[index(Motor::clamp1)] = -config_.a_clamp * r + config_.b_clamp;
+    p[index(Motor::clamp2)] = config_.a_clamp * r - config_.b_clamp;
     for (std::size_t j = 0; j < p.size(); ++j) {
       const auto i = static_cast<Eigen::Index>(j);
       if (std::isnan(p[j])) {  // only 0 * inf (huge input with a zero scale) gets here
@@ -182,10 +166,10 @@ class CylindricalMapper {
       result.status = MapperStatus::non_finite;
       return result;
     }
-    const Scalar f_roll = joint_force[motor_of(ToolJoint::roll)];
-    const Scalar f_pitch = joint_force[motor_of(ToolJoint::pitch)];
-    const Scalar f_clamp1 = joint_force[motor_of(ToolJoint::clamp1)];
-    const Scalar f_clamp2 = joint_force[motor_of(ToolJoint::clamp2)];
+    const Scalar f_roll = joint_force[motor_of(Motor::roll)];
+    const Scalar f_pitch = joint_force[motor_of(Motor::pitch)];
+    const Scalar f_clamp1 = joint_force[motor_of(Motor::clamp1)];
+    const Scalar f_clamp2 = joint_force[motor_of(Motor::clamp2)];
     // Generalised forces along r, theta, z (virtual work: P_clamp2 grows with r, P_clamp1 falls).
     const Scalar clamp = sign(config_.a_clamp) * (f_clamp2 - f_clamp1) / 2 * config_.force_scale[0];
     const Scalar roll = sign(config_.a_roll) * f_roll * config_.force_scale[1];
@@ -228,10 +212,10 @@ class CylindricalMapper {
   void reset() noexcept { held_theta_ = config_.theta_neutral; }
 
  private:
-  static constexpr std::size_t index(ToolJoint joint) noexcept {
+  static constexpr std::size_t index(Motor joint) noexcept {
     return static_cast<std::size_t>(joint);
   }
-  Eigen::Index motor_of(ToolJoint joint) const noexcept {
+  Eigen::Index motor_of(Motor joint) const noexcept {
     return static_cast<Eigen::Index>(motor_of_joint_[index(joint)]);
   }
   static constexpr Scalar sign(Scalar x) noexcept {
@@ -262,7 +246,7 @@ class CylindricalMapper {
     require_finite(config_.a_clamp, "a_clamp");
     require_finite(config_.b_clamp, "b_clamp");
     for (int j = 0; j < num_joints; ++j) {
-      const std::string name(to_string(static_cast<ToolJoint>(j)));
+      const std::string name(to_string(static_cast<Motor>(j)));
       require_finite(config_.lower[j], ("lower[" + name + "]").c_str());
       require_finite(config_.upper[j], ("upper[" + name + "]").c_str());
       if (config_.lower[j] > config_.upper[j]) {

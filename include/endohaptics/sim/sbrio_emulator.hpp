@@ -13,10 +13,10 @@
 #include <span>
 #include <string_view>
 
+#include "endohaptics/core/clock.hpp"
 #include "endohaptics/core/error.hpp"
-#include "endohaptics/io/transport.hpp"
 #include "endohaptics/protocol/packet_codec.hpp"
-#include "endohaptics/teleop/clock.hpp"
+#include "endohaptics/transport/transport.hpp"
 
 namespace endohaptics::sim {
 
@@ -85,8 +85,8 @@ struct EmulatorCounters {
 
 //! The sbRIO side. `Transport` answers the sender of the newest datagram (UdpServerTransport,
 //! or an in-memory link end). All members a poll calls are noexcept and allocation-free.
-template <io::Transport Transport, typename Rig, teleop::Clock ClockT = teleop::SteadyClock,
-          int N = 4>
+template <transport::Transport Transport, typename Rig,
+          endohaptics::Clock ClockT = endohaptics::SteadyClock, int N = 4>
 requires EmulatedRig<Rig, N>
 class SbrioEmulator {
  public:
@@ -106,16 +106,16 @@ class SbrioEmulator {
   //! Waits up to `timeout` for a setpoint packet, runs the rig up to the clock's now (tripping the
   //! watchdog on the way if due), applies the packet and answers it with the rig's state.
   [[nodiscard]] PollEvent poll(std::chrono::nanoseconds timeout) noexcept {
-    const io::ReceiveResult rx = transport_->receive(rx_buffer_, timeout);
+    const transport::ReceiveResult rx = transport_->receive(rx_buffer_, timeout);
     advance_to(clock_->now());
     counters_.stale_dropped += rx.dropped;
-    if (rx.status == io::TransportStatus::timeout) return PollEvent::idle;
-    if (rx.status == io::TransportStatus::error) {
+    if (rx.status == transport::TransportStatus::timeout) return PollEvent::idle;
+    if (rx.status == transport::TransportStatus::error) {
       ++counters_.transport_errors;
       return PollEvent::transport_error;
     }
     typename Codec::Setpoint received;
-    const auto decoded = rx.status == io::TransportStatus::ok
+    const auto decoded = rx.status == transport::TransportStatus::ok
                              ? Codec::decode_setpoint(
                                    std::span<const std::byte>(rx_buffer_.data(), rx.size), received)
                              : protocol::CodecStatus::wrong_size;
@@ -131,7 +131,7 @@ class SbrioEmulator {
 
     typename Codec::StateBytes tx{};
     if (Codec::encode_state(rig_->state(), tx) != protocol::CodecStatus::ok ||
-        transport_->send(tx) != io::TransportStatus::ok) {
+        transport_->send(tx) != transport::TransportStatus::ok) {
       ++counters_.transport_errors;
       return PollEvent::transport_error;
     }

@@ -12,9 +12,9 @@
 #include <numbers>
 #include <string>
 
+#include "endohaptics/core/clock.hpp"
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/model/human_arm_model.hpp"
-#include "endohaptics/teleop/clock.hpp"
 #include "endohaptics/teleop/haptic_device.hpp"
 
 namespace endohaptics::sim {
@@ -81,7 +81,7 @@ struct OperatorScript {
 
 //! teleop::HapticDevice. read(): the hand's intent plus the arm's response (admittance, eq. 5.3)
 //! to the force last commanded, the arm stepped at its own period up to the clock's now.
-template <teleop::Clock ClockT = teleop::SteadyClock>
+template <endohaptics::Clock ClockT = endohaptics::SteadyClock>
 class ScriptedOperator {
  public:
   //! Throws Error on an invalid script or arm. `clock` must outlive the device.
@@ -146,6 +146,6 @@ class ScriptedOperator {
   Eigen::Vector3d last_position_ = Eigen::Vector3d::Zero();
 };
 
-static_assert(teleop::HapticDevice<ScriptedOperator<teleop::SteadyClock>>);
+static_assert(teleop::HapticDevice<ScriptedOperator<endohaptics::SteadyClock>>);
 
 }  // namespace endohaptics::sim

@@ -12,29 +12,21 @@
 #include <cstdint>
 #include <span>
 
-#include "endohaptics/io/transport.hpp"
+#include "endohaptics/core/clock.hpp"
+#include "endohaptics/estimation/joint_force_estimator.hpp"
 #include "endohaptics/protocol/packet_codec.hpp"
-#include "endohaptics/teleop/clock.hpp"
 #include "endohaptics/teleop/haptic_device.hpp"
 #include "endohaptics/teleop/loop_stats.hpp"
 #include "endohaptics/teleop/safety.hpp"
+#include "endohaptics/transport/transport.hpp"
 
 namespace endohaptics::teleop {
 
-inline constexpr int loop_motors = 4;  //!< the EndoWrist: roll, pitch, clamp1, clamp2
-using MotorVector = Eigen::Matrix<double, loop_motors, 1>;
-using MotorState4 = protocol::MotorState<loop_motors>;
-
-//! Estimates the external joint forces (motor order) from the measured state and the setpoint
-//! that was sent. Returns true when `force` was written with finite values.
-template <typename E>
-concept JointForceEstimator = requires(E& estimator, const MotorState4& measured,
-                                       const MotorVector& setpoint, MotorVector& force) {
-  { estimator.estimate(measured, setpoint, force) }
-  noexcept->std::convertible_to<bool>;
-  { estimator.reset() }
-  noexcept;
-};
+inline constexpr int loop_motors = protocol::endowrist_motors;  //!< roll, pitch, clamp1, clamp2
+using estimation::JointForceEstimator;
+using estimation::MotorState4;
+using estimation::MotorVector;
+using estimation::NoForceEstimator;
 
 //! Stylus position -> setpoints and joint forces -> stylus force (CylindricalMapper's shape).
 template <typename M>
@@ -44,15 +36,6 @@ concept TeleopMapper = requires(M& mapper, const Eigen::Vector3d& position, Moto
   { mapper.map_position(position, setpoint).clamped_mask } -> std::convertible_to<std::uint8_t>;
   { mapper.map_force(joint_force, stylus_force).ok() } -> std::convertible_to<bool>;
   { mapper.map_force(joint_force, stylus_force).limited } -> std::convertible_to<bool>;
-};
-
-//! No estimation: zero force (useful to run position control only, and in tests).
-struct NoForceEstimator {
-  bool estimate(const MotorState4&, const MotorVector&, MotorVector& force) noexcept {
-    force.setZero();
-    return true;
-  }
-  void reset() noexcept {}
 };
 
 //! Overall outcome of a tick.
@@ -86,7 +69,7 @@ struct [[nodiscard]] TickResult {
   LinkState link = LinkState::waiting;
   TickOutcome exchange = TickOutcome::timeout;
   protocol::CodecStatus decode = protocol::CodecStatus::ok;
-  io::TransportStatus transport = io::TransportStatus::ok;
+  transport::TransportStatus transport = transport::TransportStatus::ok;
   DeviceStatus device = DeviceStatus::ok;
   bool mapper_rejected = false;     //!< stylus sample non-finite: previous setpoint kept
   bool estimator_rejected = false;  //!< estimator gave no finite force: force held/zeroed
@@ -124,7 +107,7 @@ struct TeleopLoopConfig {
   }
 };
 
-template <io::Transport Transport, HapticDevice Device, JointForceEstimator Estimator,
+template <transport::Transport Transport, HapticDevice Device, JointForceEstimator Estimator,
           TeleopMapper Mapper, Clock ClockT = SteadyClock>
 class TeleopLoop {
  public:
@@ -197,26 +180,29 @@ class TeleopLoop {
     bool received = false;
     std::size_t stale_dropped = 0;
     if (Codec::encode_setpoint(out, tx) != protocol::CodecStatus::ok) {
-      r.transport = io::TransportStatus::error;  // cannot happen with finite, limited setpoints
+      r.transport =
+          transport::TransportStatus::error;  // cannot happen with finite, limited setpoints
     } else {
       const auto sent_at = clock_->now();
       r.transport = transport_->send(tx);
-      if (r.transport == io::TransportStatus::ok) {
-        const io::ReceiveResult rx = transport_->receive(rx_buffer_, config_.receive_timeout);
+      if (r.transport == transport::TransportStatus::ok) {
+        const transport::ReceiveResult rx =
+            transport_->receive(rx_buffer_, config_.receive_timeout);
         stale_dropped = rx.dropped;
         r.round_trip = clock_->now() - sent_at;
         r.transport = rx.status;
-        if (rx.status == io::TransportStatus::ok) {
+        if (rx.status == transport::TransportStatus::ok) {
           r.decode =
               Codec::decode_state(std::span<const std::byte>(rx_buffer_.data(), rx.size), state_);
           received = r.decode == protocol::CodecStatus::ok;
           r.exchange = received ? TickOutcome::received : TickOutcome::decode_error;
-        } else if (rx.status == io::TransportStatus::truncated) {
+        } else if (rx.status == transport::TransportStatus::truncated) {
           r.decode = protocol::CodecStatus::wrong_size;
           r.exchange = TickOutcome::decode_error;
         } else {
-          r.exchange = rx.status == io::TransportStatus::timeout ? TickOutcome::timeout
-                                                                 : TickOutcome::transport_error;
+          r.exchange = rx.status == transport::TransportStatus::timeout
+                           ? TickOutcome::timeout
+                           : TickOutcome::transport_error;
         }
       } else {
         r.exchange = TickOutcome::transport_error;

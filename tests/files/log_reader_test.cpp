@@ -1,4 +1,4 @@
-#include "endohaptics/io/log_reader.hpp"
+#include "endohaptics/files/log_reader.hpp"
 
 #include <doctest/doctest.h>
 
@@ -14,7 +14,7 @@
 
 namespace {
 
-namespace io = endohaptics::io;
+namespace files = endohaptics::files;
 namespace id = endohaptics::identification;
 namespace fs = std::filesystem;
 using endohaptics::Error;
@@ -72,8 +72,8 @@ const std::string defects_file =
 TEST_CASE("EndoWrist log: each defect counted exactly, rows and signals right") {
   const TempDir dir;
   const std::string path = dir.write("defects.csv", defects_file);
-  const io::Log log = io::read_endowrist_2016(path);
-  const io::LogReport& r = log.report;
+  const files::Log log = files::read_endowrist_2016(path);
+  const files::LogReport& r = log.report;
   CHECK(r.source == path);
   CHECK(r.lines == 16);
   CHECK(r.header);
@@ -97,17 +97,17 @@ TEST_CASE("EndoWrist log: each defect counted exactly, rows and signals right") 
   CHECK(r.time_offset == 100.0);
 
   // Issues in line order, each with its line.
-  const std::vector<std::pair<std::size_t, io::LogIssueKind>> expected = {
-      {5, io::LogIssueKind::empty_field},
-      {6, io::LogIssueKind::short_line},
-      {7, io::LogIssueKind::non_numeric},
-      {8, io::LogIssueKind::non_finite},
-      {9, io::LogIssueKind::repeated_time},
-      {10, io::LogIssueKind::backward_time},
-      {12, io::LogIssueKind::gap},
-      {13, io::LogIssueKind::extra_fields},
-      {14, io::LogIssueKind::force_mismatch},
-      {15, io::LogIssueKind::non_numeric}};
+  const std::vector<std::pair<std::size_t, files::LogIssueKind>> expected = {
+      {5, files::LogIssueKind::empty_field},
+      {6, files::LogIssueKind::short_line},
+      {7, files::LogIssueKind::non_numeric},
+      {8, files::LogIssueKind::non_finite},
+      {9, files::LogIssueKind::repeated_time},
+      {10, files::LogIssueKind::backward_time},
+      {12, files::LogIssueKind::gap},
+      {13, files::LogIssueKind::extra_fields},
+      {14, files::LogIssueKind::force_mismatch},
+      {15, files::LogIssueKind::non_numeric}};
   REQUIRE(r.issues.size() == expected.size());
   for (std::size_t i = 0; i < expected.size(); ++i) {
     CHECK(r.issues[i].line == expected[i].first);
@@ -141,16 +141,16 @@ TEST_CASE("EndoWrist log: each defect counted exactly, rows and signals right") 
 TEST_CASE("EndoWrist log: policies make each defect throw with file, line and field") {
   const TempDir dir;
   const std::string path = dir.write("defects.csv", defects_file);
-  io::Endowrist2016Options strict;
-  strict.read = io::LogReadOptions::strict();
+  files::Endowrist2016Options strict;
+  strict.read = files::LogReadOptions::strict();
   const std::string first_bad = path + ":5: empty field: field 3 (force)";
-  CHECK_THROWS_WITH_AS((void)io::read_endowrist_2016(path, strict),
+  CHECK_THROWS_WITH_AS((void)files::read_endowrist_2016(path, strict),
                        doctest::Contains(first_bad.c_str()), Error);
 
   // Only the time policy throws: the bad lines are dropped, the repeated stamp throws.
-  io::Endowrist2016Options time_only;
-  time_only.read.on_bad_time = io::OnBadRow::throw_error;
-  CHECK_THROWS_WITH_AS((void)io::read_endowrist_2016(path, time_only),
+  files::Endowrist2016Options time_only;
+  time_only.read.on_bad_time = files::OnBadRow::throw_error;
+  CHECK_THROWS_WITH_AS((void)files::read_endowrist_2016(path, time_only),
                        doctest::Contains(":9: repeated time stamp: time 100.02"), Error);
 
   // Extra fields refused on their own.
@@ -158,11 +158,11 @@ TEST_CASE("EndoWrist log: policies make each defect throw with file, line and fi
                                       "0,0,0,0,0,0,0\n"
                                       "0.02,0,0,0,0,0,0,7\n"
                                       "0.04,0,0,0,0,0,0\n");
-  io::Endowrist2016Options no_extra;
+  files::Endowrist2016Options no_extra;
   no_extra.read.allow_extra_fields = false;
-  CHECK_THROWS_WITH_AS((void)io::read_endowrist_2016(extra, no_extra),
+  CHECK_THROWS_WITH_AS((void)files::read_endowrist_2016(extra, no_extra),
                        doctest::Contains(":2: extra fields: 8 fields, expected 7"), Error);
-  CHECK(io::read_endowrist_2016(extra).report.extra_fields == 1);
+  CHECK(files::read_endowrist_2016(extra).report.extra_fields == 1);
 }
 
 TEST_CASE("EndoWrist log: LF or CRLF, with or without header, same data") {
@@ -170,8 +170,9 @@ TEST_CASE("EndoWrist log: LF or CRLF, with or without header, same data") {
   const std::string body = "5.0,0.4,0.001,0.1,0.2,0.3,0.4\n5.02,0.8,0.002,0.1,0.2,0.3,0.4\n";
   std::string crlf;
   for (const char c : body) crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
-  const io::Log a = io::read_endowrist_2016(dir.write("lf.csv", body));
-  const io::Log b = io::read_endowrist_2016(dir.write("crlf.csv", "\xEF\xBB\xBFTime,x\r\n" + crlf));
+  const files::Log a = files::read_endowrist_2016(dir.write("lf.csv", body));
+  const files::Log b =
+      files::read_endowrist_2016(dir.write("crlf.csv", "\xEF\xBB\xBFTime,x\r\n" + crlf));
   CHECK(a.report.crlf_lines == 0);
   CHECK_FALSE(a.report.header);
   CHECK(b.report.crlf_lines == 3);
@@ -191,7 +192,7 @@ TEST_CASE("EndoWrist friction log: 3 columns (a 4th ignored), ticks to rad, velo
                                      "10.476,-138,0.05,2\r\n"
                                      "10.486,-128,0.07,3\r\n"
                                      "10.496,-118,0.06,4\r\n");
-  const io::Log log = io::read_endowrist_2016(path);
+  const files::Log log = files::read_endowrist_2016(path);
   CHECK(log.names == std::vector<std::string>{"ticks", "position", "current", "velocity"});
   CHECK(log.report.extra_fields == 4);
   CHECK(log.report.gaps == 1);
@@ -207,9 +208,9 @@ TEST_CASE("EndoWrist friction log: 3 columns (a 4th ignored), ticks to rad, velo
                                          "position, current, velocity)"),
                        Error);
 
-  io::Endowrist2016Options forced;
-  forced.layout = io::Endowrist2016Layout::measurement;  // every line is then short
-  CHECK_THROWS_WITH_AS((void)io::read_endowrist_2016(path, forced),
+  files::Endowrist2016Options forced;
+  forced.layout = files::Endowrist2016Layout::measurement;  // every line is then short
+  CHECK_THROWS_WITH_AS((void)files::read_endowrist_2016(path, forced),
                        doctest::Contains("no usable rows (0 kept, 2 needed)"), Error);
 }
 
@@ -217,43 +218,43 @@ TEST_CASE("EndoWrist log: unreadable, empty, unrecognised files throw with the f
   const TempDir dir;
   const std::string missing = (dir.path() / "missing.csv").string();
   const std::string message = missing + ": file does not exist";
-  CHECK_THROWS_WITH_AS((void)io::read_endowrist_2016(missing), doctest::Contains(message.c_str()),
-                       Error);
-  CHECK_THROWS_WITH_AS((void)io::read_endowrist_2016(dir.path().string()),
+  CHECK_THROWS_WITH_AS((void)files::read_endowrist_2016(missing),
+                       doctest::Contains(message.c_str()), Error);
+  CHECK_THROWS_WITH_AS((void)files::read_endowrist_2016(dir.path().string()),
                        doctest::Contains("is a directory"), Error);
-  CHECK_THROWS_WITH_AS((void)io::read_endowrist_2016(dir.write("empty.csv", "\r\n\r\n")),
+  CHECK_THROWS_WITH_AS((void)files::read_endowrist_2016(dir.write("empty.csv", "\r\n\r\n")),
                        doctest::Contains("no usable rows"), Error);
   CHECK_THROWS_WITH_AS(
-      (void)io::read_endowrist_2016(dir.write("header.csv", "Timestamp,Loadcell,Force\r\n")),
+      (void)files::read_endowrist_2016(dir.write("header.csv", "Timestamp,Loadcell,Force\r\n")),
       doctest::Contains("cannot tell the log layout"), Error);
   CHECK_THROWS_WITH_AS(
-      (void)io::read_endowrist_2016(dir.write("five.csv", "1,2,3,4,5\n2,2,3,4,5\n")),
+      (void)files::read_endowrist_2016(dir.write("five.csv", "1,2,3,4,5\n2,2,3,4,5\n")),
       doctest::Contains("five.csv:1: cannot tell the log layout: most lines have "
                         "5 fields"),
       Error);
-  CHECK_THROWS_WITH_AS((void)io::read_endowrist_2016(dir.write("one.csv", "0,0,0,0,0,0,0\n")),
+  CHECK_THROWS_WITH_AS((void)files::read_endowrist_2016(dir.write("one.csv", "0,0,0,0,0,0,0\n")),
                        doctest::Contains("no usable rows (1 kept, 2 needed)"), Error);
-  CHECK(io::read_endowrist_2016(dir.write("one.csv", "0,0,0,0,0,0,0\n"),
-                                [] {
-                                  io::Endowrist2016Options o;
-                                  o.read.min_rows = 1;
-                                  return o;
-                                }())
+  CHECK(files::read_endowrist_2016(dir.write("one.csv", "0,0,0,0,0,0,0\n"),
+                                   [] {
+                                     files::Endowrist2016Options o;
+                                     o.read.min_rows = 1;
+                                     return o;
+                                   }())
             .rows() == 1);
 }
 
 TEST_CASE("read_csv: header names, separators detected, time column by name") {
   const TempDir dir;
-  const io::Log comma = io::read_csv(dir.write("c.csv", "u,y\n6.41,4.766\n3.41,4.764\n"));
+  const files::Log comma = files::read_csv(dir.write("c.csv", "u,y\n6.41,4.766\n3.41,4.764\n"));
   CHECK(comma.names == std::vector<std::string>{"u", "y"});
   CHECK(comma.report.header);
   CHECK(comma.time == Eigen::Vector2d(0.0, 1.0));  // no time column: row ordinal x 1 s
   CHECK(comma.signal("y")[1] == 4.764);
 
-  io::CsvOptions o;
+  files::CsvOptions o;
   o.sample_time = 0.1;
-  const io::Log semi =
-      io::read_csv(dir.write("s.csv", "\"u\" ; \"y\"\r\n1,5;2\r\n7;8\r\n9;10\r\n"), o);
+  const files::Log semi =
+      files::read_csv(dir.write("s.csv", "\"u\" ; \"y\"\r\n1,5;2\r\n7;8\r\n9;10\r\n"), o);
   CHECK(semi.names == std::vector<std::string>{"u", "y"});
   CHECK(semi.report.non_numeric == 1);  // decimal comma is not a number here
   CHECK(semi.rows() == 2);
@@ -261,48 +262,48 @@ TEST_CASE("read_csv: header names, separators detected, time column by name") {
   CHECK(semi.report.time_offset == doctest::Approx(0.1));
   CHECK(semi.signal("u")[1] == 9.0);
 
-  const io::Log blanks =
-      io::read_csv(dir.write("w.txt", "time   u\ty\n0.0  1 2\n0.5\t3   4\n1.0 5 6\n"));
+  const files::Log blanks =
+      files::read_csv(dir.write("w.txt", "time   u\ty\n0.0  1 2\n0.5\t3   4\n1.0 5 6\n"));
   CHECK(blanks.names == std::vector<std::string>{"u", "y"});  // "time" taken as time
   CHECK(blanks.time == Eigen::Vector3d(0.0, 0.5, 1.0));
   CHECK(blanks.report.median_step == 0.5);
 
   o = {};
   o.time_column = "t_s";
-  const io::Log named = io::read_csv(dir.write("t.csv", "a,t_s\n1,3.0\n2,3.5\n3,3.5\n"), o);
+  const files::Log named = files::read_csv(dir.write("t.csv", "a,t_s\n1,3.0\n2,3.5\n3,3.5\n"), o);
   CHECK(named.names == std::vector<std::string>{"a"});
   CHECK(named.report.repeated_time == 1);
   CHECK(named.report.time_offset == 3.0);
 
   o.time_column = "seconds";
-  CHECK_THROWS_WITH_AS((void)io::read_csv(dir.write("t2.csv", "a,t_s\n1,3.0\n2,3.5\n"), o),
+  CHECK_THROWS_WITH_AS((void)files::read_csv(dir.write("t2.csv", "a,t_s\n1,3.0\n2,3.5\n"), o),
                        doctest::Contains("t2.csv:1: no column named 'seconds' for time "
                                          "(columns: a, t_s)"),
                        Error);
-  CHECK_THROWS_WITH_AS((void)io::read_csv(dir.write("n.csv", "1,2\n3,4\n")),
+  CHECK_THROWS_WITH_AS((void)files::read_csv(dir.write("n.csv", "1,2\n3,4\n")),
                        doctest::Contains("n.csv:1: expected a header line"), Error);
-  CHECK_THROWS_WITH_AS((void)io::read_csv(dir.write("d.csv", "a,b,a\n1,2,3\n")),
+  CHECK_THROWS_WITH_AS((void)files::read_csv(dir.write("d.csv", "a,b,a\n1,2,3\n")),
                        doctest::Contains("d.csv:1: column 3 repeats the name 'a'"), Error);
-  CHECK_THROWS_WITH_AS((void)io::read_csv(dir.write("e.csv", "a,,b\n1,2,3\n")),
+  CHECK_THROWS_WITH_AS((void)files::read_csv(dir.write("e.csv", "a,,b\n1,2,3\n")),
                        doctest::Contains("e.csv:1: column 2 has no name"), Error);
 
-  io::CsvOptions headerless;
+  files::CsvOptions headerless;
   headerless.column_names = {"x", "z"};
-  const io::Log h = io::read_csv(dir.write("h.csv", "1,2\n3,4\n"), headerless);
+  const files::Log h = files::read_csv(dir.write("h.csv", "1,2\n3,4\n"), headerless);
   CHECK(h.signal("z")[1] == 4.0);
   CHECK_FALSE(h.report.header);
 }
 
 TEST_CASE("read_log and parse_log_format: the command-line entry points") {
-  CHECK(io::parse_log_format("endowrist-2016") == io::LogFormat::endowrist_2016);
-  CHECK(io::parse_log_format("csv") == io::LogFormat::csv);
-  CHECK_THROWS_WITH_AS((void)io::parse_log_format("mat"),
+  CHECK(files::parse_log_format("endowrist-2016") == files::LogFormat::endowrist_2016);
+  CHECK(files::parse_log_format("csv") == files::LogFormat::csv);
+  CHECK_THROWS_WITH_AS((void)files::parse_log_format("mat"),
                        doctest::Contains("unknown log format 'mat' (valid: endowrist-2016, csv)"),
                        Error);
   const TempDir dir;
-  const io::Log log =
-      io::read_log(dir.write("a.csv", "0,0.4,0.001,0,0,0,0\n0.02,0.4,0.001,0,0,0,0\n"),
-                   io::LogFormat::endowrist_2016);
+  const files::Log log =
+      files::read_log(dir.write("a.csv", "0,0.4,0.001,0,0,0,0\n0.02,0.4,0.001,0,0,0,0\n"),
+                      files::LogFormat::endowrist_2016);
   CHECK(log.has("current_demand"));
 }
 
@@ -327,7 +328,7 @@ TEST_CASE("real logs: every file of every folder loads; nothing needs dropping" 
     CHECK(!paths.empty());
     for (const auto& p : paths) {
       INFO(p.string());
-      const io::Log log = io::read_endowrist_2016(p.string());
+      const files::Log log = files::read_endowrist_2016(p.string());
       ++files;
       rows += log.report.rows;
       mismatches += log.report.force_mismatch;
@@ -357,9 +358,9 @@ TEST_CASE("real logs: every file of every folder loads; nothing needs dropping" 
 
 TEST_CASE("real logs: pitch-up-01 has a header and a -232 N load-cell offset" *
           doctest::skip(!endohaptics::test::has_shared_data("endowrist-2016"))) {
-  const io::Log log = io::read_endowrist_2016(
+  const files::Log log = files::read_endowrist_2016(
       endohaptics::test::shared_data("endowrist-2016/pitch/pitch-up-01.csv").string());
-  const io::LogReport& r = log.report;
+  const files::LogReport& r = log.report;
   CHECK(r.header);
   CHECK(r.lines == 1500);
   CHECK(r.rows == 1499);
@@ -383,11 +384,11 @@ TEST_CASE("real logs: pitch-up-01 has a header and a -232 N load-cell offset" *
 TEST_CASE("real logs: known time defects and the force check" *
           doctest::skip(!endohaptics::test::has_shared_data("endowrist-2016"))) {
   const auto read = [](const std::string& rel) {
-    return io::read_endowrist_2016(
+    return files::read_endowrist_2016(
         endohaptics::test::shared_data("endowrist-2016/" + rel).string());
   };
   // clamp-hits: clock starts at 1080 s; a 0.866 s hole after the first sample; ~100 Hz.
-  const io::Log hits = read("clamp-hits/clamp-hits-01.csv");
+  const files::Log hits = read("clamp-hits/clamp-hits-01.csv");
   CHECK(hits.report.time_offset == 1080.013428);
   CHECK(hits.report.rows == 1879);
   CHECK(hits.report.gaps == 1);
@@ -396,7 +397,7 @@ TEST_CASE("real logs: known time defects and the force check" *
   CHECK(hits.report.force_mismatch == 0);
   REQUIRE(!hits.report.issues.empty());
   CHECK(hits.report.issues[0].line == 2);
-  CHECK(hits.report.issues[0].kind == io::LogIssueKind::gap);
+  CHECK(hits.report.issues[0].kind == files::LogIssueKind::gap);
   // Resampled at 100 Hz: the isolated first sample is dropped, one 19.11 s segment remains.
   const id::Segments seg = id::resample_uniform(hits.time, hits.select({"current", "force"}), 0.01);
   CHECK(seg.gaps == 1);
@@ -406,7 +407,7 @@ TEST_CASE("real logs: known time defects and the force check" *
   CHECK(seg.segments[0].rows() == 1911);
 
   // friction/pitch-free-00: clock at 10 s, 0.476 s hole; pitch-free-06: a 4th column.
-  const io::Log free00 = read("friction/pitch-free-00.csv");
+  const files::Log free00 = read("friction/pitch-free-00.csv");
   CHECK(free00.report.time_offset == 10.00206375);
   CHECK(free00.report.gaps == 1);
   CHECK(free00.report.largest_step == doctest::Approx(0.476011).epsilon(1e-5));
@@ -414,11 +415,11 @@ TEST_CASE("real logs: known time defects and the force check" *
 
   // one-clamp-down-02: the last line's force field holds a voltage-like value (0.99 N at
   // -0.0003 V): the only mismatch in the 41 measurement logs besides pitch-up-01.
-  const io::Log down = read("one-clamp-down/one-clamp-down-02.csv");
+  const files::Log down = read("one-clamp-down/one-clamp-down-02.csv");
   CHECK(down.report.force_mismatch == 1);
   REQUIRE(!down.report.issues.empty());
   CHECK(down.report.issues.back().line == 1500);
-  CHECK(down.report.issues.back().kind == io::LogIssueKind::force_mismatch);
+  CHECK(down.report.issues.back().kind == files::LogIssueKind::force_mismatch);
 }
 
 TEST_CASE("property: random damage never crashes and every line is accounted for") {
@@ -458,11 +459,11 @@ TEST_CASE("property: random damage never crashes and every line is accounted for
       content += rng() % 2 ? "\r\n" : "\n";
     }
     const std::string path = dir.write("random.csv", content);
-    io::Endowrist2016Options o;
+    files::Endowrist2016Options o;
     o.read.min_rows = 0;
-    o.layout = io::Endowrist2016Layout::measurement;
-    const io::Log log = io::read_endowrist_2016(path, o);
-    const io::LogReport& r = log.report;
+    o.layout = files::Endowrist2016Layout::measurement;
+    const files::Log log = files::read_endowrist_2016(path, o);
+    const files::LogReport& r = log.report;
     INFO("file " << file);
     CHECK(r.lines == 40);
     CHECK(r.rows + r.dropped() + r.blank_lines + (r.header ? 1u : 0u) == r.lines);
@@ -475,10 +476,10 @@ TEST_CASE("property: random damage never crashes and every line is accounted for
 TEST_CASE("real CSV: the DaISy records load with their header names" *
           doctest::skip(!endohaptics::test::has_shared_data("daisy"))) {
   const auto read = [](const std::string& name) {
-    return io::read_csv(endohaptics::test::shared_data("daisy/" + name).string());
+    return files::read_csv(endohaptics::test::shared_data("daisy/" + name).string());
   };
   // Sample counts from daisy/README.md; first values from the files' second line.
-  const io::Log dryer = read("dryer.csv");
+  const files::Log dryer = read("dryer.csv");
   CHECK(dryer.names == std::vector<std::string>{"u", "y"});
   CHECK(dryer.rows() == 1000);
   CHECK(dryer.report.dropped() == 0);
@@ -486,12 +487,12 @@ TEST_CASE("real CSV: the DaISy records load with their header names" *
   CHECK(dryer.signal("u")[0] == 6.41);
   CHECK(dryer.signal("y")[0] == 4.7660989);
   CHECK(dryer.time[999] == 999.0);  // no time column: unit sample time
-  const io::Log cd = read("CD_player_arm.csv");
+  const files::Log cd = read("CD_player_arm.csv");
   CHECK(cd.names == std::vector<std::string>{"u1", "u2", "y1", "y2"});
   CHECK(cd.rows() == 2048);
   CHECK(cd.report.dropped() == 0);
   CHECK(cd.signal("u2")[0] == -0.0313);
-  const io::Log ballbeam = read("ballbeam.csv");
+  const files::Log ballbeam = read("ballbeam.csv");
   CHECK(ballbeam.rows() == 1000);
   CHECK(ballbeam.signal("y")[0] == -4.885198e-03);
   CHECK_THROWS_WITH_AS((void)dryer.select({"u", "temperature"}),

@@ -26,7 +26,7 @@
 #include "endohaptics/model/state_space.hpp"
 #include "endohaptics/model/static_nonlinearity.hpp"
 
-namespace endohaptics::io {
+namespace endohaptics::files {
 
 //! Name and unit of one input or output signal (e.g. {"current", "A"}).
 struct SignalInfo {
@@ -563,4 +563,4 @@ template <int Nx, int Nu, int Ny, typename Scalar = double,
 #endif
 }
 
-}  // namespace endohaptics::io
+}  // namespace endohaptics::files

@@ -11,7 +11,7 @@
 #include <span>
 #include <string_view>
 
-namespace endohaptics::io {
+namespace endohaptics::transport {
 
 //! Outcome of a send or receive.
 enum class TransportStatus : std::uint8_t {
@@ -55,4 +55,4 @@ concept Transport = requires(T& transport, std::span<const std::byte> datagram,
   noexcept->std::same_as<ReceiveResult>;
 };
 
-}  // namespace endohaptics::io
+}  // namespace endohaptics::transport

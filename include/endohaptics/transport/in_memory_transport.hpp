@@ -13,9 +13,9 @@
 #include <type_traits>
 #include <utility>
 
-#include "endohaptics/io/transport.hpp"
+#include "endohaptics/transport/transport.hpp"
 
-namespace endohaptics::io {
+namespace endohaptics::transport {
 
 //! Bounded FIFO of datagrams of at most MaxDatagram bytes; when full, the oldest is overwritten
 //! (and counted), as a kernel socket buffer drops on overflow.
@@ -180,4 +180,4 @@ class RespondingTransport {
   bool closed_ = false;
 };
 
-}  // namespace endohaptics::io
+}  // namespace endohaptics::transport

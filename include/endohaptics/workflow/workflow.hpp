@@ -22,15 +22,17 @@
 #include <vector>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/files/log_reader.hpp"
+#include "endohaptics/files/model_file.hpp"
 #include "endohaptics/identification/fit_metrics.hpp"
 #include "endohaptics/identification/hammerstein_wiener_fit.hpp"
 #include "endohaptics/identification/signal.hpp"
 #include "endohaptics/identification/subspace.hpp"
-#include "endohaptics/io/log_reader.hpp"
-#include "endohaptics/io/model_file.hpp"
 #include "endohaptics/model/presets_2016.hpp"
 
-namespace endohaptics::identification {
+namespace endohaptics::workflow {
+
+using namespace endohaptics::identification;  // the workflow composes the identification area
 
 // ---------------------------------------------------------------------------------------------
 // Preprocessing (worksheet 4.2.1)
@@ -92,7 +94,7 @@ struct Preprocessing {
   return out.str();
 }
 
-namespace detail::workflow {
+namespace detail {
 
 [[noreturn]] inline void fail(const std::string& message) { ENDOHAPTICS_THROW(Error(message)); }
 
@@ -101,7 +103,8 @@ inline std::string num(double value) { return endohaptics::detail::format_number
 //! Whole-string number; throws naming `what` and the text otherwise.
 inline double parse_double(std::string_view text, const std::string& what) {
   double value = 0.0;
-  if (io::detail::log_reader::parse_number(text, value) != io::detail::log_reader::Number::ok) {
+  if (files::detail::log_reader::parse_number(text, value) !=
+      files::detail::log_reader::Number::ok) {
     fail(what + ": '" + std::string(text) + "' is not a finite number");
   }
   return value;
@@ -140,11 +143,11 @@ auto with_context(const std::string& prefix, F&& f) -> decltype(f()) {
 #endif
 }
 
-}  // namespace detail::workflow
+}  // namespace detail
 
 //! Reads what `describe` wrote. Unknown keys or bad values throw Error naming them.
 [[nodiscard]] inline Preprocessing parse_preprocessing(std::string_view text) {
-  namespace wf = detail::workflow;
+  namespace wf = detail;
   Preprocessing p;
   for (std::string_view item : wf::split(text, ' ')) {
     if (item.empty()) continue;
@@ -181,7 +184,8 @@ auto with_context(const std::string& prefix, F&& f) -> decltype(f()) {
 
 //! The preprocessing a model file records in its provenance notes (a line starting with
 //! "preprocessing: "), if any. Throws Error when the line is there but malformed.
-[[nodiscard]] inline std::optional<Preprocessing> recorded_preprocessing(const io::ModelFile& m) {
+[[nodiscard]] inline std::optional<Preprocessing> recorded_preprocessing(
+    const files::ModelFile& m) {
   constexpr std::string_view tag = "preprocessing: ";
   const std::string& notes = m.provenance.notes;
   std::size_t pos = 0;
@@ -199,9 +203,9 @@ auto with_context(const std::string& prefix, F&& f) -> decltype(f()) {
 
 //! Which file format and which named signals to read.
 struct LogSelection {
-  io::LogFormat format = io::LogFormat::endowrist_2016;  //!< reader
-  std::vector<std::string> inputs;                       //!< signal names, >= 1
-  std::vector<std::string> outputs;                      //!< signal names, >= 1
+  files::LogFormat format = files::LogFormat::endowrist_2016;  //!< reader
+  std::vector<std::string> inputs;                             //!< signal names, >= 1
+  std::vector<std::string> outputs;                            //!< signal names, >= 1
   double csv_row_time = 1.0;     //!< s per row of a CSV without a "time" column
   bool drop_non_finite = false;  //!< false: a NaN/Inf field fails; true: its row is dropped
 };
@@ -209,7 +213,7 @@ struct LogSelection {
 //! One log on the grid k Ts: gap-free segments of inputs and outputs, and what was done.
 struct PreparedLog {
   std::string source;                //!< file
-  io::LogReport report;              //!< what the reader dropped or repaired
+  files::LogReport report;           //!< what the reader dropped or repaired
   std::vector<DataSet> segments;     //!< u: N x nu, y: N x ny per gap-free stretch
   std::vector<double> start_time;    //!< s, time of row 0 of each segment (rebased log time)
   double sample_time = 0.0;          //!< s
@@ -227,18 +231,18 @@ struct PreparedLog {
 };
 
 //! Reads `path` as `sel` says (no checks beyond the reader's).
-[[nodiscard]] inline io::Log read_selected_format(const std::string& path,
-                                                  const LogSelection& sel) {
-  const io::LogReadOptions read;  // bad rows dropped and reported; non-finite checked by callers
-  if (sel.format == io::LogFormat::csv) {
-    io::CsvOptions o;
+[[nodiscard]] inline files::Log read_selected_format(const std::string& path,
+                                                     const LogSelection& sel) {
+  const files::LogReadOptions read;  // bad rows dropped and reported; non-finite checked by callers
+  if (sel.format == files::LogFormat::csv) {
+    files::CsvOptions o;
     o.read = read;
     o.sample_time = sel.csv_row_time;
-    return io::read_csv(path, o);
+    return files::read_csv(path, o);
   }
-  io::Endowrist2016Options o;
+  files::Endowrist2016Options o;
   o.read = read;
-  return io::read_endowrist_2016(path, o);
+  return files::read_endowrist_2016(path, o);
 }
 
 //! The default resampling period: the median time step of the log at `path` (s), rounded to six
@@ -258,16 +262,16 @@ struct PreparedLog {
 [[nodiscard]] inline PreparedLog prepare_log(const std::string& path, const LogSelection& sel,
                                              double ts, const Preprocessing& pre,
                                              Eigen::Index min_samples = 20) {
-  namespace wf = detail::workflow;
+  namespace wf = detail;
   if (sel.inputs.empty()) wf::fail(path + ": no input signal named");
   if (sel.outputs.empty()) wf::fail(path + ": no output signal named");
   if (!std::isfinite(ts) || !(ts > 0.0))
     wf::fail(path + ": sample time must be finite and > 0 s, got " + wf::num(ts));
-  const io::Log log = read_selected_format(path, sel);
+  const files::Log log = read_selected_format(path, sel);
   if (!sel.drop_non_finite && log.report.non_finite > 0) {
     std::string where;
-    for (const io::LogIssue& issue : log.report.issues) {
-      if (issue.kind == io::LogIssueKind::non_finite) {
+    for (const files::LogIssue& issue : log.report.issues) {
+      if (issue.kind == files::LogIssueKind::non_finite) {
         where = " (first at line " + std::to_string(issue.line) + ": " + issue.detail + ")";
         break;
       }
@@ -359,7 +363,7 @@ struct PreparedLog {
 
 //! One-paragraph summary: reader report counts, grid, segments, offsets.
 [[nodiscard]] inline std::string summary(const PreparedLog& log) {
-  const io::LogReport& r = log.report;
+  const files::LogReport& r = log.report;
   std::ostringstream out;
   out.precision(4);
   out << log.source << ": " << r.rows << " rows kept of " << r.lines << " lines; dropped "
@@ -385,7 +389,7 @@ struct PreparedLog {
 // Models and comparison
 
 //! The linear block of a model file as a SubspaceModel.
-[[nodiscard]] inline SubspaceModel linear_block(const io::ModelFile& m) {
+[[nodiscard]] inline SubspaceModel linear_block(const files::ModelFile& m) {
   SubspaceModel s;
   s.A = m.A;
   s.B = m.B;
@@ -401,17 +405,17 @@ struct PreparedLog {
 //! Presets by name: "yaw2016" (appendix C yaw, inputs current A, velocity rad/s, output force N)
 //! and "pitch2016" (appendix C pitch, output in gram-force, see docs/models/presets_2016.md).
 //! Throws Error for another name.
-[[nodiscard]] inline io::ModelFile preset_model(std::string_view name) {
-  const std::vector<io::SignalInfo> inputs{{"current", "A"}, {"velocity", "rad/s"}};
-  io::ModelProvenance p;
+[[nodiscard]] inline files::ModelFile preset_model(std::string_view name) {
+  const std::vector<files::SignalInfo> inputs{{"current", "A"}, {"velocity", "rad/s"}};
+  files::ModelProvenance p;
   p.date = "2016";
   if (name == "yaw2016") {
     p.method = "worksheet appendix C (yaw, eqs. C.1-C.3)";
-    return io::make_model_file(model::yaw_force_2016(), inputs, {{"force", "N"}}, p);
+    return files::make_model_file(model::yaw_force_2016(), inputs, {{"force", "N"}}, p);
   }
   if (name == "pitch2016") {
     p.method = "worksheet appendix C (pitch, eqs. C.4-C.6)";
-    return io::make_model_file(model::pitch_force_2016(), inputs, {{"force", "gf"}}, p);
+    return files::make_model_file(model::pitch_force_2016(), inputs, {{"force", "gf"}}, p);
   }
   ENDOHAPTICS_THROW(
       Error("unknown preset '" + std::string(name) + "' (valid: yaw2016, pitch2016)"));
@@ -453,9 +457,9 @@ struct FileComparison {
 //! inputs) and scores the concatenated segments. Throws Error when the log's input or output
 //! count differs from the model's.
 [[nodiscard]] inline FileComparison compare_log(
-    const io::ModelFile& model, const PreparedLog& log,
+    const files::ModelFile& model, const PreparedLog& log,
     InitialStateMode mode = InitialStateMode::estimate) {
-  namespace wf = detail::workflow;
+  namespace wf = detail;
   const SubspaceModel linear = linear_block(model);
   const auto nu = static_cast<Eigen::Index>(model.inputs.size());
   const auto ny = static_cast<Eigen::Index>(model.outputs.size());
@@ -519,7 +523,7 @@ struct DeadzoneSetting {
 //! with one of those per input. Throws Error naming the value or the count.
 [[nodiscard]] inline std::vector<DeadzoneSetting> parse_deadzone(std::string_view text,
                                                                  std::size_t inputs) {
-  namespace wf = detail::workflow;
+  namespace wf = detail;
   const auto parts = wf::split(text, ',');
   if (parts.size() != 1 && parts.size() != inputs) {
     wf::fail("--deadzone '" + std::string(text) + "' has " + std::to_string(parts.size()) +
@@ -527,7 +531,7 @@ struct DeadzoneSetting {
   }
   std::vector<DeadzoneSetting> out;
   for (std::size_t i = 0; i < inputs; ++i) {
-    const std::string_view p = io::detail::log_reader::trim(parts[parts.size() == 1 ? 0 : i]);
+    const std::string_view p = files::detail::log_reader::trim(parts[parts.size() == 1 ? 0 : i]);
     DeadzoneSetting s;
     if (p == "auto") {
       s.mode = DeadzoneSetting::Mode::fit;
@@ -564,7 +568,7 @@ struct WorkflowOptions {
 //! One candidate model and its per-file fits on the identification logs.
 struct CandidateModel {
   std::string method;                 //!< "moesp", "n4sid", "cva" or "static"
-  io::ModelFile model;                //!< with names, units, provenance (notes empty)
+  files::ModelFile model;             //!< with names, units, provenance (notes empty)
   SubspaceModel linear;               //!< the identified linear block (singular values, ...)
   std::vector<FileComparison> files;  //!< per identification log
   double mean_fit = 0.0;              //!< mean over files and outputs, %
@@ -584,7 +588,7 @@ struct WorkflowResult {
 //! spectral radius < 1 when there is any. Throws Error when `candidates` is empty.
 [[nodiscard]] inline std::size_t best_candidate(const std::vector<CandidateModel>& candidates,
                                                 bool prefer_stable) {
-  if (candidates.empty()) detail::workflow::fail("best_candidate: no candidates");
+  if (candidates.empty()) detail::fail("best_candidate: no candidates");
   const bool any_stable =
       prefer_stable && std::any_of(candidates.begin(), candidates.end(),
                                    [](const CandidateModel& c) { return c.spectral_radius < 1.0; });
@@ -615,8 +619,8 @@ struct WorkflowResult {
   }
   const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(X);
   if (qr.rank() < X.cols()) {
-    detail::workflow::fail("static gain: the inputs are constant or collinear (rank " +
-                           std::to_string(qr.rank()) + " of " + std::to_string(X.cols()) + ")");
+    detail::fail("static gain: the inputs are constant or collinear (rank " +
+                 std::to_string(qr.rank()) + " of " + std::to_string(X.cols()) + ")");
   }
   const Eigen::MatrixXd theta = qr.solve(Y);  // (nu + 1) x ny
   SubspaceModel m;
@@ -637,10 +641,10 @@ struct WorkflowResult {
 //! and skipped. Throws Error on bad options or data (as identify / fit_hammerstein_wiener), or
 //! when every candidate failed.
 [[nodiscard]] inline WorkflowResult identify_logs(const std::vector<PreparedLog>& logs,
-                                                  const std::vector<io::SignalInfo>& inputs,
-                                                  const std::vector<io::SignalInfo>& outputs,
+                                                  const std::vector<files::SignalInfo>& inputs,
+                                                  const std::vector<files::SignalInfo>& outputs,
                                                   const WorkflowOptions& options) {
-  namespace wf = detail::workflow;
+  namespace wf = detail;
   if (logs.empty()) wf::fail("identify: no logs");
   const auto nu = inputs.size();
   std::vector<DataSet> data;
@@ -681,10 +685,10 @@ struct WorkflowResult {
 
   WorkflowResult result;
   auto finish = [&](CandidateModel c, const std::vector<StaticMap>& maps) {
-    io::ModelProvenance p;
+    files::ModelProvenance p;
     p.method = c.method;
     p.files = files;
-    c.model = io::make_model_file(c.linear, inputs, outputs, p);
+    c.model = files::make_model_file(c.linear, inputs, outputs, p);
     c.model.provenance.method = c.method;
     if (any_map) {
       c.model.input_nonlinearity = maps;
@@ -768,4 +772,4 @@ struct WorkflowResult {
   return result;
 }
 
-}  // namespace endohaptics::identification
+}  // namespace endohaptics::workflow

@@ -27,7 +27,7 @@
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/identification/signal.hpp"
 
-namespace endohaptics::io {
+namespace endohaptics::files {
 
 //! What to do with a row that cannot be used.
 enum class OnBadRow : std::uint8_t {
@@ -125,7 +125,7 @@ struct LogReport {
         << " s; gaps > " << gap_threshold << " s: " << gaps << " (largest step " << largest_step
         << " s)\n";
     for (const LogIssue& issue : issues) {
-      out << "  line " << issue.line << ": " << io::to_string(issue.kind);
+      out << "  line " << issue.line << ": " << files::to_string(issue.kind);
       if (!issue.detail.empty()) out << ": " << issue.detail;
       out << '\n';
     }
@@ -784,4 +784,4 @@ enum class LogFormat : std::uint8_t {
   return read_csv(path, o);
 }
 
-}  // namespace endohaptics::io
+}  // namespace endohaptics::files

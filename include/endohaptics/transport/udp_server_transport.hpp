@@ -16,10 +16,10 @@
 #include <string>
 
 #include "endohaptics/core/error.hpp"
-#include "endohaptics/io/transport.hpp"
-#include "endohaptics/io/udp_transport.hpp"
+#include "endohaptics/transport/transport.hpp"
+#include "endohaptics/transport/udp_transport.hpp"
 
-namespace endohaptics::io {
+namespace endohaptics::transport {
 
 //! Where the server listens. Default: the sbRIO's port on every interface.
 struct UdpServerConfig {
@@ -98,4 +98,4 @@ class UdpServerTransport {
 
 static_assert(Transport<UdpServerTransport>);
 
-}  // namespace endohaptics::io
+}  // namespace endohaptics::transport

@@ -15,9 +15,9 @@
 #include <string>
 
 #include "endohaptics/core/error.hpp"
-#include "endohaptics/io/transport.hpp"
+#include "endohaptics/transport/transport.hpp"
 
-namespace endohaptics::io {
+namespace endohaptics::transport {
 
 //! Probabilities in [0, 1] of each fault, per datagram.
 struct FaultRates {
@@ -146,4 +146,4 @@ class FaultInjectingTransport {
   bool held_ = false;
 };
 
-}  // namespace endohaptics::io
+}  // namespace endohaptics::transport

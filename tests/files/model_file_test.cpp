@@ -1,4 +1,4 @@
-#include "endohaptics/io/model_file.hpp"
+#include "endohaptics/files/model_file.hpp"
 
 #include <doctest/doctest.h>
 
@@ -16,7 +16,7 @@
 namespace {
 
 namespace id = endohaptics::identification;
-namespace io = endohaptics::io;
+namespace files = endohaptics::files;
 namespace est = endohaptics::estimation;
 namespace model = endohaptics::model;
 using Eigen::MatrixXd;
@@ -53,12 +53,12 @@ std::string message_of(const auto& f) {
   return "no exception";
 }
 
-const std::vector<io::SignalInfo> yaw_inputs{{"current", "A"}, {"velocity", "rad/s"}};
-const std::vector<io::SignalInfo> yaw_outputs{{"force", "N"}};
+const std::vector<files::SignalInfo> yaw_inputs{{"current", "A"}, {"velocity", "rad/s"}};
+const std::vector<files::SignalInfo> yaw_outputs{{"force", "N"}};
 
 // A valid 2-state, 1-input, 1-output model as JSON, to break one field at a time.
 json valid_json() {
-  io::ModelFile f;
+  files::ModelFile f;
   f.sample_time = 0.02;
   f.A = (MatrixXd(2, 2) << 0.9, 0.1, 0.0, 0.5).finished();
   f.B = (MatrixXd(2, 1) << 1.0, 0.5).finished();
@@ -71,7 +71,7 @@ json valid_json() {
   f.output_nonlinearity = {{}};
   f.provenance.method = "moesp";
   f.provenance.date = "2016-05-01";
-  return io::to_json(f);
+  return files::to_json(f);
 }
 
 }  // namespace
@@ -91,19 +91,19 @@ TEST_CASE("an identified model round-trips through a file bit for bit, with prov
   options.sample_time = 0.02;
   const auto m = id::identify(u, y, options);
 
-  io::ModelProvenance provenance;
+  files::ModelProvenance provenance;
   provenance.files = {"yaw_grip_01.csv", "yaw_grip_02.csv"};
   provenance.fit_percent = {id::compare(m, u, y).fit[0]};
   provenance.notes = "synthetic";
-  const io::ModelFile file = io::make_model_file(m, yaw_inputs, yaw_outputs, provenance);
+  const files::ModelFile file = files::make_model_file(m, yaw_inputs, yaw_outputs, provenance);
   CHECK(file.provenance.method == "moesp");
   CHECK(file.provenance.order == 2);
   CHECK(file.provenance.block_rows == 15);
   CHECK(file.provenance.date.size() == 10);  // YYYY-MM-DD, today (UTC)
 
   TempFile tmp("roundtrip");
-  io::save_model(tmp.path, file);
-  const io::ModelFile back = io::load_model(tmp.path);
+  files::save_model(tmp.path, file);
+  const files::ModelFile back = files::load_model(tmp.path);
   CHECK(back.A == file.A);  // shortest round-trip decimal: bit-exact
   CHECK(back.B == file.B);
   CHECK(back.C == file.C);
@@ -123,12 +123,12 @@ TEST_CASE("an identified model round-trips through a file bit for bit, with prov
   CHECK(j.at("states") == 2);
   CHECK_FALSE(j.contains("input_nonlinearity"));
 
-  auto ss = io::load_state_space<2, 2, 1>(tmp.path);
+  auto ss = files::load_state_space<2, 2, 1>(tmp.path);
   CHECK(ss.sample_time() == 0.02);
   CHECK(ss.state() == Eigen::Vector2d(m.x0));
-  const auto ssf = io::load_state_space<2, 2, 1, float>(tmp.path);
+  const auto ssf = files::load_state_space<2, 2, 1, float>(tmp.path);
   CHECK(ssf.A()(0, 0) == static_cast<float>(m.A(0, 0)));
-  CHECK(message_of([&] { (void)io::load_state_space<4, 2, 1>(tmp.path); }) ==
+  CHECK(message_of([&] { (void)files::load_state_space<4, 2, 1>(tmp.path); }) ==
         "model file " + tmp.path.string() +
             ": to_state_space: the model has 2 states, 2 inputs, 1 outputs; the target type 4, "
             "2, 1");
@@ -137,19 +137,19 @@ TEST_CASE("an identified model round-trips through a file bit for bit, with prov
 TEST_CASE("a loaded yaw Hammerstein-Wiener model drives OpenLoop and the ForceEstimator") {
   // The appendix C yaw model with the 0.21 A dead zone, saved and loaded again.
   const auto preset = model::yaw_force_2016_hw();
-  io::ModelProvenance provenance;
+  files::ModelProvenance provenance;
   provenance.method = "worksheet appendix C (MATLAB n4sid + idDeadZone)";
   provenance.date = "2016-06-01";
   TempFile tmp("yaw_hw");
-  io::save_model(tmp.path, io::make_model_file(preset, yaw_inputs, yaw_outputs, provenance));
-  const io::ModelFile file = io::load_model(tmp.path);
+  files::save_model(tmp.path, files::make_model_file(preset, yaw_inputs, yaw_outputs, provenance));
+  const files::ModelFile file = files::load_model(tmp.path);
   REQUIRE(file.is_hammerstein_wiener());
   CHECK(file.input_nonlinearity[0].kind == id::StaticMapKind::deadzone);
   CHECK(file.input_nonlinearity[0].upper == 0.21);
   CHECK(file.input_nonlinearity[1].upper == 0.0);
   CHECK(file.output_nonlinearity[0].kind == id::StaticMapKind::none);
 
-  auto loaded = io::load_hammerstein_wiener<6, 2, 1>(tmp.path);
+  auto loaded = files::load_hammerstein_wiener<6, 2, 1>(tmp.path);
   static_assert(std::is_same_v<decltype(loaded), model::YawForceHW2016<double>>,
                 "the default loader gives the yaw preset's own type");
   CHECK(loaded.linear().A() == preset.linear().A());
@@ -192,9 +192,9 @@ TEST_CASE("load errors name the file, the field and the value") {
   auto broken = [](auto edit) {
     json j = valid_json();
     edit(j);
-    return message_of([&] { (void)io::model_from_json(j, "test"); });
+    return message_of([&] { (void)files::model_from_json(j, "test"); });
   };
-  CHECK(io::model_from_json(valid_json(), "test").is_hammerstein_wiener());
+  CHECK(files::model_from_json(valid_json(), "test").is_hammerstein_wiener());
   CHECK(broken([](json& j) { j.erase("C"); }) == src + ": missing field \"C\"");
   CHECK(broken([](json& j) { j.erase("sample_time_s"); }) ==
         src + ": missing field \"sample_time_s\"");
@@ -231,35 +231,36 @@ TEST_CASE("load errors name the file, the field and the value") {
         src + ": inputs[0]: missing field \"unit\"");
 
   // Files: unreadable, not JSON (a bare NaN literal is not JSON), a type the loader cannot hold.
-  CHECK(message_of([] { (void)io::load_model("/nonexistent/model.json"); }) ==
+  CHECK(message_of([] { (void)files::load_model("/nonexistent/model.json"); }) ==
         "model file /nonexistent/model.json: cannot be opened");
   TempFile tmp("errors");
   std::string text = valid_json().dump();
   text.replace(text.find("0.9"), 3, "NaN");
   write_text(tmp.path, text);
-  const std::string nan_message = message_of([&] { (void)io::load_model(tmp.path); });
+  const std::string nan_message = message_of([&] { (void)files::load_model(tmp.path); });
   CHECK(nan_message.find("model file " + tmp.path.string() + ": [json.exception.parse_error") == 0);
   write_text(tmp.path, valid_json().dump());
   CHECK(message_of([&] {
-          (void)io::load_hammerstein_wiener<2, 1, 1, double, model::Saturation<double>>(tmp.path);
+          (void)files::load_hammerstein_wiener<2, 1, 1, double, model::Saturation<double>>(
+              tmp.path);
         }) == "model file " + tmp.path.string() +
                   ": to_hammerstein_wiener: input 0 is a deadzone, which the requested "
                   "nonlinearity type cannot represent");
-  const auto hw = io::load_hammerstein_wiener<2, 1, 1>(tmp.path);
+  const auto hw = files::load_hammerstein_wiener<2, 1, 1>(tmp.path);
   CHECK(hw.input_nonlinearity().channel(0).upper() == 0.2);
 }
 
 TEST_CASE("saving refuses NaN and mismatched sizes, naming the field") {
-  io::ModelFile f = io::model_from_json(valid_json());
+  files::ModelFile f = files::model_from_json(valid_json());
   f.A(0, 1) = std::nan("");
-  CHECK(message_of([&] { (void)io::to_json(f); }) ==
+  CHECK(message_of([&] { (void)files::to_json(f); }) ==
         "to_json: field \"A[0][1]\" is not finite (nan)");
-  f = io::model_from_json(valid_json());
+  f = files::model_from_json(valid_json());
   f.D = MatrixXd::Zero(2, 1);
-  CHECK(message_of([&] { (void)io::to_json(f); }) ==
+  CHECK(message_of([&] { (void)files::to_json(f); }) ==
         "to_json: field \"D\" is 2 x 1, expected 1 x 1 (outputs x inputs)");
-  f = io::model_from_json(valid_json());
+  f = files::model_from_json(valid_json());
   TempFile tmp("save_errors");
-  CHECK(message_of([&] { io::save_model("/nonexistent/dir/model.json", f); }) ==
+  CHECK(message_of([&] { files::save_model("/nonexistent/dir/model.json", f); }) ==
         "save_model: cannot open /nonexistent/dir/model.json for writing");
 }

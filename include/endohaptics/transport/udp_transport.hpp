@@ -19,9 +19,9 @@
 #include <string>
 
 #include "endohaptics/core/error.hpp"
-#include "endohaptics/io/transport.hpp"
+#include "endohaptics/transport/transport.hpp"
 
-namespace endohaptics::io {
+namespace endohaptics::transport {
 
 namespace detail {
 
@@ -157,4 +157,4 @@ class UdpTransport {
 
 static_assert(Transport<UdpTransport>);
 
-}  // namespace endohaptics::io
+}  // namespace endohaptics::transport

@@ -2,14 +2,14 @@
 
 #include <array>
 #include <chrono>
-#include <endohaptics/io/fault_injecting_transport.hpp>
-#include <endohaptics/io/in_memory_transport.hpp>
-#include <endohaptics/io/udp_server_transport.hpp>
-#include <endohaptics/io/udp_transport.hpp>
+#include <endohaptics/transport/fault_injecting_transport.hpp>
+#include <endohaptics/transport/in_memory_transport.hpp>
+#include <endohaptics/transport/udp_server_transport.hpp>
+#include <endohaptics/transport/udp_transport.hpp>
 #include <thread>
 
-namespace io = endohaptics::io;
-using io::TransportStatus;
+namespace transport = endohaptics::transport;
+using transport::TransportStatus;
 using namespace std::chrono_literals;
 
 namespace {
@@ -23,11 +23,12 @@ std::array<std::byte, N> pattern(unsigned char first) {
 
 }  // namespace
 
-static_assert(io::Transport<io::InMemoryTransport<>>);
-static_assert(io::Transport<io::FaultInjectingTransport<io::InMemoryTransport<>>>);
+static_assert(transport::Transport<transport::InMemoryTransport<>>);
+static_assert(
+    transport::Transport<transport::FaultInjectingTransport<transport::InMemoryTransport<>>>);
 
 TEST_CASE("in-memory link: delivery, newest-only draining, truncation, closing") {
-  io::InMemoryLink<64, 8> link;
+  transport::InMemoryLink<64, 8> link;
   std::array<std::byte, 64> buffer{};
 
   CHECK(link.b().receive(buffer, 1ms).status == TransportStatus::timeout);
@@ -70,8 +71,8 @@ TEST_CASE("responding transport answers inside send") {
     for (std::size_t i = 0; i < in.size(); ++i) out[i] = in[i] ^ std::byte{0xFF};
     (void)reply.send(std::span<const std::byte>(out.data(), in.size()));
   };
-  io::RespondingTransport<decltype(echo_plus_one)> transport(echo_plus_one);
-  static_assert(io::Transport<decltype(transport)>);
+  transport::RespondingTransport<decltype(echo_plus_one)> transport(echo_plus_one);
+  static_assert(transport::Transport<decltype(transport)>);
   const auto p = pattern<5>(0);
   REQUIRE(transport.send(p) == TransportStatus::ok);
   std::array<std::byte, 32> buffer{};
@@ -83,12 +84,12 @@ TEST_CASE("responding transport answers inside send") {
 }
 
 TEST_CASE("fault injection: each fault at rate 1 happens every time and is counted exactly") {
-  io::InMemoryLink<64, 8> link;
+  transport::InMemoryLink<64, 8> link;
   std::array<std::byte, 64> buffer{};
   const auto p = pattern<17>(3);
 
   SUBCASE("no faults: transparent") {
-    io::FaultInjectingTransport receiver(link.b(), {}, 1);
+    transport::FaultInjectingTransport receiver(link.b(), {}, 1);
     for (int i = 0; i < 100; ++i) {
       (void)link.a().send(p);
       const auto r = receiver.receive(buffer, 0ns);
@@ -98,7 +99,7 @@ TEST_CASE("fault injection: each fault at rate 1 happens every time and is count
     CHECK(receiver.counters().corrupted == 0);
   }
   SUBCASE("drop on receive") {
-    io::FaultInjectingTransport receiver(link.b(), {.drop_receive = 1.0}, 1);
+    transport::FaultInjectingTransport receiver(link.b(), {.drop_receive = 1.0}, 1);
     for (int i = 0; i < 100; ++i) {
       (void)link.a().send(p);
       REQUIRE(receiver.receive(buffer, 0ns).status == TransportStatus::timeout);
@@ -106,17 +107,17 @@ TEST_CASE("fault injection: each fault at rate 1 happens every time and is count
     CHECK(receiver.counters().dropped_receive == 100);
   }
   SUBCASE("drop on send and duplicate") {
-    io::FaultInjectingTransport dropper(link.a(), {.drop_send = 1.0}, 1);
+    transport::FaultInjectingTransport dropper(link.a(), {.drop_send = 1.0}, 1);
     for (int i = 0; i < 10; ++i) (void)dropper.send(p);
     CHECK(link.a_to_b().size() == 0);
     CHECK(dropper.counters().dropped_send == 10);
-    io::FaultInjectingTransport duplicator(link.a(), {.duplicate = 1.0}, 1);
+    transport::FaultInjectingTransport duplicator(link.a(), {.duplicate = 1.0}, 1);
     (void)duplicator.send(p);
     CHECK(link.a_to_b().size() == 2);
     CHECK(duplicator.counters().duplicated == 1);
   }
   SUBCASE("corruption flips bits, truncation shortens") {
-    io::FaultInjectingTransport receiver(link.b(), {.corrupt = 1.0, .truncate = 1.0}, 7);
+    transport::FaultInjectingTransport receiver(link.b(), {.corrupt = 1.0, .truncate = 1.0}, 7);
     for (int i = 0; i < 50; ++i) {
       (void)link.a().send(p);
       const auto r = receiver.receive(buffer, 0ns);
@@ -127,7 +128,7 @@ TEST_CASE("fault injection: each fault at rate 1 happens every time and is count
     CHECK(receiver.counters().truncated == 50);
   }
   SUBCASE("delay: held back, delivered at the next receive that finds nothing") {
-    io::FaultInjectingTransport receiver(link.b(), {.delay = 1.0}, 1);
+    transport::FaultInjectingTransport receiver(link.b(), {.delay = 1.0}, 1);
     (void)link.a().send(p);
     CHECK(receiver.receive(buffer, 0ns).status == TransportStatus::timeout);
     const auto r = receiver.receive(buffer, 0ns);  // nothing new: the late one arrives
@@ -136,7 +137,7 @@ TEST_CASE("fault injection: each fault at rate 1 happens every time and is count
     CHECK(receiver.counters().delayed == 1);
   }
   SUBCASE("reorder: an older datagram overtakes a newer one") {
-    io::FaultInjectingTransport receiver(link.b(), {.delay = 1.0, .reorder = 1.0}, 1);
+    transport::FaultInjectingTransport receiver(link.b(), {.delay = 1.0, .reorder = 1.0}, 1);
     const auto older = pattern<17>(10), newer = pattern<17>(90);
     (void)link.a().send(older);
     CHECK(receiver.receive(buffer, 0ns).status == TransportStatus::timeout);  // held
@@ -153,8 +154,9 @@ TEST_CASE("fault injection: each fault at rate 1 happens every time and is count
 
 TEST_CASE("fault injection is deterministic for a seed and validates its rates") {
   auto run = [](std::uint64_t seed) {
-    io::InMemoryLink<64, 8> link;
-    io::FaultInjectingTransport receiver(link.b(), {.drop_receive = 0.3, .corrupt = 0.2}, seed);
+    transport::InMemoryLink<64, 8> link;
+    transport::FaultInjectingTransport receiver(link.b(), {.drop_receive = 0.3, .corrupt = 0.2},
+                                                seed);
     std::array<std::byte, 64> buffer{};
     std::uint64_t signature = 0;
     for (int i = 0; i < 1000; ++i) {
@@ -170,16 +172,18 @@ TEST_CASE("fault injection is deterministic for a seed and validates its rates")
   const auto [sig, dropped] = run(42);
   CHECK(dropped > 250);  // binomial(1000, 0.3): 300 +- 14.5 (sd); 250 is 3.4 sd below
   CHECK(dropped < 350);
-  io::InMemoryLink<64, 8> link;
-  CHECK_THROWS_AS(io::FaultInjectingTransport(link.b(), {.corrupt = 1.5}, 1), endohaptics::Error);
-  CHECK_THROWS_AS(io::FaultInjectingTransport(link.b(), {.delay = -0.1}, 1), endohaptics::Error);
+  transport::InMemoryLink<64, 8> link;
+  CHECK_THROWS_AS(transport::FaultInjectingTransport(link.b(), {.corrupt = 1.5}, 1),
+                  endohaptics::Error);
+  CHECK_THROWS_AS(transport::FaultInjectingTransport(link.b(), {.delay = -0.1}, 1),
+                  endohaptics::Error);
 }
 
 TEST_CASE("UDP transport on loopback: send, timed receive, drain to newest, truncation") {
-  io::UdpTransport a2({.local_address = "127.0.0.1", .remote_address = "127.0.0.1"});
-  io::UdpTransport b2({.local_address = "127.0.0.1",
-                       .remote_address = "127.0.0.1",
-                       .remote_port = a2.local_endpoint().port()});
+  transport::UdpTransport a2({.local_address = "127.0.0.1", .remote_address = "127.0.0.1"});
+  transport::UdpTransport b2({.local_address = "127.0.0.1",
+                              .remote_address = "127.0.0.1",
+                              .remote_port = a2.local_endpoint().port()});
   a2.connect("127.0.0.1", b2.local_endpoint().port());
   std::array<std::byte, 64> buffer{};
   CHECK(b2.receive(buffer, 2ms).status == TransportStatus::timeout);
@@ -207,30 +211,30 @@ TEST_CASE("UDP transport on loopback: send, timed receive, drain to newest, trun
 TEST_CASE("UDP transport: a peer that is not listening is reported, not hidden") {
   std::uint16_t dead_port = 0;
   {
-    io::UdpTransport gone({.local_address = "127.0.0.1", .remote_address = "127.0.0.1"});
+    transport::UdpTransport gone({.local_address = "127.0.0.1", .remote_address = "127.0.0.1"});
     dead_port = gone.local_endpoint().port();
   }  // closed: nothing listens on dead_port any more
-  io::UdpTransport pc(
+  transport::UdpTransport pc(
       {.local_address = "127.0.0.1", .remote_address = "127.0.0.1", .remote_port = dead_port});
   std::array<std::byte, 64> buffer{};
   (void)pc.send(pattern<17>(0));
   // Loopback answers with ICMP port unreachable: the next receive sees ECONNREFUSED.
   const auto r = pc.receive(buffer, 50ms);
   CHECK(r.status == TransportStatus::error);
-  CHECK_THROWS_AS(io::UdpTransport({.local_address = "not-an-address"}), endohaptics::Error);
+  CHECK_THROWS_AS(transport::UdpTransport({.local_address = "not-an-address"}), endohaptics::Error);
   const auto taken = pc.local_endpoint().port();
-  CHECK_THROWS_WITH_AS(io::UdpTransport({.local_address = "127.0.0.1", .local_port = taken}),
+  CHECK_THROWS_WITH_AS(transport::UdpTransport({.local_address = "127.0.0.1", .local_port = taken}),
                        doctest::Contains("cannot bind"), endohaptics::Error);
 }
 
 TEST_CASE("UDP server transport: answers whoever sent the newest datagram") {
-  io::UdpServerTransport server({.bind_address = "127.0.0.1", .port = 0});
+  transport::UdpServerTransport server({.bind_address = "127.0.0.1", .port = 0});
   const auto port = server.local_endpoint().port();
   CHECK(!server.has_peer());
   CHECK(server.send(pattern<49>(0)) == TransportStatus::error);  // nobody to answer yet
-  io::UdpTransport alice(
+  transport::UdpTransport alice(
       {.local_address = "127.0.0.1", .remote_address = "127.0.0.1", .remote_port = port});
-  io::UdpTransport bob(
+  transport::UdpTransport bob(
       {.local_address = "127.0.0.1", .remote_address = "127.0.0.1", .remote_port = port});
   std::array<std::byte, 64> buffer{};
   CHECK(server.receive(buffer, 2ms).status == TransportStatus::timeout);
@@ -260,8 +264,8 @@ TEST_CASE("UDP server transport: answers whoever sent the newest datagram") {
   REQUIRE(r.status == TransportStatus::ok);
   CHECK(buffer[0] == std::byte{20});
 
-  CHECK_THROWS_WITH_AS(io::UdpServerTransport({.bind_address = "127.0.0.1", .port = port}),
+  CHECK_THROWS_WITH_AS(transport::UdpServerTransport({.bind_address = "127.0.0.1", .port = port}),
                        doctest::Contains("cannot bind 127.0.0.1:"), endohaptics::Error);
-  CHECK_THROWS_WITH_AS(io::UdpServerTransport({.bind_address = "nowhere"}),
+  CHECK_THROWS_WITH_AS(transport::UdpServerTransport({.bind_address = "nowhere"}),
                        doctest::Contains("invalid bind address 'nowhere'"), endohaptics::Error);
 }

@@ -1,4 +1,4 @@
-#include "endohaptics/identification/workflow.hpp"
+#include "endohaptics/workflow/workflow.hpp"
 
 #include <doctest/doctest.h>
 
@@ -14,7 +14,8 @@
 namespace {
 
 namespace id = endohaptics::identification;
-namespace eio = endohaptics::io;
+namespace wf = endohaptics::workflow;
+namespace files = endohaptics::files;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 using endohaptics::Error;
@@ -85,9 +86,9 @@ VectorXd grid(Eigen::Index n, double ts) {
   return VectorXd::LinSpaced(n, 0.0, static_cast<double>(n - 1) * ts);
 }
 
-id::LogSelection csv_selection(std::vector<std::string> inputs, std::vector<std::string> outputs) {
-  id::LogSelection sel;
-  sel.format = eio::LogFormat::csv;
+wf::LogSelection csv_selection(std::vector<std::string> inputs, std::vector<std::string> outputs) {
+  wf::LogSelection sel;
+  sel.format = files::LogFormat::csv;
   sel.inputs = std::move(inputs);
   sel.outputs = std::move(outputs);
   return sel;
@@ -107,57 +108,57 @@ std::string message_of(F&& f) {
 }  // namespace
 
 TEST_CASE("preprocessing settings round-trip through their text; bad text throws") {
-  id::Preprocessing p;
+  wf::Preprocessing p;
   p.cutoff = 12.5;
   p.filter_order = 3;
-  p.output_offset = id::OffsetMode::median;
-  p.input_offset = id::OffsetMode::start;
+  p.output_offset = wf::OffsetMode::median;
+  p.input_offset = wf::OffsetMode::start;
   p.offset_duration = 0.25;
   p.detrend = true;
   p.max_gap = 0.3;
   p.min_segment = 7;
-  const id::Preprocessing q = id::parse_preprocessing(id::describe(p));
+  const wf::Preprocessing q = wf::parse_preprocessing(wf::describe(p));
   CHECK(q.cutoff == 12.5);
   CHECK(q.filter_order == 3);
-  CHECK(q.output_offset == id::OffsetMode::median);
-  CHECK(q.input_offset == id::OffsetMode::start);
+  CHECK(q.output_offset == wf::OffsetMode::median);
+  CHECK(q.input_offset == wf::OffsetMode::start);
   CHECK(q.offset_duration == 0.25);
   CHECK(q.detrend);
   CHECK(q.max_gap == 0.3);
   CHECK(q.min_segment == 7);
   CHECK(message_of([] {
-          (void)id::parse_preprocessing("lowpass_hz=5 colour=red");
+          (void)wf::parse_preprocessing("lowpass_hz=5 colour=red");
         }).find("unknown key 'colour'") != std::string::npos);
   CHECK(message_of([] {
-          (void)id::parse_preprocessing("lowpass_hz=abc");
+          (void)wf::parse_preprocessing("lowpass_hz=abc");
         }).find("'abc' is not a finite number") != std::string::npos);
   CHECK(message_of([] {
-          (void)id::offset_mode_from_string("max");
+          (void)wf::offset_mode_from_string("max");
         }).find("unknown offset mode 'max'") != std::string::npos);
 
-  eio::ModelFile m;
-  m.provenance.notes = "first line\npreprocessing: " + id::describe(p) + "\ntool: test";
-  REQUIRE(id::recorded_preprocessing(m).has_value());
-  CHECK(id::recorded_preprocessing(m)->cutoff == 12.5);
+  files::ModelFile m;
+  m.provenance.notes = "first line\npreprocessing: " + wf::describe(p) + "\ntool: test";
+  REQUIRE(wf::recorded_preprocessing(m).has_value());
+  CHECK(wf::recorded_preprocessing(m)->cutoff == 12.5);
   m.provenance.notes = "no preprocessing here";
-  CHECK_FALSE(id::recorded_preprocessing(m).has_value());
+  CHECK_FALSE(wf::recorded_preprocessing(m).has_value());
 }
 
 TEST_CASE("--deadzone: auto, none, a width, or one entry per input") {
-  using Mode = id::DeadzoneSetting::Mode;
-  const auto all = id::parse_deadzone("auto", 2);
+  using Mode = wf::DeadzoneSetting::Mode;
+  const auto all = wf::parse_deadzone("auto", 2);
   REQUIRE(all.size() == 2);
   CHECK(all[0].mode == Mode::fit);
   CHECK(all[1].mode == Mode::fit);
-  const auto mixed = id::parse_deadzone("0.21, none", 2);
+  const auto mixed = wf::parse_deadzone("0.21, none", 2);
   CHECK(mixed[0].mode == Mode::fixed);
   CHECK(mixed[0].width == 0.21);
   CHECK(mixed[1].mode == Mode::none);
   CHECK(message_of([] {
-          (void)id::parse_deadzone("auto,none,auto", 2);
+          (void)wf::parse_deadzone("auto,none,auto", 2);
         }).find("3 entries for 2 inputs") != std::string::npos);
-  CHECK(message_of([] { (void)id::parse_deadzone("-0.1", 1); }).find(">= 0") != std::string::npos);
-  CHECK(message_of([] { (void)id::parse_deadzone("wide", 1); }).find("'wide'") !=
+  CHECK(message_of([] { (void)wf::parse_deadzone("-0.1", 1); }).find(">= 0") != std::string::npos);
+  CHECK(message_of([] { (void)wf::parse_deadzone("wide", 1); }).find("'wide'") !=
         std::string::npos);
 }
 
@@ -171,10 +172,10 @@ TEST_CASE("prepare_log: named columns, resampling, gap split, offsets, and its e
   m.col(1) = (3.0 + 2.0 * m.col(0).array()).matrix();
   m.col(1).segment(150, 5).array() += 10.0;
   const TempFile file("prepare.csv", to_csv(t, m, {"u", "y"}));
-  const id::LogSelection sel = csv_selection({"u"}, {"y"});
+  const wf::LogSelection sel = csv_selection({"u"}, {"y"});
 
-  id::Preprocessing pre;
-  const id::PreparedLog plain = id::prepare_log(file.path.string(), sel, 0.02, pre);
+  wf::Preprocessing pre;
+  const wf::PreparedLog plain = wf::prepare_log(file.path.string(), sel, 0.02, pre);
   REQUIRE(plain.segments.size() == 2);
   CHECK(plain.gaps == 1);
   CHECK(plain.segments[0].u.rows() == 50);  // 0 .. 0.98 s at 0.02 s
@@ -184,9 +185,9 @@ TEST_CASE("prepare_log: named columns, resampling, gap split, offsets, and its e
   CHECK(plain.segments[0].y(1, 0) == doctest::Approx(3.0 + 2.0 * m(2, 0)));
   CHECK(plain.output_offsets[0] == 0.0);
 
-  pre.output_offset = id::OffsetMode::median;
-  pre.input_offset = id::OffsetMode::mean;
-  const id::PreparedLog centred = id::prepare_log(file.path.string(), sel, 0.02, pre);
+  pre.output_offset = wf::OffsetMode::median;
+  pre.input_offset = wf::OffsetMode::mean;
+  const wf::PreparedLog centred = wf::prepare_log(file.path.string(), sel, 0.02, pre);
   // Grid samples of u are symmetric about 0 except for the dropped odd samples: mean by hand.
   double u_sum = 0.0, count = 0.0;
   std::vector<double> y_values;
@@ -205,36 +206,36 @@ TEST_CASE("prepare_log: named columns, resampling, gap split, offsets, and its e
 
   pre = {};
   pre.detrend = true;
-  const id::PreparedLog detrended = id::prepare_log(file.path.string(), sel, 0.02, pre);
+  const wf::PreparedLog detrended = wf::prepare_log(file.path.string(), sel, 0.02, pre);
   CHECK(std::abs(detrended.segments[0].y.mean()) < 1e-12);  // a line minus its line: zero
   CHECK(detrended.segments[0].y.cwiseAbs().maxCoeff() < 1e-12);
 
   pre = {};
   pre.min_segment = 60;  // both halves too short: nothing left
   CHECK(message_of([&] {
-          (void)id::prepare_log(file.path.string(), sel, 0.02, pre);
+          (void)wf::prepare_log(file.path.string(), sel, 0.02, pre);
         }).find("too few samples: 0 on the grid") != std::string::npos);
   pre = {};
   CHECK(message_of([&] {
-          (void)id::prepare_log(file.path.string(), csv_selection({"u", "v"}, {"y"}), 0.02, pre);
+          (void)wf::prepare_log(file.path.string(), csv_selection({"u", "v"}, {"y"}), 0.02, pre);
         }).find("no signal named 'v' (signals: u, y)") != std::string::npos);
   CHECK(message_of([&] {
-          (void)id::prepare_log(file.path.string(), sel, 0.5, pre);
+          (void)wf::prepare_log(file.path.string(), sel, 0.5, pre);
         }).find("too few samples: 200 rows spanning 2.49 s give at most 5 samples") !=
         std::string::npos);
   CHECK(message_of([&] {
-          (void)id::prepare_log("/nonexistent/x.csv", sel, 0.02, pre);
+          (void)wf::prepare_log("/nonexistent/x.csv", sel, 0.02, pre);
         }).find("file does not exist") != std::string::npos);
 
   std::string text = to_csv(t, m, {"u", "y"});
   text.replace(text.find('\n', text.find('\n') + 1) + 1, 0, "0.005,inf,1\n");
   const TempFile bad("prepare_inf.csv", text);
   CHECK(message_of([&] {
-          (void)id::prepare_log(bad.path.string(), sel, 0.02, pre);
+          (void)wf::prepare_log(bad.path.string(), sel, 0.02, pre);
         }).find("1 row(s) hold non-finite values (first at line 3") != std::string::npos);
-  id::LogSelection dropping = sel;
+  wf::LogSelection dropping = sel;
   dropping.drop_non_finite = true;
-  const id::PreparedLog dropped = id::prepare_log(bad.path.string(), dropping, 0.02, pre);
+  const wf::PreparedLog dropped = wf::prepare_log(bad.path.string(), dropping, 0.02, pre);
   CHECK(dropped.report.non_finite == 1);
   CHECK(dropped.samples() == 100);
 }
@@ -242,8 +243,8 @@ TEST_CASE("prepare_log: named columns, resampling, gap split, offsets, and its e
 TEST_CASE("identify_logs recovers a known 2nd-order system from two CSVs; replay fits 100 %") {
   const id::SubspaceModel g = second_order();
   std::vector<std::unique_ptr<TempFile>> files;
-  std::vector<id::PreparedLog> logs;
-  const id::LogSelection sel = csv_selection({"u1", "u2"}, {"y"});
+  std::vector<wf::PreparedLog> logs;
+  const wf::LogSelection sel = csv_selection({"u1", "u2"}, {"y"});
   for (unsigned e = 0; e < 2; ++e) {
     const MatrixXd u = held_random(1500, 2, 10 + e);
     const MatrixXd y = id::simulate(g, u, VectorXd::Zero(2));
@@ -251,12 +252,12 @@ TEST_CASE("identify_logs recovers a known 2nd-order system from two CSVs; replay
     m << u, y;
     files.push_back(std::make_unique<TempFile>("sys" + std::to_string(e) + ".csv",
                                                to_csv(grid(1500, 0.01), m, {"u1", "u2", "y"})));
-    logs.push_back(id::prepare_log(files.back()->path.string(), sel, 0.01, {}));
+    logs.push_back(wf::prepare_log(files.back()->path.string(), sel, 0.01, {}));
   }
-  id::WorkflowOptions options;
+  wf::WorkflowOptions options;
   options.candidates = {id::Weighting::n4sid, id::Weighting::moesp, id::Weighting::cva};
-  const id::WorkflowResult r =
-      id::identify_logs(logs, {{"u1", "A"}, {"u2", ""}}, {{"y", "N"}}, options);
+  const wf::WorkflowResult r =
+      wf::identify_logs(logs, {{"u1", "A"}, {"u2", ""}}, {{"y", "N"}}, options);
   REQUIRE(r.candidates.size() == 3);
   for (const auto& c : r.candidates) {
     CHECK(c.linear.order == 2);
@@ -265,7 +266,7 @@ TEST_CASE("identify_logs recovers a known 2nd-order system from two CSVs; replay
     REQUIRE(c.files.size() == 2);
   }
   for (const auto& c : r.candidates) CHECK(r.chosen().mean_fit >= c.mean_fit);
-  const eio::ModelFile& model = r.chosen().model;
+  const files::ModelFile& model = r.chosen().model;
   CHECK(model.inputs[0].name == "u1");
   CHECK(model.inputs[0].unit == "A");
   CHECK(model.provenance.files.size() == 2);
@@ -281,40 +282,40 @@ TEST_CASE("identify_logs recovers a known 2nd-order system from two CSVs; replay
   MatrixXd m(800, 3);
   m << u, id::simulate(g, u, x0);
   const TempFile val("sys_val.csv", to_csv(grid(800, 0.01), m, {"u1", "u2", "y"}));
-  const id::PreparedLog v = id::prepare_log(val.path.string(), sel, 0.01, {});
-  const id::FileComparison estimated = id::compare_log(model, v);
+  const wf::PreparedLog v = wf::prepare_log(val.path.string(), sel, 0.01, {});
+  const wf::FileComparison estimated = wf::compare_log(model, v);
   CHECK(estimated.fit[0] > 99.9);
   CHECK(estimated.correlation[0] > 0.99999);
   CHECK(estimated.rmse[0] < 1e-6);
-  const id::FileComparison zero = id::compare_log(model, v, id::InitialStateMode::zero);
+  const wf::FileComparison zero = wf::compare_log(model, v, wf::InitialStateMode::zero);
   CHECK(zero.fit[0] < estimated.fit[0] - 0.5);
   CHECK(zero.y.size() == 1);
   CHECK(zero.y_hat[0].rows() == 800);
 
   // A model with other input counts refuses the log.
-  eio::ModelFile one_input = model;
+  files::ModelFile one_input = model;
   one_input.B = model.B.leftCols(1);
   one_input.D = model.D.leftCols(1);
   one_input.inputs.resize(1);
   CHECK(message_of([&] {
-          (void)id::compare_log(one_input, v);
+          (void)wf::compare_log(one_input, v);
         }).find("the log gives 2 inputs and 1 outputs, the model has 1 and 1") !=
         std::string::npos);
 }
 
 TEST_CASE("best_candidate: highest mean fit, among the stable ones when there are any") {
-  std::vector<id::CandidateModel> c(3);
+  std::vector<wf::CandidateModel> c(3);
   c[0].mean_fit = 60.0;
   c[0].spectral_radius = 0.97;
   c[1].mean_fit = 73.0;
   c[1].spectral_radius = 1.0001;  // a fold of the clamp-hits study chose such a model
   c[2].mean_fit = 65.0;
   c[2].spectral_radius = 0.99;
-  CHECK(id::best_candidate(c, true) == 2);
-  CHECK(id::best_candidate(c, false) == 1);
+  CHECK(wf::best_candidate(c, true) == 2);
+  CHECK(wf::best_candidate(c, false) == 1);
   c[0].spectral_radius = c[2].spectral_radius = 1.2;  // none stable: the best fit anyway
-  CHECK(id::best_candidate(c, true) == 1);
-  CHECK(message_of([] { (void)id::best_candidate({}, true); }).find("no candidates") !=
+  CHECK(wf::best_candidate(c, true) == 1);
+  CHECK(message_of([] { (void)wf::best_candidate({}, true); }).find("no candidates") !=
         std::string::npos);
 }
 
@@ -323,25 +324,25 @@ TEST_CASE("static gain baseline: y = D u + c by least squares, c as a constant s
   MatrixXd m(400, 3);
   m << u, (2.0 * u.col(0) - u.col(1)).array() + 0.5;
   const TempFile file("static.csv", to_csv(grid(400, 0.01), m, {"u1", "u2", "y"}));
-  const std::vector<id::PreparedLog> logs{
-      id::prepare_log(file.path.string(), csv_selection({"u1", "u2"}, {"y"}), 0.01, {})};
-  id::WorkflowOptions options;
+  const std::vector<wf::PreparedLog> logs{
+      wf::prepare_log(file.path.string(), csv_selection({"u1", "u2"}, {"y"}), 0.01, {})};
+  wf::WorkflowOptions options;
   options.static_gain = true;
-  const id::WorkflowResult r =
-      id::identify_logs(logs, {{"u1", ""}, {"u2", ""}}, {{"y", ""}}, options);
-  const eio::ModelFile& model = r.chosen().model;
+  const wf::WorkflowResult r =
+      wf::identify_logs(logs, {{"u1", ""}, {"u2", ""}}, {{"y", ""}}, options);
+  const files::ModelFile& model = r.chosen().model;
   CHECK(r.chosen().method == "static");
   CHECK(model.D(0, 0) == doctest::Approx(2.0));
   CHECK(model.D(0, 1) == doctest::Approx(-1.0));
   CHECK(model.x0[0] == doctest::Approx(0.5));
   CHECK(model.A(0, 0) == 1.0);
   CHECK(model.B.cwiseAbs().maxCoeff() == 0.0);
-  CHECK(id::compare_log(model, logs[0], id::InitialStateMode::stored).fit[0] > 99.9999);
-  CHECK(id::compare_log(model, logs[0], id::InitialStateMode::zero).rmse[0] ==
+  CHECK(wf::compare_log(model, logs[0], wf::InitialStateMode::stored).fit[0] > 99.9999);
+  CHECK(wf::compare_log(model, logs[0], wf::InitialStateMode::zero).rmse[0] ==
         doctest::Approx(0.5));  // the constant is lost with x0 = 0
-  options.deadzone = id::parse_deadzone("auto", 2);
+  options.deadzone = wf::parse_deadzone("auto", 2);
   CHECK(message_of([&] {
-          (void)id::identify_logs(logs, {{"u1", ""}, {"u2", ""}}, {{"y", ""}}, options);
+          (void)wf::identify_logs(logs, {{"u1", ""}, {"u2", ""}}, {{"y", ""}}, options);
         }).find("needs a subspace method") != std::string::npos);
 }
 
@@ -355,39 +356,39 @@ TEST_CASE("dead zones: a fixed width is applied and stored; auto finds a known o
   MatrixXd m(1500, 2);
   m << u, id::simulate(g, id::apply_maps(truth, u), VectorXd::Zero(2));
   const TempFile file("deadzone.csv", to_csv(grid(1500, 0.01), m, {"u", "y"}));
-  const std::vector<id::PreparedLog> logs{
-      id::prepare_log(file.path.string(), csv_selection({"u"}, {"y"}), 0.01, {})};
-  id::WorkflowOptions options;
-  options.deadzone = id::parse_deadzone("0.3", 1);
-  const id::WorkflowResult fixed = id::identify_logs(logs, {{"u", ""}}, {{"y", ""}}, options);
+  const std::vector<wf::PreparedLog> logs{
+      wf::prepare_log(file.path.string(), csv_selection({"u"}, {"y"}), 0.01, {})};
+  wf::WorkflowOptions options;
+  options.deadzone = wf::parse_deadzone("0.3", 1);
+  const wf::WorkflowResult fixed = wf::identify_logs(logs, {{"u", ""}}, {{"y", ""}}, options);
   REQUIRE(fixed.chosen().model.is_hammerstein_wiener());
   CHECK(fixed.chosen().model.input_nonlinearity[0].upper == 0.3);
   CHECK(fixed.chosen().model.input_nonlinearity[0].lower == -0.3);
   CHECK(fixed.chosen().mean_fit > 99.9);
 
-  options.deadzone = id::parse_deadzone("auto", 1);
-  const id::WorkflowResult fitted = id::identify_logs(logs, {{"u", ""}}, {{"y", ""}}, options);
+  options.deadzone = wf::parse_deadzone("auto", 1);
+  const wf::WorkflowResult fitted = wf::identify_logs(logs, {{"u", ""}}, {{"y", ""}}, options);
   CHECK(fitted.chosen().method == "moesp + dead zone");
   CHECK(fitted.chosen().model.input_nonlinearity[0].upper == doctest::Approx(0.3).epsilon(0.01));
   CHECK(fitted.chosen().mean_fit > 99.0);
 
   // Without the dead zone the linear model is clearly worse on the same data.
   options.deadzone.clear();
-  CHECK(id::identify_logs(logs, {{"u", ""}}, {{"y", ""}}, options).chosen().mean_fit <
+  CHECK(wf::identify_logs(logs, {{"u", ""}}, {{"y", ""}}, options).chosen().mean_fit <
         fitted.chosen().mean_fit - 5.0);
 }
 
 TEST_CASE("presets by name carry appendix C's matrices and signal names") {
-  const eio::ModelFile yaw = id::preset_model("yaw2016");
+  const files::ModelFile yaw = wf::preset_model("yaw2016");
   CHECK(yaw.A.rows() == 6);
   CHECK(yaw.A(0, 0) == 0.9745);   // eq. C.1, first entry
   CHECK(yaw.B(2, 0) == 12.9892);  // eq. C.2
   CHECK(yaw.sample_time == 0.02);
   CHECK(yaw.inputs.at(1).name == "velocity");
   CHECK(yaw.outputs.at(0).name == "force");
-  const eio::ModelFile pitch = id::preset_model("pitch2016");
+  const files::ModelFile pitch = wf::preset_model("pitch2016");
   CHECK(pitch.B(0, 0) == 27203.0);  // eq. C.5, 2.7203 x 10^4
-  CHECK(message_of([] { (void)id::preset_model("roll"); }).find("unknown preset 'roll'") !=
+  CHECK(message_of([] { (void)wf::preset_model("roll"); }).find("unknown preset 'roll'") !=
         std::string::npos);
 }
 
@@ -395,21 +396,21 @@ TEST_CASE("real log: clamp-hits-01 on the 0.02 s grid" *
           doctest::skip(!endohaptics::test::has_shared_data("endowrist-2016"))) {
   const std::string path =
       endohaptics::test::shared_data("endowrist-2016/clamp-hits/clamp-hits-01.csv").string();
-  id::LogSelection sel;
+  wf::LogSelection sel;
   sel.inputs = {"current", "velocity"};
   sel.outputs = {"force"};
   // 1879 rows, the first 0.866 s before the rest (a gap): that lone row is dropped, the other
   // 19.1 s give 956 samples (numbers from endohaptics-identify on this file).
-  const id::PreparedLog log = id::prepare_log(path, sel, 0.02, {});
+  const wf::PreparedLog log = wf::prepare_log(path, sel, 0.02, {});
   CHECK(log.report.rows == 1879);
   CHECK(log.gaps == 1);
   CHECK(log.dropped_segments == 1);
   REQUIRE(log.segments.size() == 1);
   CHECK(log.samples() == 956);
-  CHECK(id::default_sample_time(path, sel) == 0.01001);  // median step, 6 digits
+  CHECK(wf::default_sample_time(path, sel) == 0.01001);  // median step, 6 digits
   // The appendix C yaw preset does not fit these clamp hits (fit < 0, see
   // docs/identification_results.md): x0 estimated, no preprocessing.
-  const id::FileComparison c = id::compare_log(id::preset_model("yaw2016"), log);
+  const wf::FileComparison c = wf::compare_log(wf::preset_model("yaw2016"), log);
   CHECK(c.fit[0] < 0.0);
   CHECK(c.correlation[0] > 0.0);
 }
@@ -419,22 +420,22 @@ TEST_CASE("real logs: a weighting that fails is skipped by --method best, not fa
   // Found in the clamp-hits study: on files 01, 02, 03, 06 at 0.02 s, 5 Hz low-pass, median
   // output offset, current -> force with a fitted dead zone, N4SID's model at the automatic
   // order makes the B, D, x0 regression overflow (fit_hammerstein_wiener's validation call).
-  id::LogSelection sel;
+  wf::LogSelection sel;
   sel.inputs = {"current"};
   sel.outputs = {"force"};
-  id::Preprocessing pre;
+  wf::Preprocessing pre;
   pre.cutoff = 5.0;
-  pre.output_offset = id::OffsetMode::median;
-  std::vector<id::PreparedLog> logs;
+  pre.output_offset = wf::OffsetMode::median;
+  std::vector<wf::PreparedLog> logs;
   for (const char* f : {"01", "02", "03", "06"}) {
     const std::string name = std::string("endowrist-2016/clamp-hits/clamp-hits-") + f + ".csv";
-    logs.push_back(id::prepare_log(endohaptics::test::shared_data(name).string(), sel, 0.02, pre));
+    logs.push_back(wf::prepare_log(endohaptics::test::shared_data(name).string(), sel, 0.02, pre));
   }
-  id::WorkflowOptions options;
+  wf::WorkflowOptions options;
   options.candidates = {id::Weighting::n4sid, id::Weighting::moesp, id::Weighting::cva};
-  options.deadzone = id::parse_deadzone("auto", 1);
-  const id::WorkflowResult r =
-      id::identify_logs(logs, {{"current", "A"}}, {{"force", "N"}}, options);
+  options.deadzone = wf::parse_deadzone("auto", 1);
+  const wf::WorkflowResult r =
+      wf::identify_logs(logs, {{"current", "A"}}, {{"force", "N"}}, options);
   REQUIRE(r.failures.size() == 1);
   CHECK(r.failures[0].starts_with("n4sid: "));
   CHECK(r.failures[0].find("overflowed") != std::string::npos);
@@ -443,6 +444,6 @@ TEST_CASE("real logs: a weighting that fails is skipped by --method best, not fa
   CHECK(r.chosen().method == "moesp + dead zone");
   options.candidates = {id::Weighting::n4sid};
   CHECK(message_of([&] {
-          (void)id::identify_logs(logs, {{"current", "A"}}, {{"force", "N"}}, options);
+          (void)wf::identify_logs(logs, {{"current", "A"}}, {{"force", "N"}}, options);
         }).starts_with("n4sid: "));
 }

@@ -10,7 +10,7 @@
 #include <chrono>
 #include <concepts>
 
-namespace endohaptics::teleop {
+namespace endohaptics {
 
 //! now() is monotonic; sleep_until(t) returns at or after t (never early, except on a stop).
 template <typename C>
@@ -55,4 +55,4 @@ class ManualClock {
 static_assert(Clock<SteadyClock>);
 static_assert(Clock<ManualClock>);
 
-}  // namespace endohaptics::teleop
+}  // namespace endohaptics
