@@ -24,11 +24,13 @@ concept Clock = requires(C& clock, std::chrono::nanoseconds t) {
 //! The monotonic system clock; sleeps with clock_nanosleep(TIMER_ABSTIME), so pacing uses
 //! absolute deadlines and never accumulates drift.
 struct SteadyClock {
+  //! Current CLOCK_MONOTONIC time (ns since an unspecified epoch).
   std::chrono::nanoseconds now() const noexcept {
     timespec ts{};
     ::clock_gettime(CLOCK_MONOTONIC, &ts);
     return std::chrono::seconds(ts.tv_sec) + std::chrono::nanoseconds(ts.tv_nsec);
   }
+  //! Sleeps until the absolute monotonic time `t` (ns); retries when interrupted by a signal.
   void sleep_until(std::chrono::nanoseconds t) const noexcept {
     const auto s = std::chrono::duration_cast<std::chrono::seconds>(t);
     timespec ts{static_cast<time_t>(s.count()), static_cast<long>((t - s).count())};
@@ -40,12 +42,16 @@ struct SteadyClock {
 //! Simulated time for tests: starts at `start`, moves only by advance() or sleep_until().
 class ManualClock {
  public:
+  //! Starts the simulated time at `start` (ns).
   explicit ManualClock(std::chrono::nanoseconds start = std::chrono::nanoseconds(0)) noexcept
       : now_(start) {}
+  //! Current simulated time (ns).
   std::chrono::nanoseconds now() const noexcept { return now_; }
+  //! Jumps to `t` (ns) if that is later than now; never moves backwards.
   void sleep_until(std::chrono::nanoseconds t) noexcept {
     if (t > now_) now_ = t;
   }
+  //! Moves the simulated time forward by `d` (ns).
   void advance(std::chrono::nanoseconds d) noexcept { now_ += d; }
 
  private:

@@ -30,6 +30,7 @@ struct PacingCounters {
 template <JointForceEstimator Estimator, endohaptics::Clock ClockT = endohaptics::SteadyClock>
 class PacedEstimator {
  public:
+  //! One value per EndoWrist motor, in motor order.
   using MotorVector = estimation::MotorVector;
 
   //! Precondition: period > 0, max_catch_up >= 1. `estimator` and `clock` must outlive this.
@@ -83,8 +84,11 @@ class PacedEstimator {
     held_.setZero();
   }
 
+  //! What the pacing did since construction.
   [[nodiscard]] const PacingCounters& counters() const noexcept { return counters_; }
+  //! The fixed-period estimator being paced.
   [[nodiscard]] Estimator& wrapped() noexcept { return *estimator_; }
+  //! The wrapped estimator's step period (ns).
   [[nodiscard]] std::chrono::nanoseconds period() const noexcept { return period_; }
 
  private:

@@ -65,26 +65,26 @@ class SteadyStateKalman {
   static_assert(Nm >= 1, "SteadyStateKalman needs at least one measurement (Nm >= 1)");
 
  public:
-  using ScalarType = typename Model::ScalarType;
-  static constexpr int states = Model::states;
-  static constexpr int inputs = Model::inputs;
-  static constexpr int outputs = Model::outputs;
-  static constexpr int measurements = Nm;
+  using ScalarType = typename Model::ScalarType;  //!< scalar type of the model
+  static constexpr int states = Model::states;    //!< state dimension
+  static constexpr int inputs = Model::inputs;    //!< input dimension
+  static constexpr int outputs = Model::outputs;  //!< model output dimension
+  static constexpr int measurements = Nm;         //!< measurement dimension
 
-  using State = Eigen::Matrix<ScalarType, states, 1>;
-  using Input = Eigen::Matrix<ScalarType, inputs, 1>;
-  using Output = Eigen::Matrix<ScalarType, outputs, 1>;
-  using Measurement = Eigen::Matrix<ScalarType, Nm, 1>;
-  using MatrixA = Eigen::Matrix<ScalarType, states, states>;
-  using MatrixB = Eigen::Matrix<ScalarType, states, inputs>;
-  using MatrixC = Eigen::Matrix<ScalarType, outputs, states>;
-  using MatrixD = Eigen::Matrix<ScalarType, outputs, inputs>;
-  using MeasurementC = Eigen::Matrix<ScalarType, Nm, states>;  //!< Cm
-  using MeasurementD = Eigen::Matrix<ScalarType, Nm, inputs>;  //!< Dm
-  using Covariance = Eigen::Matrix<ScalarType, states, states>;
+  using State = Eigen::Matrix<ScalarType, states, 1>;              //!< state vector x
+  using Input = Eigen::Matrix<ScalarType, inputs, 1>;              //!< input vector u
+  using Output = Eigen::Matrix<ScalarType, outputs, 1>;            //!< output vector y = C x + D u
+  using Measurement = Eigen::Matrix<ScalarType, Nm, 1>;            //!< z = Cm x + Dm u + v
+  using MatrixA = Eigen::Matrix<ScalarType, states, states>;       //!< state matrix A
+  using MatrixB = Eigen::Matrix<ScalarType, states, inputs>;       //!< input matrix B
+  using MatrixC = Eigen::Matrix<ScalarType, outputs, states>;      //!< output matrix C
+  using MatrixD = Eigen::Matrix<ScalarType, outputs, inputs>;      //!< feedthrough matrix D
+  using MeasurementC = Eigen::Matrix<ScalarType, Nm, states>;      //!< Cm
+  using MeasurementD = Eigen::Matrix<ScalarType, Nm, inputs>;      //!< Dm
+  using Covariance = Eigen::Matrix<ScalarType, states, states>;    //!< state error covariance (P)
   using ProcessNoise = Eigen::Matrix<ScalarType, states, states>;  //!< Q = cov(w)
   using MeasurementNoise = Eigen::Matrix<ScalarType, Nm, Nm>;      //!< R = cov(v)
-  using Gain = Eigen::Matrix<ScalarType, states, Nm>;
+  using Gain = Eigen::Matrix<ScalarType, states, Nm>;              //!< Kalman gain M
 
   //! Every model output is measured: Cm = C, Dm = D. Throws Error as `solve_filter_dare` does
   //! (bad Q or R, (A, C) not detectable, no convergence) or on a non-finite B or D.

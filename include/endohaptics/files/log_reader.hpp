@@ -75,9 +75,9 @@ enum class LogIssueKind : std::uint8_t {
 
 //! One recorded defect: 1-based line number in the file, kind, and what was found.
 struct LogIssue {
-  std::size_t line = 0;  //!< 1-based line in the file
-  LogIssueKind kind = LogIssueKind::non_numeric;
-  std::string detail;  //!< e.g. "field 3 (force): 'abc'"
+  std::size_t line = 0;                           //!< 1-based line in the file
+  LogIssueKind kind = LogIssueKind::non_numeric;  //!< what kind of defect
+  std::string detail;                             //!< e.g. "field 3 (force): 'abc'"
 };
 
 //! What a reader kept, dropped and repaired. Each dropped row is counted under one reason.
@@ -162,6 +162,7 @@ struct Log {
   Eigen::MatrixXd data;            //!< rows: samples, columns: signals in `names` order
   LogReport report;                //!< what the reader dropped, repaired, found
 
+  //! Number of samples (rows of `data`, entries of `time`).
   [[nodiscard]] Eigen::Index rows() const noexcept { return time.size(); }
 
   //! True for "time" and for every name in `names`.
@@ -653,8 +654,8 @@ struct Endowrist2016Options {
 //! Settings of `read_csv`.
 struct CsvOptions {
   LogReadOptions read;  //!< policies shared by the readers
-  //! ',', ';', '\t' or ' ' (runs of blanks/tabs); '\0': ';' if the header has one, else ',' if
-  //! it has one, else blanks.
+  //! ',', ';', `\t` (tab) or ' ' (runs of blanks/tabs); '\0': ';' if the header has one, else
+  //! ',' if it has one, else blanks.
   char separator = '\0';
   //! Column holding time in s; empty: the column named "time" if any, else time = row ordinal
   //! x sample_time (the ordinal counts dropped rows too, so a drop leaves a hole).

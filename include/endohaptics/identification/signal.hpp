@@ -89,6 +89,7 @@ struct UniformSegment {
   Eigen::Index first_source = 0;  //!< first source row covered
   Eigen::Index last_source = 0;   //!< last source row covered (inclusive)
 
+  //! Number of grid samples (rows of `data`).
   [[nodiscard]] Eigen::Index rows() const noexcept { return data.rows(); }
   //! The grid times, s.
   [[nodiscard]] Eigen::VectorXd time() const {

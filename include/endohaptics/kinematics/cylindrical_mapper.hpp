@@ -48,11 +48,12 @@ struct Cylindrical {
 //! What `map_position` did.
 template <typename Scalar = double>
 struct [[nodiscard]] PositionResult {
-  MapperStatus status = MapperStatus::ok;
-  std::uint8_t clamped_mask = 0;      //!< bit j: tool joint j was limited to its range
-  bool theta_held = false;            //!< r <= min_radius: theta is the last valid one
-  Cylindrical<Scalar> coordinates{};  //!< the (theta, r, z) used; meaningful only when ok
+  MapperStatus status = MapperStatus::ok;  //!< ok, or why the mapping was refused
+  std::uint8_t clamped_mask = 0;           //!< bit j: tool joint j was limited to its range
+  bool theta_held = false;                 //!< r <= min_radius: theta is the last valid one
+  Cylindrical<Scalar> coordinates{};       //!< the (theta, r, z) used; meaningful only when ok
 
+  //! True when `status` is ok (setpoints written).
   [[nodiscard]] constexpr bool ok() const noexcept { return status == MapperStatus::ok; }
   //! True when `joint` was limited to its range.
   [[nodiscard]] constexpr bool clamped(Motor joint) const noexcept {
@@ -62,9 +63,10 @@ struct [[nodiscard]] PositionResult {
 
 //! What `map_force` did.
 struct [[nodiscard]] ForceResult {
-  MapperStatus status = MapperStatus::ok;
+  MapperStatus status = MapperStatus::ok;  //!< ok, or why the mapping was refused
   bool limited = false;  //!< the force was scaled down to `force_limit` (direction kept)
 
+  //! True when `status` is ok (force written).
   [[nodiscard]] constexpr bool ok() const noexcept { return status == MapperStatus::ok; }
 };
 
@@ -72,8 +74,8 @@ struct [[nodiscard]] ForceResult {
 //! says which are from the worksheet, which are assumptions, and which units they assume).
 template <typename Scalar = double>
 struct CylindricalMapperConfig {
-  using Vector3 = Eigen::Matrix<Scalar, 3, 1>;
-  using Vector4 = Eigen::Matrix<Scalar, 4, 1>;
+  using Vector3 = Eigen::Matrix<Scalar, 3, 1>;  //!< per cylindrical axis
+  using Vector4 = Eigen::Matrix<Scalar, 4, 1>;  //!< per tool joint (index = Motor)
 
   Scalar a_roll = Scalar(0.7096);  //!< rad/rad: P_roll = a_roll theta + b_roll
   Scalar b_roll = Scalar(-1.108);  //!< rad
@@ -100,11 +102,11 @@ struct CylindricalMapperConfig {
 template <typename Scalar = double>
 class CylindricalMapper {
  public:
-  static constexpr int num_joints = 4;
-  using Config = CylindricalMapperConfig<Scalar>;
-  using Vector3 = Eigen::Matrix<Scalar, 3, 1>;
+  static constexpr int num_joints = 4;                       //!< EndoWrist tool joints (= motors)
+  using Config = CylindricalMapperConfig<Scalar>;            //!< eq. 5.8/5.9 parameters
+  using Vector3 = Eigen::Matrix<Scalar, 3, 1>;               //!< stylus position (m) or force (N)
   using MotorVector = Eigen::Matrix<Scalar, num_joints, 1>;  //!< motor order
-  using Coordinates = Cylindrical<Scalar>;
+  using Coordinates = Cylindrical<Scalar>;                   //!< (theta, r, z) of the stylus
 
   //! Validates `config`; throws endohaptics::Error naming the bad field and its value.
   explicit CylindricalMapper(const Config& config = Config{}) : config_(config) {
@@ -112,6 +114,7 @@ class CylindricalMapper {
     held_theta_ = config_.theta_neutral;
   }
 
+  //! The validated configuration.
   [[nodiscard]] const Config& config() const noexcept { return config_; }
 
   //! Eq. 5.9: stylus position (m, base frame) -> setpoints (rad, motor order), each limited to

@@ -57,13 +57,13 @@ class DhChain {
   static_assert(N >= 1 && N <= 32, "a DH chain has 1 to 32 joints");
 
  public:
-  static constexpr int dof = N;
-  using Row = DhRow<Scalar>;
-  static constexpr auto size = static_cast<std::size_t>(N);
-  using Rows = std::array<Row, size>;
-  using JointVector = Eigen::Matrix<Scalar, N, 1>;  //!< rad (revolute) or m (prismatic)
-  using Transform = Eigen::Transform<Scalar, 3, Eigen::Isometry>;
-  using Frames = std::array<Transform, size>;  //!< frames[i] = T_0^{i+1}
+  static constexpr int dof = N;                              //!< number of joints
+  using Row = DhRow<Scalar>;                                 //!< one DH row
+  static constexpr auto size = static_cast<std::size_t>(N);  //!< number of rows (= dof)
+  using Rows = std::array<Row, size>;                        //!< the DH table, base to tip
+  using JointVector = Eigen::Matrix<Scalar, N, 1>;           //!< rad (revolute) or m (prismatic)
+  using Transform = Eigen::Transform<Scalar, 3, Eigen::Isometry>;  //!< homogeneous transform (m)
+  using Frames = std::array<Transform, size>;                      //!< frames[i] = T_0^{i+1}
 
   //! Throws endohaptics::Error when a parameter is not finite (naming row, field and value).
   explicit DhChain(const Rows& rows) : rows_(rows) {
@@ -79,6 +79,7 @@ class DhChain {
     }
   }
 
+  //! The DH table, base to tip.
   [[nodiscard]] const Rows& rows() const noexcept { return rows_; }
 
   //! Eq. D.1 in closed form for one row at joint value q.

@@ -53,15 +53,20 @@ struct JointFriction {
   [[nodiscard]] static constexpr JointFriction simplified(Scalar level) noexcept {
     return {level, level, Scalar(0)};
   }
+  //! Member-wise equality.
   friend bool operator==(const JointFriction&, const JointFriction&) = default;
 };
 
 //! Table 5.2 presets (simplified model, Kc = Ks, F_mu = 0), in A. The roll value is doubtful:
 //! the 2016 analysis script and the logs give about 0.13 A (docs/models/friction_model.md).
 namespace friction_2016 {
+//! Roll: 0.7 A (doubtful, see above).
 inline constexpr JointFriction<double> roll = JointFriction<double>::simplified(0.7);
+//! Pitch: 0.17 A.
 inline constexpr JointFriction<double> pitch = JointFriction<double>::simplified(0.17);
+//! Yaw: 0.21 A.
 inline constexpr JointFriction<double> yaw = JointFriction<double>::simplified(0.21);
+//! Clamp: 0.20 A.
 inline constexpr JointFriction<double> clamp = JointFriction<double>::simplified(0.20);
 //! Joint order of `endowrist_2016_friction` (the row order of table 5.2).
 enum Joint : int { roll_joint = 0, pitch_joint = 1, yaw_joint = 2, clamp_joint = 3 };
@@ -86,12 +91,12 @@ class FrictionModel {
   static_assert(std::is_floating_point_v<Scalar>, "FrictionModel Scalar must be floating point");
 
  public:
-  static constexpr int joints = N;
-  using Vector = Eigen::Matrix<Scalar, N, 1>;
-  using Joint = JointFriction<Scalar>;
-  using Joints = std::array<Joint, static_cast<std::size_t>(N)>;
-  using Options = FrictionOptions<Scalar>;
-  using GateState = std::array<bool, static_cast<std::size_t>(N)>;
+  static constexpr int joints = N;             //!< number of joints
+  using Vector = Eigen::Matrix<Scalar, N, 1>;  //!< one value per joint
+  using Joint = JointFriction<Scalar>;         //!< friction constants of one joint
+  using Joints = std::array<Joint, static_cast<std::size_t>(N)>;  //!< constants of every joint
+  using Options = FrictionOptions<Scalar>;  //!< thresholds of the model and gate
+  using GateState = std::array<bool, static_cast<std::size_t>(N)>;  //!< per joint: gate open
 
   //! Throws Error when a constant is negative or not finite, standstill_velocity is negative or
   //! not finite, or release_fraction is outside (0, 1]; the message names joint, field, value.
@@ -260,6 +265,7 @@ struct FrictionDirectionFit {
   double coulomb_level = std::numeric_limits<double>::quiet_NaN();  //!< Kc, A (NaN: no fit)
   double viscous_gain = std::numeric_limits<double>::quiet_NaN();   //!< F_mu, A s/rad
   std::size_t samples = 0;  //!< sliding grid samples in this direction
+  //! True when the fit succeeded (`coulomb_level` is finite).
   [[nodiscard]] bool valid() const noexcept { return std::isfinite(coulomb_level); }
 };
 

@@ -50,16 +50,16 @@ template <LinearBlock Linear,
               PerChannel<Identity<typename Linear::ScalarType>, Linear::outputs>>
 class HammersteinWiener {
  public:
-  using LinearType = Linear;
-  using InputNonlinearity = InputNL;
-  using OutputNonlinearity = OutputNL;
-  using ScalarType = typename Linear::ScalarType;
-  static constexpr int states = Linear::states;
-  static constexpr int inputs = Linear::inputs;
-  static constexpr int outputs = Linear::outputs;
-  using State = typename Linear::State;
-  using Input = typename Linear::Input;
-  using Output = typename Linear::Output;
+  using LinearType = Linear;                       //!< the linear block (A, B, C, D)
+  using InputNonlinearity = InputNL;               //!< f, applied to u
+  using OutputNonlinearity = OutputNL;             //!< g, applied to the linear output
+  using ScalarType = typename Linear::ScalarType;  //!< scalar type of the linear block
+  static constexpr int states = Linear::states;    //!< state dimension
+  static constexpr int inputs = Linear::inputs;    //!< input dimension
+  static constexpr int outputs = Linear::outputs;  //!< output dimension
+  using State = typename Linear::State;            //!< state vector x
+  using Input = typename Linear::Input;            //!< input vector u (before f)
+  using Output = typename Linear::Output;          //!< output vector y (after g)
 
   //! Takes copies of the three blocks; the model starts from the linear block's current state.
   HammersteinWiener(Linear linear, InputNL input_nonlinearity, OutputNL output_nonlinearity)

@@ -33,6 +33,7 @@ struct HumanArmParameters {
   [[nodiscard]] constexpr Scalar static_compliance() const noexcept {
     return (k1 + k2) / (k1 * k2);
   }
+  //! Member-wise equality.
   friend bool operator==(const HumanArmParameters&, const HumanArmParameters&) = default;
 };
 
@@ -118,7 +119,7 @@ class HumanArmModel {
   static_assert(std::is_floating_point_v<Scalar>, "HumanArmModel Scalar must be floating point");
 
  public:
-  using Parameters = HumanArmParameters<Scalar>;
+  using Parameters = HumanArmParameters<Scalar>;   //!< figure 5.3 constants
   using Admittance = StateSpace<3, 1, 2, Scalar>;  //!< u = F_h; x = [x_m, x_h, v_h]; y = [x_m, v_m]
   using Impedance = StateSpace<2, 2, 1, Scalar>;   //!< u = [x_m, v_m]; x = [x_h, v_h]; y = F_h
 
@@ -129,6 +130,7 @@ class HumanArmModel {
         admittance_(discretize_zoh(human_arm_admittance(parameters_), sample_time)),
         impedance_(discretize_zoh(human_arm_impedance(parameters_), sample_time)) {}
 
+  //! The validated constants.
   [[nodiscard]] const Parameters& parameters() const noexcept { return parameters_; }
   [[nodiscard]] Scalar sample_time() const noexcept { return admittance_.sample_time(); }  //!< s
   //! Discrete admittance (its state is current only while ticking `apply_force`).
@@ -222,9 +224,9 @@ class HumanArmModel {
 template <typename Scalar = double>
 class HumanArm3 {
  public:
-  using Axis = HumanArmModel<Scalar>;
-  using Parameters = HumanArmParameters<Scalar>;
-  using Vector = Eigen::Matrix<Scalar, 3, 1>;
+  using Axis = HumanArmModel<Scalar>;             //!< the model of one axis
+  using Parameters = HumanArmParameters<Scalar>;  //!< figure 5.3 constants of one axis
+  using Vector = Eigen::Matrix<Scalar, 3, 1>;     //!< one value per axis (x, y, z)
 
   //! Same parameters on every axis. Throws Error like HumanArmModel.
   explicit HumanArm3(Scalar sample_time, const Parameters& parameters = {})

@@ -98,18 +98,18 @@ class StateSpace {
   static_assert(std::is_floating_point_v<Scalar>, "StateSpace Scalar must be floating point");
 
  public:
-  static constexpr int states = Nx;
-  static constexpr int inputs = Nu;
-  static constexpr int outputs = Ny;
-  using ScalarType = Scalar;
-  using State = Eigen::Matrix<Scalar, Nx, 1>;
-  using Input = Eigen::Matrix<Scalar, Nu, 1>;
-  using Output = Eigen::Matrix<Scalar, Ny, 1>;
-  using MatrixA = Eigen::Matrix<Scalar, Nx, Nx>;
-  using MatrixB = Eigen::Matrix<Scalar, Nx, Nu>;
-  using MatrixC = Eigen::Matrix<Scalar, Ny, Nx>;
-  using MatrixD = Eigen::Matrix<Scalar, Ny, Nu>;
-  using Eigenvalues = Eigen::Matrix<std::complex<Scalar>, Nx, 1>;
+  static constexpr int states = Nx;                                //!< state dimension
+  static constexpr int inputs = Nu;                                //!< input dimension
+  static constexpr int outputs = Ny;                               //!< output dimension
+  using ScalarType = Scalar;                                       //!< scalar type
+  using State = Eigen::Matrix<Scalar, Nx, 1>;                      //!< state vector x
+  using Input = Eigen::Matrix<Scalar, Nu, 1>;                      //!< input vector u
+  using Output = Eigen::Matrix<Scalar, Ny, 1>;                     //!< output vector y
+  using MatrixA = Eigen::Matrix<Scalar, Nx, Nx>;                   //!< state matrix A
+  using MatrixB = Eigen::Matrix<Scalar, Nx, Nu>;                   //!< input matrix B
+  using MatrixC = Eigen::Matrix<Scalar, Ny, Nx>;                   //!< output matrix C
+  using MatrixD = Eigen::Matrix<Scalar, Ny, Nu>;                   //!< feedthrough matrix D
+  using Eigenvalues = Eigen::Matrix<std::complex<Scalar>, Nx, 1>;  //!< eigenvalues of A
 
   //! Builds the model with zero initial state. Throws Error on a non-finite matrix entry or a
   //! sample time that is not finite and > 0 (the message names the entry and the value).
@@ -231,17 +231,17 @@ class ContinuousStateSpace {
                 "ContinuousStateSpace Scalar must be floating point");
 
  public:
-  static constexpr int states = Nx;
-  static constexpr int inputs = Nu;
-  static constexpr int outputs = Ny;
-  using ScalarType = Scalar;
-  using State = Eigen::Matrix<Scalar, Nx, 1>;
-  using Input = Eigen::Matrix<Scalar, Nu, 1>;
-  using Output = Eigen::Matrix<Scalar, Ny, 1>;
-  using MatrixA = Eigen::Matrix<Scalar, Nx, Nx>;
-  using MatrixB = Eigen::Matrix<Scalar, Nx, Nu>;
-  using MatrixC = Eigen::Matrix<Scalar, Ny, Nx>;
-  using MatrixD = Eigen::Matrix<Scalar, Ny, Nu>;
+  static constexpr int states = Nx;               //!< state dimension
+  static constexpr int inputs = Nu;               //!< input dimension
+  static constexpr int outputs = Ny;              //!< output dimension
+  using ScalarType = Scalar;                      //!< scalar type
+  using State = Eigen::Matrix<Scalar, Nx, 1>;     //!< state vector x
+  using Input = Eigen::Matrix<Scalar, Nu, 1>;     //!< input vector u
+  using Output = Eigen::Matrix<Scalar, Ny, 1>;    //!< output vector y
+  using MatrixA = Eigen::Matrix<Scalar, Nx, Nx>;  //!< state matrix A
+  using MatrixB = Eigen::Matrix<Scalar, Nx, Nu>;  //!< input matrix B
+  using MatrixC = Eigen::Matrix<Scalar, Ny, Nx>;  //!< output matrix C
+  using MatrixD = Eigen::Matrix<Scalar, Ny, Nu>;  //!< feedthrough matrix D
 
   //! Throws Error on a non-finite matrix entry (the message names the entry and the value).
   ContinuousStateSpace(const MatrixA& A, const MatrixB& B, const MatrixC& C, const MatrixD& D)

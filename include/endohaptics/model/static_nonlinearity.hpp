@@ -69,7 +69,7 @@ void require_ordered(Scalar lower, Scalar upper, const char* owner) {
 template <typename Scalar = double>
 struct Identity {
   static_assert(std::is_floating_point_v<Scalar>, "Identity Scalar must be floating point");
-  using ScalarType = Scalar;
+  using ScalarType = Scalar;  //!< scalar type of u and y
   //! Returns u unchanged.
   [[nodiscard]] constexpr Scalar apply(Scalar u) const noexcept { return u; }
 };
@@ -81,7 +81,7 @@ class Deadzone {
   static_assert(std::is_floating_point_v<Scalar>, "Deadzone Scalar must be floating point");
 
  public:
-  using ScalarType = Scalar;
+  using ScalarType = Scalar;  //!< scalar type of u and y
 
   //! Symmetric zero interval [-half_width, half_width]. Throws Error unless finite and >= 0.
   explicit Deadzone(Scalar half_width)
@@ -113,7 +113,7 @@ class Saturation {
   static_assert(std::is_floating_point_v<Scalar>, "Saturation Scalar must be floating point");
 
  public:
-  using ScalarType = Scalar;
+  using ScalarType = Scalar;  //!< scalar type of u and y
 
   //! Symmetric limits [-limit, limit]. Throws Error unless finite and >= 0.
   explicit Saturation(Scalar limit)
@@ -153,8 +153,8 @@ class PiecewiseLinear {
   static_assert(std::is_floating_point_v<Scalar>, "PiecewiseLinear Scalar must be floating point");
 
  public:
-  using ScalarType = Scalar;
-  static constexpr int max_points = MaxPoints;
+  using ScalarType = Scalar;                    //!< scalar type of u, y and the points
+  static constexpr int max_points = MaxPoints;  //!< capacity (points)
 
   //! Throws Error when the sizes differ, the count is outside [2, MaxPoints], a value is not
   //! finite or the breakpoints are not strictly increasing (the message names index and value).
@@ -196,6 +196,7 @@ class PiecewiseLinear {
   [[nodiscard]] std::span<const Scalar> values() const noexcept {
     return {y_.data(), static_cast<std::size_t>(count_)};
   }
+  //! What the map does outside the first and last breakpoints.
   [[nodiscard]] Extrapolation extrapolation() const noexcept { return extrapolation_; }
 
   //! Interpolates (O(log n), no allocation); NaN stays NaN.
@@ -227,10 +228,10 @@ class PerChannel {
   static_assert(N >= 0, "PerChannel channel count must be >= 0");
 
  public:
-  using ScalarType = typename NL::ScalarType;
-  using Channel = NL;
-  using Vector = Eigen::Matrix<ScalarType, N, 1>;
-  static constexpr int size = N;
+  using ScalarType = typename NL::ScalarType;      //!< scalar type of every channel
+  using Channel = NL;                              //!< the nonlinearity of one channel
+  using Vector = Eigen::Matrix<ScalarType, N, 1>;  //!< one value per channel
+  static constexpr int size = N;                   //!< number of channels
 
   //! Default: every channel default-constructed (only for default-constructible NL).
   PerChannel() requires std::default_initializable<NL> : channels_{} {}

@@ -48,22 +48,26 @@ enum class CodecStatus : std::uint8_t {
 //! What the sbRIO reports for N motors: rad, rad/s, A, and bit i set when motor i is active.
 template <int N>
 struct MotorState {
+  //! One value per motor.
   using Vector = Eigen::Matrix<double, N, 1>;
   Vector position = Vector::Zero();  //!< rad, motor side after gearing
   Vector velocity = Vector::Zero();  //!< rad/s
   Vector effort = Vector::Zero();    //!< motor current, A
   std::uint8_t active_mask = 0;      //!< bit i: motor i is enabled and following its setpoint
 
+  //! Member-wise equality.
   friend bool operator==(const MotorState&, const MotorState&) = default;
 };
 
 //! What the PC commands for N motors: position setpoints (rad) and bit i to enable motor i.
 template <int N>
 struct MotorSetpoint {
+  //! One value per motor.
   using Vector = Eigen::Matrix<double, N, 1>;
   Vector position = Vector::Zero();  //!< rad, motor side after gearing
   std::uint8_t enable_mask = 0;      //!< bit i: enable motor i
 
+  //! Member-wise equality.
   friend bool operator==(const MotorSetpoint&, const MotorSetpoint&) = default;
 };
 
@@ -75,17 +79,17 @@ class PacketCodec {
                 "the protocol carries one mask byte: 1 to 8 motors");
 
  public:
-  static constexpr int num_motors = NumMotors;
+  static constexpr int num_motors = NumMotors;  //!< motors per packet
   static constexpr std::size_t value_size = 4;  //!< float32
-  static constexpr std::size_t state_packet_size = 3 * NumMotors * value_size + 1;
-  static constexpr std::size_t setpoint_packet_size = NumMotors * value_size + 1;
+  static constexpr std::size_t state_packet_size = 3 * NumMotors * value_size + 1;  //!< bytes
+  static constexpr std::size_t setpoint_packet_size = NumMotors * value_size + 1;   //!< bytes
   //! Bits that may be set in a mask byte.
   static constexpr std::uint8_t valid_mask = static_cast<std::uint8_t>((1u << NumMotors) - 1u);
 
-  using State = MotorState<NumMotors>;
-  using Setpoint = MotorSetpoint<NumMotors>;
-  using StateBytes = std::array<std::byte, state_packet_size>;
-  using SetpointBytes = std::array<std::byte, setpoint_packet_size>;
+  using State = MotorState<NumMotors>;                                //!< decoded state packet
+  using Setpoint = MotorSetpoint<NumMotors>;                          //!< setpoint to encode
+  using StateBytes = std::array<std::byte, state_packet_size>;        //!< one state datagram
+  using SetpointBytes = std::array<std::byte, setpoint_packet_size>;  //!< one setpoint datagram
 
   //! Writes the setpoint packet. Refuses non-finite or float32-overflowing setpoints and mask
   //! bits >= NumMotors; `out` is untouched unless the result is `ok`.

@@ -39,6 +39,7 @@ struct EmulatorConfig {
   //! The rig is advanced in chunks of at most this (bounds the work of one poll after a pause).
   std::chrono::nanoseconds max_advance = std::chrono::seconds(1);
 
+  //! Throws Error when a duration is not > 0 (naming field and value).
   void validate() const {
     if (watchdog_timeout.count() <= 0) {
       ENDOHAPTICS_THROW(Error("EmulatorConfig: watchdog_timeout must be > 0 ns, got " +
@@ -59,6 +60,7 @@ enum class PollEvent : std::uint8_t {
   transport_error,  //!< the transport failed (receive or send)
 };
 
+//! Human-readable name of a poll event, for logs.
 [[nodiscard]] constexpr std::string_view to_string(PollEvent e) noexcept {
   switch (e) {
     case PollEvent::idle:
@@ -75,12 +77,12 @@ enum class PollEvent : std::uint8_t {
 
 //! Running totals (monotonic).
 struct EmulatorCounters {
-  std::uint64_t received = 0;       //!< valid setpoint packets
-  std::uint64_t answered = 0;       //!< state packets sent
-  std::uint64_t rejected = 0;       //!< invalid datagrams (wrong size, non-finite, bad mask)
-  std::uint64_t stale_dropped = 0;  //!< older datagrams drained unanswered (queue of one)
-  std::uint64_t transport_errors = 0;
-  std::uint64_t watchdog_trips = 0;  //!< times the 100 ms watchdog disabled the motors
+  std::uint64_t received = 0;          //!< valid setpoint packets
+  std::uint64_t answered = 0;          //!< state packets sent
+  std::uint64_t rejected = 0;          //!< invalid datagrams (wrong size, non-finite, bad mask)
+  std::uint64_t stale_dropped = 0;     //!< older datagrams drained unanswered (queue of one)
+  std::uint64_t transport_errors = 0;  //!< receive or send failures
+  std::uint64_t watchdog_trips = 0;    //!< times the 100 ms watchdog disabled the motors
 };
 
 //! The sbRIO side. `Transport` answers the sender of the newest datagram (UdpServerTransport,
@@ -90,7 +92,7 @@ template <transport::Transport Transport, typename Rig,
 requires EmulatedRig<Rig, N>
 class SbrioEmulator {
  public:
-  using Codec = protocol::PacketCodec<N>;
+  using Codec = protocol::PacketCodec<N>;  //!< the sbRIO protocol for N motors
 
   //! Parts are owned by the caller and must outlive the emulator. Throws Error on a bad config.
   SbrioEmulator(Transport& transport, Rig& rig, ClockT& clock, const EmulatorConfig& config = {})
@@ -151,12 +153,15 @@ class SbrioEmulator {
     run_until(now);
   }
 
+  //! Running totals since construction.
   [[nodiscard]] const EmulatorCounters& counters() const noexcept { return counters_; }
   //! The setpoint the rig follows now (enable bits cleared by the watchdog).
   [[nodiscard]] const typename Codec::Setpoint& setpoint() const noexcept { return setpoint_; }
   //! True while the watchdog holds the motors disabled.
   [[nodiscard]] bool watchdog_tripped() const noexcept { return tripped_; }
+  //! The emulated rig.
   [[nodiscard]] Rig& rig() noexcept { return *rig_; }
+  //! The emulated rig.
   [[nodiscard]] const Rig& rig() const noexcept { return *rig_; }
   //! Clock time up to which the rig has run.
   [[nodiscard]] std::chrono::nanoseconds time() const noexcept { return last_time_; }

@@ -34,6 +34,7 @@ struct OperatorScript {
   double release_time = 0.8;            //!< s, opening
   double arm_sample_time = 1e-3;        //!< s, the arm model's ZOH period
 
+  //! Duration of one open-close-hold-release cycle, s.
   [[nodiscard]] double cycle() const noexcept {
     return open_time + close_time + hold_time + release_time;
   }
@@ -95,6 +96,7 @@ class ScriptedOperator {
         start_(clock.now()),
         next_step_(start_) {}
 
+  //! Steps the arm up to the clock's now, writes the stylus position (m), no buttons; ok.
   teleop::DeviceStatus read(teleop::StylusSample& sample) noexcept {
     const auto now = clock_->now();
     int steps = 0;
@@ -111,6 +113,7 @@ class ScriptedOperator {
     return teleop::DeviceStatus::ok;
   }
 
+  //! Force (N) on the hand from now on; a non-finite force is refused (zero force, error).
   teleop::DeviceStatus command_force(const Eigen::Vector3d& force) noexcept {
     if (!force.allFinite()) {
       force_.setZero();
@@ -121,11 +124,13 @@ class ScriptedOperator {
   }
 
   [[nodiscard]] const Eigen::Vector3d& force() const noexcept { return force_; }  //!< N, last
+  //! Stylus position returned by the last read(), m.
   [[nodiscard]] const Eigen::Vector3d& position() const noexcept { return last_position_; }
   //! Hand's intended position now (without the arm's response), m.
   [[nodiscard]] Eigen::Vector3d intent() const noexcept {
     return script_.intent(seconds(clock_->now()));
   }
+  //! The validated script.
   [[nodiscard]] const OperatorScript& script() const noexcept { return script_; }
 
   static constexpr int max_catch_up = 100;  //!< arm steps per read at most

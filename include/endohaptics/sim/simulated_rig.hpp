@@ -116,10 +116,10 @@ struct ContactParameters {
 //! Everything about one joint.
 template <typename Scalar = double>
 struct JointConfig {
-  MotorParameters<Scalar> motor;
-  TransmissionParameters<Scalar> transmission;
-  ControllerParameters<Scalar> controller;
-  ContactParameters<Scalar> contact;
+  MotorParameters<Scalar> motor;                //!< motor, gearhead and encoder
+  TransmissionParameters<Scalar> transmission;  //!< tendon, play, inertia, friction
+  ControllerParameters<Scalar> controller;      //!< table 5.3 control cascade
+  ContactParameters<Scalar> contact;            //!< contact environment
 };
 
 //! The whole rig: per-joint parameters (motor order roll, pitch, clamp1, clamp2) and the rates.
@@ -128,6 +128,7 @@ struct RigConfig {
   static_assert(N >= 1 && N <= 8, "the sbRIO protocol carries 1 to 8 motors");
   static_assert(std::is_floating_point_v<Scalar>, "RigConfig Scalar must be floating point");
 
+  //! Per-joint parameters, motor order.
   std::array<JointConfig<Scalar>, static_cast<std::size_t>(N)> joints{};
   Scalar position_rate = Scalar(2000.0);  //!< Hz, FPGA P position loop and sbRIO sampling
   Scalar speed_rate = Scalar(5360.0);     //!< Hz, ESCON PI speed loop
@@ -317,6 +318,7 @@ template <int N = 4, typename Scalar = double>
 //! The true (unmeasurable) signals of the rig, per joint.
 template <int N = 4, typename Scalar = double>
 struct RigTruth {
+  //! One value per joint, motor order.
   using Vector = Eigen::Matrix<Scalar, N, 1>;
   Vector joint_position = Vector::Zero();  //!< rad (gear-output coordinates, "motor side")
   Vector motor_velocity = Vector::Zero();  //!< rad/s (gear output)
@@ -331,8 +333,8 @@ class SimulatedRig {
   static_assert(std::is_floating_point_v<Scalar>, "SimulatedRig Scalar must be floating point");
 
  public:
-  using Config = RigConfig<N, Scalar>;
-  using Truth = RigTruth<N, Scalar>;
+  using Config = RigConfig<N, Scalar>;  //!< rig parameters
+  using Truth = RigTruth<N, Scalar>;    //!< true signals per joint
   //! Longest duration one advance() accepts, s (bounds the work of one call).
   static constexpr double max_advance_seconds = 1e6;
 

@@ -514,6 +514,7 @@ struct FileComparison {
 
 //! Dead zone on one input: none, fitted jointly with the linear block, or of a given half width.
 struct DeadzoneSetting {
+  //! No dead zone, fitted jointly with the linear block, or fixed at half width `width`.
   enum class Mode : std::uint8_t { none, fit, fixed };
   Mode mode = Mode::none;  //!< what to do on this input
   double width = 0.0;      //!< half width for `fixed`, input units (symmetric: [-w, w])
@@ -581,6 +582,7 @@ struct WorkflowResult {
   std::size_t best = 0;                    //!< index of the chosen one (best_candidate)
   std::vector<std::string> failures;       //!< "method: message" of candidates that failed
 
+  //! The candidate at index `best`; throws std::out_of_range if `best` is out of range.
   [[nodiscard]] const CandidateModel& chosen() const { return candidates.at(best); }
 };
 
