@@ -1,106 +1,260 @@
-// A Geomagic Touch through the OpenHaptics HD API, as a teleop::HapticDevice. Compiled only when
-// the OpenHaptics SDK is found (CMake: ENDOHAPTICS_OPENHAPTICS_ROOT or the default /usr paths;
-// see docs/rig.md). The HD servo loop (1 kHz, its own thread, hdScheduleAsynchronous) reads
-// HD_CURRENT_POSITION and writes HD_CURRENT_FORCE; it exchanges them with the TeleopLoop thread
-// through lock-free atomics only. Frames: the Touch's (x right, y up, z towards the user, mm) is
-// turned into the library's base frame (x right, y away from the user, z up, m).
+//! @file
+//! A Geomagic Touch through the OpenHaptics HD API, as a teleop::HapticDevice. Built into the
+//! bridge (`--device openhaptics`) only when CMake finds the SDK (docs/rig.md); always built by
+//! the tests against the HD stand-in in tests/openhaptics_standin. Same HD calls either way.
 #pragma once
 
 #include <HD/hd.h>
 
 #include <Eigen/Core>
+#include <array>
 #include <atomic>
+#include <charconv>
+#include <cstdint>
 #include <endohaptics/core/error.hpp>
 #include <endohaptics/teleop/haptic_device.hpp>
 #include <string>
 
+// Frames and units. The HD API reports HD_CURRENT_POSITION in mm and takes HD_CURRENT_FORCE in N,
+// both in the Touch's frame: x right, y up, z towards the user (right-handed; origin where the
+// driver puts it, as far as we know in the workspace, not at the device base). The library's base
+// frame (StylusSample, the CylindricalMapper) is x right, y away from the user, z up, in m and N:
+//     position_base = (x, -z, y)_Touch / 1000        force_Touch = (Fx, Fz, -Fy)_base
+// a proper rotation (det +1) about x, the same one for position and force, so the force the
+// operator feels does the same work along a stylus motion in both frames. No origin shift is
+// applied: docs/models/cylindrical_mapper.md expects the origin at the device base (its 2016
+// coefficients put the clamp and pitch zero crossings about 0.13 m from it); that disagreement is
+// open, see docs/rig.md.
+//
+// Threads. The HD servo loop (hdScheduleAsynchronous, highest priority, ~1 kHz, the SDK's thread)
+// reads the stylus and writes the force inside hdBeginFrame/hdEndFrame. It exchanges them with the
+// TeleopLoop thread through two wait-free triple buffers (LatestValue): no lock, no allocation,
+// the newest value wins, a sample is never torn. read() and command_force() are for one thread
+// (the loop's); constructor and destructor for the owner.
+//
+// Errors. hdInitDevice or another set-up call failing throws endohaptics::Error with the HD text
+// and code, after undoing what was done. While the Touch needs calibration read() is not_ready and
+// no force is sent; calibrations the SDK can finish alone (auto, or inkwell once the stylus is in
+// the inkwell) are requested with hdUpdateCalibration. Any HD error in a servo frame (hdGetError)
+// is final: force output off, the servo callback ends, read() and command_force() return
+// DeviceStatus::error from then on.
+
 namespace bridge {
 
-class OpenHapticsDevice {
+//! Touch frame (x right, y up, z towards the user; mm) to the base frame (x right, y away from
+//! the user, z up; m).
+[[nodiscard]] inline Eigen::Vector3d touch_to_base_position(const HDdouble (&p_mm)[3]) noexcept {
+  return {p_mm[0] * 1e-3, -p_mm[2] * 1e-3, p_mm[1] * 1e-3};
+}
+
+//! Base-frame force (N) to the Touch frame (N): the inverse rotation of touch_to_base_position.
+[[nodiscard]] inline std::array<HDdouble, 3> base_to_touch_force(
+    const Eigen::Vector3d& f) noexcept {
+  return {f.x(), f.z(), -f.y()};
+}
+
+//! Hands the newest value from one producer thread to one consumer thread (a triple buffer):
+//! wait-free on both sides, no allocation, never torn; values the consumer did not take in time
+//! are overwritten (the newest wins).
+template <typename T>
+class LatestValue {
  public:
-  //! Opens the default device, enables force output with ramping, starts the servo loop.
-  //! Throws endohaptics::Error with the HD error text on failure.
-  OpenHapticsDevice() {
-    device_ = hdInitDevice(HD_DEFAULT_DEVICE);
-    check("hdInitDevice");
-    hdEnable(HD_FORCE_OUTPUT);
-    hdEnable(HD_FORCE_RAMPING);  // the device ramps force in after a (re)start, not a step
-    check("hdEnable");
-    callback_ =
-        hdScheduleAsynchronous(&OpenHapticsDevice::servo, this, HD_DEFAULT_SCHEDULER_PRIORITY);
-    hdStartScheduler();
-    check("hdStartScheduler");
+  //! Producer only: makes `value` the newest.
+  void publish(const T& value) noexcept {
+    slots_[back_] = value;
+    back_ = middle_.exchange(back_ | kFresh, std::memory_order_acq_rel) & kIndex;
   }
 
-  ~OpenHapticsDevice() {
-    for (auto& f : force_) f.store(0.0);
-    hdStopScheduler();
-    hdUnschedule(callback_);
-    hdDisableDevice(device_);
-  }
-
-  OpenHapticsDevice(const OpenHapticsDevice&) = delete;
-  OpenHapticsDevice& operator=(const OpenHapticsDevice&) = delete;
-
-  endohaptics::teleop::DeviceStatus read(endohaptics::teleop::StylusSample& sample) noexcept {
-    if (failed_.load(std::memory_order_acquire)) return endohaptics::teleop::DeviceStatus::error;
-    if (!fresh_.load(std::memory_order_acquire))
-      return endohaptics::teleop::DeviceStatus::not_ready;
-    sample.position = Eigen::Vector3d(position_[0].load(std::memory_order_relaxed),
-                                      position_[1].load(std::memory_order_relaxed),
-                                      position_[2].load(std::memory_order_relaxed));
-    sample.buttons = static_cast<std::uint8_t>(buttons_.load(std::memory_order_relaxed));
-    return endohaptics::teleop::DeviceStatus::ok;
-  }
-
-  endohaptics::teleop::DeviceStatus command_force(const Eigen::Vector3d& f) noexcept {
-    if (failed_.load(std::memory_order_acquire)) return endohaptics::teleop::DeviceStatus::error;
-    for (int i = 0; i < 3; ++i) force_[i].store(f[i], std::memory_order_relaxed);
-    return endohaptics::teleop::DeviceStatus::ok;
+  //! Consumer only: copies the newest value published into `out` (again the same one if nothing
+  //! newer came); false, `out` untouched, if nothing was ever published.
+  bool take(T& out) noexcept {
+    if ((middle_.load(std::memory_order_relaxed) & kFresh) != 0u) {
+      front_ = middle_.exchange(front_, std::memory_order_acq_rel) & kIndex;
+      has_value_ = true;
+    }
+    if (!has_value_) return false;
+    out = slots_[front_];
+    return true;
   }
 
  private:
+  static constexpr unsigned kIndex = 3u;  // slot index bits of middle_
+  static constexpr unsigned kFresh = 4u;  // middle_ holds a value the consumer has not taken
+  static_assert(std::atomic<unsigned>::is_always_lock_free);
+
+  T slots_[3]{};
+  std::atomic<unsigned> middle_{1u};  // the slot between the two sides, and kFresh
+  unsigned back_ = 0u;                // producer's slot
+  unsigned front_ = 2u;               // consumer's slot
+  bool has_value_ = false;            // consumer only
+};
+
+//! A Geomagic Touch as a teleop::HapticDevice (frames, threads and errors: see the file comment).
+class OpenHapticsDevice {
+ public:
+  //! Opens the default device, enables force output with ramping, schedules the servo callback
+  //! and starts the scheduler. Throws endohaptics::Error with the HD error text on failure, after
+  //! undoing what was already done.
+  OpenHapticsDevice() {
+    device_ = hdInitDevice(HD_DEFAULT_DEVICE);
+    check("hdInitDevice");
+    try {
+      HDint styles = 0;
+      hdGetIntegerv(HD_CALIBRATION_STYLE, &styles);
+      check("hdGetIntegerv(HD_CALIBRATION_STYLE)");
+      // What the servo loop may finish alone: auto, else inkwell (once the stylus is in it). An
+      // encoder reset needs the arm held at its reset position: left to the vendor's tools.
+      if ((styles & HD_CALIBRATION_AUTO) != 0) {
+        calibration_style_ = HD_CALIBRATION_AUTO;
+      } else if ((styles & HD_CALIBRATION_INKWELL) != 0) {
+        calibration_style_ = HD_CALIBRATION_INKWELL;
+      }
+      hdEnable(HD_FORCE_OUTPUT);
+      check("hdEnable(HD_FORCE_OUTPUT)");
+      hdEnable(HD_FORCE_RAMPING);  // the device ramps force in after a (re)start, not a step
+      check("hdEnable(HD_FORCE_RAMPING)");
+      servo_ = hdScheduleAsynchronous(&OpenHapticsDevice::servo, this, HD_MAX_SCHEDULER_PRIORITY);
+      check("hdScheduleAsynchronous");
+      scheduled_ = true;
+      hdStartScheduler();
+      stop_scheduler_ = true;  // stopped on the way out even if the start reported an error
+      check("hdStartScheduler");
+      running_ = true;
+    } catch (...) {
+      shutdown();
+      throw;
+    }
+  }
+
+  //! Sends zero force, stops the scheduler, unschedules the servo callback, disables the device.
+  ~OpenHapticsDevice() { shutdown(); }
+
+  OpenHapticsDevice(const OpenHapticsDevice&) = delete;
+  OpenHapticsDevice& operator=(const OpenHapticsDevice&) = delete;
+  OpenHapticsDevice(OpenHapticsDevice&&) = delete;
+  OpenHapticsDevice& operator=(OpenHapticsDevice&&) = delete;
+
+  //! The newest stylus sample (base frame, m). not_ready before the first servo frame and while
+  //! the Touch needs calibration; error after an HD error. Wait-free, no allocation.
+  endohaptics::teleop::DeviceStatus read(endohaptics::teleop::StylusSample& sample) noexcept {
+    using endohaptics::teleop::DeviceStatus;
+    if (failed_.load(std::memory_order_acquire)) return DeviceStatus::error;
+    if (calibration_.load(std::memory_order_acquire) != HD_CALIBRATION_OK) {
+      return DeviceStatus::not_ready;
+    }
+    return samples_.take(sample) ? DeviceStatus::ok : DeviceStatus::not_ready;
+  }
+
+  //! Sets the force (base frame, N) the servo loop sends from its next frame on; a non-finite
+  //! force is sent as zero. error after an HD error. Wait-free, no allocation.
+  endohaptics::teleop::DeviceStatus command_force(const Eigen::Vector3d& force) noexcept {
+    using endohaptics::teleop::DeviceStatus;
+    if (failed_.load(std::memory_order_acquire)) return DeviceStatus::error;
+    forces_.publish(force.allFinite() ? base_to_touch_force(force) : std::array<HDdouble, 3>{});
+    return DeviceStatus::ok;
+  }
+
+  //! hdCheckCalibration in the newest servo frame (0 before the first frame).
+  [[nodiscard]] HDenum calibration_status() const noexcept {
+    return calibration_.load(std::memory_order_acquire);
+  }
+
+  //! The HD error that stopped the servo loop; HD_SUCCESS while it runs.
+  [[nodiscard]] HDerror error_code() const noexcept {
+    return error_code_.load(std::memory_order_acquire);
+  }
+
+ private:
+  // The servo loop: one frame per scheduler tick, on the HD scheduler thread.
   static HDCallbackCode HDCALLBACK servo(void* self_ptr) {
     auto* self = static_cast<OpenHapticsDevice*>(self_ptr);
     hdBeginFrame(self->device_);
-    HDdouble p[3];
+    HDdouble position[3] = {0.0, 0.0, 0.0};
     HDint buttons = 0;
-    hdGetDoublev(HD_CURRENT_POSITION, p);
+    hdGetDoublev(HD_CURRENT_POSITION, position);
     hdGetIntegerv(HD_CURRENT_BUTTONS, &buttons);
-    // Touch (x right, y up, z towards the user, mm) -> base (x right, y away, z up, m).
-    self->position_[0].store(p[0] * 1e-3, std::memory_order_relaxed);
-    self->position_[1].store(-p[2] * 1e-3, std::memory_order_relaxed);
-    self->position_[2].store(p[1] * 1e-3, std::memory_order_relaxed);
-    self->buttons_.store(buttons, std::memory_order_relaxed);
-    const HDdouble f[3] = {self->force_[0].load(std::memory_order_relaxed),
-                           self->force_[2].load(std::memory_order_relaxed),
-                           -self->force_[1].load(std::memory_order_relaxed)};
-    hdSetDoublev(HD_CURRENT_FORCE, f);
+    const HDenum calibration = hdCheckCalibration();
+    std::array<HDdouble, 3> force{0.0, 0.0, 0.0};
+    if (calibration == HD_CALIBRATION_OK && !self->stopping_.load(std::memory_order_acquire)) {
+      self->forces_.take(force);  // stays zero until the loop commands one
+    }
+    hdSetDoublev(HD_CURRENT_FORCE, force.data());
     hdEndFrame(self->device_);
-    self->fresh_.store(true, std::memory_order_release);
+    if (calibration == HD_CALIBRATION_NEEDS_UPDATE && self->calibration_style_ != 0) {
+      hdUpdateCalibration(self->calibration_style_);
+    }
+
     const HDErrorInfo error = hdGetError();
     if (HD_DEVICE_ERROR(error)) {
+      hdDisable(HD_FORCE_OUTPUT);
+      self->error_code_.store(error.errorCode, std::memory_order_release);
       self->failed_.store(true, std::memory_order_release);  // the loop sees DeviceStatus::error
       return HD_CALLBACK_DONE;
     }
+    if (calibration == HD_CALIBRATION_OK) {
+      endohaptics::teleop::StylusSample sample;
+      sample.position = touch_to_base_position(position);
+      sample.buttons = static_cast<std::uint8_t>(buttons & 0xff);
+      self->samples_.publish(sample);
+    }
+    self->calibration_.store(calibration, std::memory_order_release);
     return HD_CALLBACK_CONTINUE;
   }
 
-  static void check(const char* what) {
-    const HDErrorInfo error = hdGetError();
-    if (HD_DEVICE_ERROR(error)) {
-      throw endohaptics::Error(std::string("OpenHaptics: ") + what +
-                               " failed: " + hdGetErrorString(error.errorCode));
+  // One frame with zero force, run synchronously before the scheduler stops.
+  static HDCallbackCode HDCALLBACK zero_force(void* self_ptr) {
+    auto* self = static_cast<OpenHapticsDevice*>(self_ptr);
+    const HDdouble zero[3] = {0.0, 0.0, 0.0};
+    hdBeginFrame(self->device_);
+    hdSetDoublev(HD_CURRENT_FORCE, zero);
+    hdEndFrame(self->device_);
+    return HD_CALLBACK_DONE;
+  }
+
+  // Undoes the constructor's steps that were done, in the SDK examples' order.
+  void shutdown() noexcept {
+    if (running_) {
+      stopping_.store(true, std::memory_order_release);  // the servo sends zero from now on
+      hdScheduleSynchronous(&OpenHapticsDevice::zero_force, this, HD_DEFAULT_SCHEDULER_PRIORITY);
+    }
+    if (stop_scheduler_) hdStopScheduler();
+    if (scheduled_) hdUnschedule(servo_);
+    hdDisableDevice(device_);
+    // Leave no error of ours on the HD error stack for the next user of the API.
+    for (int i = 0; i < 64 && HD_DEVICE_ERROR(hdGetError()); ++i) {
     }
   }
 
+  // Throws if the HD API reported an error since the last check.
+  static void check(const char* what) {
+    const HDErrorInfo error = hdGetError();
+    if (!HD_DEVICE_ERROR(error)) return;
+    throw endohaptics::Error(std::string("OpenHaptics: ") + what +
+                             " failed: " + hdGetErrorString(error.errorCode) + " (HD error 0x" +
+                             hex(error.errorCode) + ", internal " +
+                             std::to_string(error.internalErrorCode) + ")");
+  }
+
+  static std::string hex(HDerror code) {
+    char text[16] = {};
+    const auto end = std::to_chars(text, text + sizeof(text), code, 16).ptr;
+    std::string digits(text, end);
+    return std::string(digits.size() < 4 ? 4 - digits.size() : 0, '0') + digits;
+  }
+
   HHD device_ = HD_INVALID_HANDLE;
-  HDSchedulerHandle callback_ = 0;
-  std::atomic<double> position_[3] = {0.0, 0.0, 0.0};
-  std::atomic<double> force_[3] = {0.0, 0.0, 0.0};
-  std::atomic<int> buttons_{0};
-  std::atomic<bool> fresh_{false};
+  HDSchedulerHandle servo_ = 0;
+  bool scheduled_ = false;        // hdUnschedule(servo_) on the way out
+  bool stop_scheduler_ = false;   // hdStopScheduler on the way out
+  bool running_ = false;          // the scheduler started: synchronous calls return
+  HDenum calibration_style_ = 0;  // 0: the servo loop never calibrates by itself
+  LatestValue<endohaptics::teleop::StylusSample> samples_;  // servo -> loop
+  LatestValue<std::array<HDdouble, 3>> forces_;             // loop -> servo, Touch frame
+  std::atomic<HDenum> calibration_{0};
+  std::atomic<HDerror> error_code_{HD_SUCCESS};
   std::atomic<bool> failed_{false};
+  std::atomic<bool> stopping_{false};
+  static_assert(std::atomic<HDenum>::is_always_lock_free && std::atomic<bool>::is_always_lock_free);
 };
 
 }  // namespace bridge
