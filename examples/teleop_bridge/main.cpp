@@ -53,14 +53,11 @@ struct Options {
   double busy_wait_us = 0.0;
 };
 
-// One second of the loop, summed up on the loop thread (no allocation) for the printer thread.
+// The end of one second of the loop: a ~100-byte copy made on the loop thread (no allocation,
+// no LoopStats of its own); the printer thread turns two of them into the second's figures.
 struct Window {
   double t = 0.0;  // s since start
-  double rate = 0.0;
-  double period_error_p99 = 0.0;  // s
-  double round_trip_mean = 0.0;   // s
-  double loss_percent = 0.0;
-  std::uint64_t decode_errors = 0;
+  tp::LoopSnapshot stats;
   std::uint64_t link_losses = 0;
   std::uint64_t recoveries = 0;
   tp::LinkState link = tp::LinkState::waiting;
@@ -129,12 +126,6 @@ int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& o
   loop_config.safety = cfg.safety;
   tp::TeleopLoop loop(transport, device, paced, mapper, clock, loop_config);
 
-  // Timer slack 1 ns always (Linux's 50 us default is 50 us of lateness on every period);
-  // SCHED_FIFO, pinning and mlockall when asked.
-  const auto realtime =
-      tp::apply_realtime({opt.fifo_priority, opt.cpu, opt.fifo_priority > 0, /*slack*/ 1});
-  for (const auto& m : realtime.messages) fmt::print("bridge: realtime: {}\n", m);
-
   // Per-tick log and per-second windows leave the loop thread through lock-free rings.
   std::unique_ptr<tp::TickRecorder> recorder;
   std::FILE* log = nullptr;
@@ -146,14 +137,21 @@ int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& o
   }
   boost::lockfree::spsc_queue<Window> windows(64);
   std::atomic<bool> done{false};
+  // Started before apply_realtime and reset explicitly: the writer never runs SCHED_FIFO or on
+  // the loop's CPU.
   std::thread writer([&] {
-    auto print_window = [](const Window& w) {
+    for (const auto& m : tp::leave_realtime()) fmt::print("bridge: log writer: {}\n", m);
+    tp::LoopSnapshot previous;
+    auto print_window = [&previous](const Window& w) {
+      const tp::LoopWindow s = w.stats.since(previous);
+      previous = w.stats;
       fmt::print(
-          "bridge: t {:5.1f} s  rate {:7.1f} Hz  period err p99 {:6.1f} us  round trip {:6.1f} us"
-          "  loss {:6.3f} %  decode errors {}  link {}  (lost {}, recovered {})  clamp1 {:+.2f} "
-          "N\n",
-          w.t, w.rate, w.period_error_p99 * 1e6, w.round_trip_mean * 1e6, w.loss_percent,
-          w.decode_errors, to_string(w.link), w.link_losses, w.recoveries, w.clamp_force);
+          "bridge: t {:5.1f} s  rate {:7.1f} Hz  period err mean {:6.1f} us  deadline misses {}"
+          "  round trip {:6.1f} us  loss {:6.3f} %  decode errors {}  link {}  (lost {}, "
+          "recovered {})  clamp1 {:+.2f} N\n",
+          w.t, s.rate, s.period_error_mean * 1e6, s.deadline_misses, s.round_trip_mean * 1e6,
+          s.loss_percent, s.decode_errors, to_string(w.link), w.link_losses, w.recoveries,
+          w.clamp_force);
     };
     for (;;) {
       const bool last = done.load();
@@ -167,6 +165,12 @@ int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& o
     }
   });
 
+  // Timer slack 1 ns always (Linux's 50 us default is 50 us of lateness on every period);
+  // SCHED_FIFO, pinning and mlockall when asked.
+  const auto realtime =
+      tp::apply_realtime({opt.fifo_priority, opt.cpu, opt.fifo_priority > 0, /*slack*/ 1});
+  for (const auto& m : realtime.messages) fmt::print("bridge: realtime: {}\n", m);
+
   fmt::print("bridge: sbRIO {}:{}, rate {}, device {}, clamp model {} (paced at 1 kHz)\n", host,
              port, opt.rate == "max" ? "max" : opt.rate + " Hz", opt.device,
              cfg.clamp_model.empty() ? "appendix C yaw (2016)" : cfg.clamp_model);
@@ -175,31 +179,21 @@ int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& o
   const auto end = opt.duration > 0 ? start + std::chrono::duration_cast<nanoseconds>(
                                                   std::chrono::duration<double>(opt.duration))
                                     : nanoseconds::max();
-  tp::LoopStats window(loop_config.period);
   auto next_window = start + std::chrono::seconds(1);
-  std::uint64_t decode_errors_before = 0;
   loop.run([&] { return g_stop.load(std::memory_order_relaxed) || clock.now() >= end; },
            [&](const tp::TickResult& r) {
              const auto now = clock.now();
              if (recorder) (void)recorder->push(tp::TickRecord::from(r, now));
-             window.record_tick_start(now);
-             window.record_exchange(r.exchange, r.round_trip, 0);
              if (now >= next_window) {
                next_window += std::chrono::seconds(1);
                Window w;
                w.t = std::chrono::duration<double>(now - start).count();
-               w.rate = window.rate();
-               w.period_error_p99 = window.period_error().quantile(0.99);
-               w.round_trip_mean = window.round_trip().mean();
-               w.loss_percent = window.loss_percent();
-               w.decode_errors = loop.stats().decode_errors() - decode_errors_before;
-               decode_errors_before = loop.stats().decode_errors();
+               w.stats = loop.stats().snapshot();
                w.link_losses = loop.watchdog().link_losses();
                w.recoveries = loop.watchdog().recoveries();
                w.link = r.link;
                w.clamp_force = r.joint_force[2];
                (void)windows.push(w);
-               window.reset();
              }
            },
            nanoseconds(static_cast<std::int64_t>(opt.busy_wait_us * 1e3)));

@@ -110,14 +110,13 @@ std::string message_of(auto&& construct) {
 
 }  // namespace
 
-TEST_CASE("a model sample time that differs from the loop period is refused without a policy") {
+TEST_CASE("a model sample time that differs from the loop period is refused by rate::SameRate") {
   // Appendix C models: 0.02 s; loop 1 kHz. The roll model is memoryless (C = 0) and exempt, so
   // the first joint named is the pitch.
   const std::string what = message_of([] { (void)ForceEstimator<rate::SameRate>(); });
   CHECK(what.find("pitch model's sample time 0.02 s differs from the loop period 0.001 s") !=
         std::string::npos);
   CHECK(what.find("rate::Decimate or rate::Resample") != std::string::npos);
-  CHECK_THROWS_AS((void)ForceEstimator<>(), Error);  // SameRate is the default policy
 
   // At the models' own period the estimator is the models themselves, bit for bit:
   // f = -current_sign * unit_scale * y(k) = unit_scale * y(k) (2016 current_sign -1),
@@ -144,6 +143,30 @@ TEST_CASE("a model sample time that differs from the loop period is refused with
     CHECK(f[2] == clamp1.step(u_clamp1)[0]);
     CHECK(f[3] == clamp2.step(u_clamp2)[0]);
   }
+}
+
+TEST_CASE("every default template argument set constructs and runs with its default models") {
+  // The default rate policy must accept the default (2016, Ts = 0.02 s) models at the default
+  // loop period (1 ms): ForceEstimator<> and ForceEstimator2016<> construct and estimate.
+  auto run = [](auto& estimator) {
+    for (int k = 0; k < 200; ++k) {
+      const JointState<double> s = wavy_state(k);
+      endohaptics::protocol::MotorState<4> packet;
+      packet.position = s.position;
+      packet.velocity = s.velocity;
+      packet.effort = s.current;
+      Eigen::Vector4d force = Eigen::Vector4d::Constant(std::numeric_limits<double>::quiet_NaN());
+      REQUIRE(estimator.estimate(packet, s.setpoint, force));
+      REQUIRE(force.allFinite());
+    }
+  };
+  ForceEstimator<> defaults;
+  run(defaults);
+  CHECK(defaults.ticks_per_model_step(Motor::pitch) == 20);
+  ForceEstimator2016<> defaults_2016;
+  run(defaults_2016);
+  ForceEstimator2016<rate::Decimate, float> in_float;
+  run(in_float);
 }
 
 TEST_CASE("rate::Decimate needs an integer ratio within 1e-9; rate::Resample refuses the pitch") {

@@ -312,3 +312,95 @@ TEST_CASE("no heap allocation in 10,000 ticks after warm-up") {
   CHECK(allocations == 0);
   CHECK(rig.loop.stats().ticks() == 10100);
 }
+
+namespace {
+
+// CylindricalMapper's shape without the noexcept: one or both per-tick functions may throw.
+struct ThrowingMapper {
+  Mapper inner;
+  auto map_position(const Eigen::Vector3d& p, tp::MotorVector& s) {
+    return inner.map_position(p, s);
+  }
+  auto map_force(const tp::MotorVector& f, Eigen::Vector3d& out) { return inner.map_force(f, out); }
+};
+struct ThrowingForceMapper {
+  Mapper inner;
+  auto map_position(const Eigen::Vector3d& p, tp::MotorVector& s) noexcept {
+    return inner.map_position(p, s);
+  }
+  auto map_force(const tp::MotorVector& f, Eigen::Vector3d& out) { return inner.map_force(f, out); }
+};
+struct ThrowingPositionMapper {
+  Mapper inner;
+  auto map_position(const Eigen::Vector3d& p, tp::MotorVector& s) {
+    return inner.map_position(p, s);
+  }
+  auto map_force(const tp::MotorVector& f, Eigen::Vector3d& out) noexcept {
+    return inner.map_force(f, out);
+  }
+};
+
+static_assert(tp::TeleopMapper<Mapper>);
+static_assert(!tp::TeleopMapper<ThrowingMapper>);
+static_assert(!tp::TeleopMapper<ThrowingForceMapper>);
+static_assert(!tp::TeleopMapper<ThrowingPositionMapper>);
+
+}  // namespace
+
+TEST_CASE("TeleopMapper requires noexcept map_position and map_force") {
+  CHECK(tp::TeleopMapper<Mapper>);
+  CHECK_FALSE(tp::TeleopMapper<ThrowingMapper>);
+  CHECK_FALSE(tp::TeleopMapper<ThrowingForceMapper>);
+  CHECK_FALSE(tp::TeleopMapper<ThrowingPositionMapper>);
+}
+
+TEST_CASE("a stall (clock jumps 100 ms): rate limit and force ramp still hold per nominal period") {
+  auto check_stall = [](const tp::TeleopLoopConfig& config, double bound_s) {
+    CHECK(std::chrono::duration<double>(config.max_tick_dt()).count() == bound_s);
+    Rig rig({}, config);
+    tp::TickResult before;
+    for (int i = 0; i < 100; ++i) before = rig.tick();  // link up, force ramp under way
+    REQUIRE(before.status == tp::TickStatus::ok);
+    REQUIRE(before.force_scale > 0.0);
+    REQUIRE(before.force_scale < 1.0);
+    rig.clock.advance(100ms);  // the tick thread stalled
+    rig.device.t += 500;       // meanwhile the stylus moved a long way (roll: 0.7 rad)
+    const auto after = rig.tick();
+    REQUIRE(after.status == tp::TickStatus::ok);
+    CHECK(after.rate_limited);
+    const double max_step = config.safety.max_setpoint_rate * bound_s;
+    CHECK((after.setpoint - before.setpoint).cwiseAbs().maxCoeff() <= max_step + 1e-12);
+    CHECK(after.force_scale - before.force_scale <=
+          bound_s / config.safety.force_ramp_time + 1e-12);
+  };
+  SUBCASE("period 1 ms: dt at most the period") { check_stall(tp::TeleopLoopConfig{}, 1e-3); }
+  SUBCASE("period 0 (as fast as possible): dt at most the receive timeout (here 2 ms)") {
+    tp::TeleopLoopConfig config;
+    config.period = 0ns;
+    config.receive_timeout = 2ms;
+    check_stall(config, 2e-3);
+  }
+  SUBCASE("period 0 with receive timeout 0: dt at most 1 ms") {
+    tp::TeleopLoopConfig config;
+    config.period = 0ns;
+    config.receive_timeout = 0ns;
+    check_stall(config, 1e-3);
+  }
+}
+
+TEST_CASE("an enable_mask with a bit at or above the motor count is refused at construction") {
+  tp::TeleopLoopConfig config;
+  config.safety.enable_mask = 0x10;
+  CHECK_THROWS_WITH_AS(Rig({}, config), doctest::Contains("enable_mask"), endohaptics::Error);
+  tp::SafetyConfig safety;
+  safety.enable_mask = 0x10;
+  CHECK_THROWS_WITH_AS(safety.validate(),
+                       "SafetyConfig: enable_mask must be <= 0x0F (bits 0..3: 4 motors), got 0x10",
+                       endohaptics::Error);
+  safety.enable_mask = 0x80;
+  CHECK_THROWS_WITH_AS(safety.validate(), doctest::Contains("got 0x80"), endohaptics::Error);
+  for (const std::uint8_t ok : std::initializer_list<std::uint8_t>{0x00, 0x01, 0x0F}) {
+    safety.enable_mask = ok;
+    CHECK_NOTHROW(safety.validate());
+  }
+}

@@ -269,3 +269,87 @@ TEST_CASE("UDP server transport: answers whoever sent the newest datagram") {
   CHECK_THROWS_WITH_AS(transport::UdpServerTransport({.bind_address = "nowhere"}),
                        doctest::Contains("invalid bind address 'nowhere'"), endohaptics::Error);
 }
+
+TEST_CASE("in-memory receive drains at most max_drain datagrams; the rest wait for the next call") {
+  transport::InMemoryLink<64, 200> link;  // room for a flood larger than the default bound (64)
+  std::array<std::byte, 64> buffer{};
+  for (int i = 0; i < 100; ++i) {
+    REQUIRE(link.a().send(pattern<17>(static_cast<unsigned char>(i))) == TransportStatus::ok);
+  }
+  auto r = link.b().receive(buffer, 0ns);
+  REQUIRE(r.status == TransportStatus::ok);
+  CHECK(r.dropped == 63);             // 64 read: the newest of them returned
+  CHECK(buffer[0] == std::byte{63});  // the 64th datagram
+  CHECK(link.a_to_b().size() == 36);  // still queued
+  r = link.b().receive(buffer, 0ns);
+  REQUIRE(r.status == TransportStatus::ok);
+  CHECK(r.dropped == 35);
+  CHECK(buffer[0] == std::byte{99});
+  CHECK(link.a_to_b().size() == 0);
+  CHECK(link.b().receive(buffer, 0ns).status == TransportStatus::timeout);
+  CHECK(link.b().max_drain() == transport::default_max_drain);
+
+  transport::InMemoryLink<64, 32> bounded(8);  // a configured bound
+  CHECK(bounded.b().max_drain() == 8);
+  for (int i = 0; i < 20; ++i) (void)bounded.a().send(pattern<17>(static_cast<unsigned char>(i)));
+  r = bounded.b().receive(buffer, 0ns);
+  REQUIRE(r.status == TransportStatus::ok);
+  CHECK(r.dropped == 7);
+  CHECK(buffer[0] == std::byte{7});
+  CHECK(bounded.a_to_b().size() == 12);
+  r = bounded.b().receive(buffer, 0ns);
+  CHECK(r.dropped == 7);
+  CHECK(buffer[0] == std::byte{15});
+  r = bounded.b().receive(buffer, 0ns);
+  CHECK(r.dropped == 3);
+  CHECK(buffer[0] == std::byte{19});
+
+  using Link = transport::InMemoryLink<64, 8>;
+  CHECK_THROWS_WITH_AS(Link(0),
+                       "InMemoryTransport: max_drain must be 1..4096 datagrams per receive, got 0",
+                       endohaptics::Error);
+  CHECK_THROWS_WITH_AS(Link(4097), doctest::Contains("got 4097"), endohaptics::Error);
+}
+
+TEST_CASE("UDP receive drains at most max_drain datagrams; the rest wait for the next call") {
+  transport::UdpTransport a({.local_address = "127.0.0.1", .remote_address = "127.0.0.1"});
+  transport::UdpTransport b({.local_address = "127.0.0.1",
+                             .remote_address = "127.0.0.1",
+                             .remote_port = a.local_endpoint().port()});
+  a.connect("127.0.0.1", b.local_endpoint().port());
+  std::array<std::byte, 64> buffer{};
+  for (unsigned char i = 0; i < 70; ++i) REQUIRE(a.send(pattern<49>(i)) == TransportStatus::ok);
+  std::this_thread::sleep_for(5ms);
+  auto r = b.receive(buffer, 100ms);
+  REQUIRE(r.status == TransportStatus::ok);
+  CHECK(r.dropped == 63);  // default bound: 64 reads
+  CHECK(buffer[0] == std::byte{63});
+  r = b.receive(buffer, 100ms);
+  REQUIRE(r.status == TransportStatus::ok);
+  CHECK(r.dropped == 5);
+  CHECK(buffer[0] == std::byte{69});
+  CHECK(b.receive(buffer, 1ms).status == TransportStatus::timeout);
+
+  // The server side, with a configured bound of 8: 20 datagrams take three receives.
+  transport::UdpServerTransport server({.bind_address = "127.0.0.1", .port = 0, .max_drain = 8});
+  CHECK(server.max_drain() == 8);
+  a.connect("127.0.0.1", server.local_endpoint().port());
+  for (unsigned char i = 0; i < 20; ++i) REQUIRE(a.send(pattern<49>(i)) == TransportStatus::ok);
+  std::this_thread::sleep_for(5ms);
+  r = server.receive(buffer, 100ms);
+  REQUIRE(r.status == TransportStatus::ok);
+  CHECK(r.dropped == 7);
+  CHECK(buffer[0] == std::byte{7});
+  r = server.receive(buffer, 100ms);
+  CHECK(r.dropped == 7);
+  CHECK(buffer[0] == std::byte{15});
+  r = server.receive(buffer, 100ms);
+  CHECK(r.dropped == 3);
+  CHECK(buffer[0] == std::byte{19});
+
+  CHECK_THROWS_WITH_AS(transport::UdpTransport({.local_address = "127.0.0.1", .max_drain = 0}),
+                       "UdpTransport: max_drain must be 1..4096 datagrams per receive, got 0",
+                       endohaptics::Error);
+  CHECK_THROWS_WITH_AS(transport::UdpServerTransport({.bind_address = "127.0.0.1", .max_drain = 0}),
+                       doctest::Contains("UdpServerTransport: max_drain"), endohaptics::Error);
+}

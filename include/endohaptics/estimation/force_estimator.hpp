@@ -690,10 +690,12 @@ struct ForceEstimatorSettings {
 //! per joint, model y -> f = -current_sign x unit_scale x y (the external force along the
 //! joint's positive setpoint, the convention of CylindricalMapper::map_force) -> friction gate
 //! (5.2.3) -> dead zone -> saturation.
-//! `Rate` is rate::SameRate (default: refuses a model whose sample time differs from the loop
-//! period), rate::Decimate or rate::Resample; the models are JointForceModel policies (OpenLoop
-//! by default, KalmanCorrected for correction). `step` is noexcept and allocation-free.
-template <typename Rate = rate::SameRate, JointForceModel RollModel = RollModel2016<>,
+//! `Rate` is rate::Decimate (default: the only policy that runs the default 0.02 s models at the
+//! default 1 ms loop period), rate::SameRate (refuses a model whose sample time differs from the
+//! loop period) or rate::Resample (refuses the 2016 pitch model); the models are JointForceModel
+//! policies (OpenLoop by default, KalmanCorrected for correction). `step` is noexcept and
+//! allocation-free.
+template <typename Rate = rate::Decimate, JointForceModel RollModel = RollModel2016<>,
           JointForceModel PitchModel = PitchModel2016<>,
           JointForceModel ClampModel = ClampModel2016<>>
 requires RatePolicyFor<Rate, RollModel> && RatePolicyFor<Rate, PitchModel> &&
@@ -922,7 +924,7 @@ class ForceEstimator {
 };
 
 //! The 2016 estimator (appendix C models, table 5.2 gates) with rate policy `Rate`.
-template <typename Rate = rate::SameRate, typename Scalar = double>
+template <typename Rate = rate::Decimate, typename Scalar = double>
 using ForceEstimator2016 =
     ForceEstimator<Rate, RollModel2016<Scalar>, PitchModel2016<Scalar>, ClampModel2016<Scalar>>;
 

@@ -90,6 +90,76 @@ enum class TickOutcome : std::uint8_t {
   transport_error  //!< send or receive failed at the OS level (also a miss)
 };
 
+//! Figures of the ticks between two LoopSnapshots (a window, e.g. one second), as a LoopStats
+//! that recorded only those ticks would give them; periods are measured from the tick before
+//! the window, so consecutive windows cover every period once. Times in seconds.
+struct LoopWindow {
+  std::uint64_t ticks = 0;             //!< ticks started in the window
+  double duration = 0.0;               //!< s, covered by the window's periods
+  double rate = 0.0;                   //!< Hz, achieved
+  double period_mean = 0.0;            //!< s
+  double period_error_mean = 0.0;      //!< s, mean |period - nominal| (0 with nominal 0)
+  std::uint64_t deadline_misses = 0;   //!< periods more than 10 % over nominal
+  double round_trip_mean = 0.0;        //!< s, over the received exchanges
+  std::uint64_t exchanges = 0;         //!< received + every kind of miss
+  std::uint64_t received = 0;          //!< valid state packets
+  std::uint64_t timeouts = 0;          //!< nothing before the deadline
+  std::uint64_t decode_errors = 0;     //!< a datagram the codec refused
+  std::uint64_t transport_errors = 0;  //!< send or receive failed
+  std::uint64_t stale_dropped = 0;     //!< older datagrams drained
+  double loss_percent = 0.0;           //!< exchanges without a valid state packet, %
+};
+
+//! A LoopStats' cumulative counters at one instant: fixed size, about 100 bytes (no histograms),
+//! trivially copyable. Take one per window on the loop thread (`LoopStats::snapshot()`), hand
+//! it to another thread, and get the window's figures there with `later.since(earlier)`.
+struct LoopSnapshot {
+  std::chrono::nanoseconds first_start{0};       //!< start of the first tick
+  std::chrono::nanoseconds last_start{0};        //!< start of the newest tick
+  std::uint64_t ticks = 0;                       //!< ticks started
+  std::uint64_t received = 0;                    //!< valid state packets
+  std::uint64_t timeouts = 0;                    //!< receive deadlines missed
+  std::uint64_t decode_errors = 0;               //!< datagrams the codec refused
+  std::uint64_t transport_errors = 0;            //!< sends or receives that failed
+  std::uint64_t stale_dropped = 0;               //!< older datagrams drained
+  std::uint64_t deadline_misses = 0;             //!< periods more than 10 % over nominal
+  std::uint64_t period_errors = 0;               //!< periods summed in period_error_sum
+  std::chrono::nanoseconds period_error_sum{0};  //!< sum of |period - nominal|
+  std::chrono::nanoseconds round_trip_sum{0};    //!< sum over the received exchanges
+
+  //! The window from `earlier` (a snapshot of the same LoopStats, or a default one for "from
+  //! the start") to this one.
+  [[nodiscard]] LoopWindow since(const LoopSnapshot& earlier) const noexcept {
+    const auto seconds = [](std::chrono::nanoseconds d) {
+      return std::chrono::duration<double>(d).count();
+    };
+    const auto ratio = [](double num, std::uint64_t den) {
+      return den ? num / static_cast<double>(den) : 0.0;
+    };
+    LoopWindow w;
+    w.ticks = ticks - earlier.ticks;
+    // From the start the first tick opens the first period; otherwise the window's first period
+    // starts at the earlier snapshot's newest tick.
+    const bool from_start = earlier.ticks == 0;
+    const std::uint64_t periods = from_start ? (ticks ? ticks - 1 : 0) : w.ticks;
+    if (periods) w.duration = seconds(last_start - (from_start ? first_start : earlier.last_start));
+    w.rate = w.duration > 0 ? static_cast<double>(periods) / w.duration : 0.0;
+    w.period_mean = ratio(w.duration, periods);
+    w.period_error_mean = ratio(seconds(period_error_sum - earlier.period_error_sum),
+                                period_errors - earlier.period_errors);
+    w.deadline_misses = deadline_misses - earlier.deadline_misses;
+    w.received = received - earlier.received;
+    w.round_trip_mean = ratio(seconds(round_trip_sum - earlier.round_trip_sum), w.received);
+    w.timeouts = timeouts - earlier.timeouts;
+    w.decode_errors = decode_errors - earlier.decode_errors;
+    w.transport_errors = transport_errors - earlier.transport_errors;
+    w.stale_dropped = stale_dropped - earlier.stale_dropped;
+    w.exchanges = w.received + w.timeouts + w.decode_errors + w.transport_errors;
+    w.loss_percent = ratio(100.0 * static_cast<double>(w.exchanges - w.received), w.exchanges);
+    return w;
+  }
+};
+
 //! Loop statistics: the worksheet's table 3.1 and more. One `record_*` per tick, all noexcept.
 class LoopStats {
  public:
@@ -106,7 +176,9 @@ class LoopStats {
       const auto period = t - last_start_;
       period_.add(period);
       if (nominal_.count() > 0) {  // a nominal period of 0 means "as fast as possible"
-        period_error_.add(period > nominal_ ? period - nominal_ : nominal_ - period);
+        const auto error = period > nominal_ ? period - nominal_ : nominal_ - period;
+        period_error_.add(error);
+        period_error_sum_ += error;
         if (period > nominal_ + nominal_ / 10) ++deadline_misses_;
       }
     }
@@ -123,6 +195,7 @@ class LoopStats {
       case TickOutcome::received:
         ++received_;
         round_trip_.add(round_trip);
+        round_trip_sum_ += round_trip;
         break;
       case TickOutcome::timeout:
         ++timeouts_;
@@ -169,6 +242,25 @@ class LoopStats {
 
   void reset() noexcept { *this = LoopStats{nominal_}; }
 
+  //! The cumulative counters now, about 100 bytes: for per-second figures on another thread
+  //! (LoopSnapshot::since) without copying or resetting this object's histograms.
+  [[nodiscard]] LoopSnapshot snapshot() const noexcept {
+    LoopSnapshot s;
+    s.first_start = first_start_;
+    s.last_start = last_start_;
+    s.ticks = ticks_;
+    s.received = received_;
+    s.timeouts = timeouts_;
+    s.decode_errors = decode_errors_;
+    s.transport_errors = transport_errors_;
+    s.stale_dropped = stale_dropped_;
+    s.deadline_misses = deadline_misses_;
+    s.period_errors = period_error_.count();
+    s.period_error_sum = period_error_sum_;
+    s.round_trip_sum = round_trip_sum_;
+    return s;
+  }
+
   //! Table 3.1 layout plus percentiles. Not for the tick (allocates the string).
   [[nodiscard]] std::string to_table() const {
     char buf[1024];
@@ -211,6 +303,8 @@ class LoopStats {
   std::uint64_t transport_errors_ = 0;
   std::uint64_t stale_dropped_ = 0;
   std::uint64_t deadline_misses_ = 0;
+  std::chrono::nanoseconds period_error_sum_{0};
+  std::chrono::nanoseconds round_trip_sum_{0};
   DurationStats<> period_;
   DurationStats<> period_error_;
   DurationStats<> round_trip_;

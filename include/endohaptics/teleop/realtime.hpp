@@ -82,4 +82,24 @@ inline RealtimeReport apply_realtime(const RealtimeOptions& options) {
   return report;
 }
 
+//! For a helper thread (log writer, statistics printer) that a real-time thread created: it
+//! inherits SCHED_FIFO and the CPU pin, so this puts the calling thread back to SCHED_OTHER and
+//! on every CPU (the kernel keeps those the process's cpuset allows). Returns one line per
+//! refusal; empty when both were applied.
+[[nodiscard]] inline std::vector<std::string> leave_realtime() {
+  std::vector<std::string> refused;
+  sched_param param{};
+  param.sched_priority = 0;
+  if (::sched_setscheduler(0, SCHED_OTHER, &param) != 0) {
+    refused.push_back(std::string("SCHED_OTHER refused: ") + std::strerror(errno));
+  }
+  cpu_set_t all;
+  CPU_ZERO(&all);
+  for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu) CPU_SET(static_cast<unsigned>(cpu), &all);
+  if (::sched_setaffinity(0, sizeof all, &all) != 0) {
+    refused.push_back(std::string("every CPU refused: ") + std::strerror(errno));
+  }
+  return refused;
+}
+
 }  // namespace endohaptics::teleop

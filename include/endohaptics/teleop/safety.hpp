@@ -8,10 +8,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <string>
 #include <string_view>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/protocol/motor_order.hpp"
 
 namespace endohaptics::teleop {
 
@@ -67,9 +69,23 @@ struct SafetyConfig {
   double max_stylus_force = 3.0;    //!< N, last guard before the device (Touch peak: 3.3 N)
   std::uint8_t enable_mask = 0x0F;  //!< motors to enable while the link is usable
 
-  //! Throws Error naming the field and value.
-  void validate() const {
+  //! Throws Error naming the field and value. `motors` (1..8): how many the link carries; the
+  //! enable mask may only name those (bits 0..motors-1), anything above cannot be encoded.
+  void validate(int motors = protocol::endowrist_motors) const {
     auto fail = [](const std::string& what) { ENDOHAPTICS_THROW(Error("SafetyConfig: " + what)); };
+    auto hex = [](unsigned value) {
+      char text[8];
+      std::snprintf(text, sizeof text, "0x%02X", value);
+      return std::string(text);
+    };
+    if (motors < 1 || motors > 8) {
+      fail("motors must be 1..8 (one mask byte), got " + std::to_string(motors));
+    }
+    const unsigned allowed = (1u << static_cast<unsigned>(motors)) - 1u;
+    if ((enable_mask & ~allowed) != 0u) {
+      fail("enable_mask must be <= " + hex(allowed) + " (bits 0.." + std::to_string(motors - 1) +
+           ": " + std::to_string(motors) + " motors), got " + hex(enable_mask));
+    }
     if (max_consecutive_misses < 0) {
       fail("max_consecutive_misses must be >= 0, got " + std::to_string(max_consecutive_misses));
     }

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <concepts>
@@ -29,9 +30,14 @@ using estimation::MotorVector;
 using estimation::NoForceEstimator;
 
 //! Stylus position -> setpoints and joint forces -> stylus force (CylindricalMapper's shape).
+//! Both calls run in the tick, so both must be noexcept (as every other policy's).
 template <typename M>
 concept TeleopMapper = requires(M& mapper, const Eigen::Vector3d& position, MotorVector& setpoint,
                                 const MotorVector& joint_force, Eigen::Vector3d& stylus_force) {
+  { mapper.map_position(position, setpoint) }
+  noexcept;
+  { mapper.map_force(joint_force, stylus_force) }
+  noexcept;
   { mapper.map_position(position, setpoint).ok() } -> std::convertible_to<bool>;
   { mapper.map_position(position, setpoint).clamped_mask } -> std::convertible_to<std::uint8_t>;
   { mapper.map_force(joint_force, stylus_force).ok() } -> std::convertible_to<bool>;
@@ -94,6 +100,14 @@ struct TeleopLoopConfig {
   std::chrono::nanoseconds receive_timeout = std::chrono::milliseconds(1);  //!< 2016: 1 ms
   SafetyConfig safety{};
 
+  //! Largest dt a tick gives the setpoint rate limit and the force ramp: the period, or with
+  //! period 0 the receive timeout (a tick's longest wait) but at least 1 ms.
+  [[nodiscard]] std::chrono::nanoseconds max_tick_dt() const noexcept {
+    if (period.count() > 0) return period;
+    return std::max(receive_timeout, std::chrono::nanoseconds(std::chrono::milliseconds(1)));
+  }
+
+  //! Throws Error naming the field and value.
   void validate() const {
     if (period.count() < 0) {
       ENDOHAPTICS_THROW(
@@ -103,7 +117,7 @@ struct TeleopLoopConfig {
     }
     if (receive_timeout.count() < 0)
       ENDOHAPTICS_THROW(Error("TeleopLoopConfig: receive_timeout must be >= 0"));
-    safety.validate();
+    safety.validate(protocol::endowrist_motors);
   }
 };
 
@@ -126,16 +140,20 @@ class TeleopLoop {
         watchdog_(config.safety.max_consecutive_misses),
         ramp_(config.safety.force_ramp_time),
         limiter_(config.safety.max_setpoint_rate),
-        stats_(config.period) {}
+        stats_(config.period),
+        max_dt_(config.max_tick_dt()) {}
 
   //! One cycle. Never throws, never allocates; the result says what happened.
   TickResult tick() noexcept {
     TickResult r;
     const auto start = clock_->now();
     stats_.record_tick_start(start);
-    const double dt = last_start_.count() > 0
-                          ? std::chrono::duration<double>(start - last_start_).count()
-                          : std::chrono::duration<double>(config_.period).count();
+    // dt for the rate limit and the ramp, bounded by one nominal period: after a stall (the
+    // clock jumped, the thread was preempted) neither moves further than in one normal tick.
+    const auto gap = last_start_.count() > 0 ? start - last_start_ : config_.period;
+    const double dt =
+        std::chrono::duration<double>(std::clamp(gap, std::chrono::nanoseconds(0), max_dt_))
+            .count();
     last_start_ = start;
 
     // 1. Stylus -> desired setpoint (eq. 5.9, range-limited by the mapper).
@@ -331,6 +349,7 @@ class TeleopLoop {
   MotorState4 state_{};
   MotorVector joint_force_ = MotorVector::Zero();
   std::array<std::byte, 2 * Codec::state_packet_size> rx_buffer_{};  // room to detect long ones
+  std::chrono::nanoseconds max_dt_;
   std::chrono::nanoseconds last_start_{0};
 };
 

@@ -72,7 +72,11 @@ class InMemoryTransport {
  public:
   using Queue = DatagramQueue<MaxDatagram, Capacity>;
 
+  //! Receives read at most default_max_drain datagrams each.
   InMemoryTransport(Queue& tx, Queue& rx) noexcept : tx_(&tx), rx_(&rx) {}
+  //! Receives read at most `max_drain` datagrams each; throws Error unless 1..max_drain_limit.
+  InMemoryTransport(Queue& tx, Queue& rx, std::size_t max_drain)
+      : tx_(&tx), rx_(&rx), max_drain_(detail::checked_max_drain(max_drain, "InMemoryTransport")) {}
 
   TransportStatus send(std::span<const std::byte> datagram) noexcept {
     if (closed_) return TransportStatus::error;
@@ -80,8 +84,9 @@ class InMemoryTransport {
     return TransportStatus::ok;
   }
 
-  //! Returns the newest queued datagram, discarding older ones. Never waits: an empty queue is a
-  //! timeout at once (simulated time is the caller's business).
+  //! Returns the newest queued datagram, discarding older ones, after reading at most max_drain
+  //! of them (the rest stay queued). Never waits: an empty queue is a timeout at once (simulated
+  //! time is the caller's business).
   ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds) noexcept {
     ReceiveResult result;
     if (closed_) {
@@ -91,7 +96,7 @@ class InMemoryTransport {
     std::size_t size = 0;
     bool truncated = false;
     bool any = false;
-    while (rx_->pop(buffer, size, truncated)) {
+    for (std::size_t reads = 0; reads < max_drain_ && rx_->pop(buffer, size, truncated); ++reads) {
       if (any) ++result.dropped;
       any = true;
     }
@@ -105,9 +110,13 @@ class InMemoryTransport {
   void close() noexcept { closed_ = true; }
   void reopen() noexcept { closed_ = false; }
 
+  //! Datagrams one receive reads at most.
+  [[nodiscard]] std::size_t max_drain() const noexcept { return max_drain_; }
+
  private:
   Queue* tx_;
   Queue* rx_;
+  std::size_t max_drain_ = default_max_drain;
   bool closed_ = false;
 };
 
@@ -118,7 +127,11 @@ class InMemoryLink {
   using Endpoint = InMemoryTransport<MaxDatagram, Capacity>;
   using Queue = typename Endpoint::Queue;
 
+  //! Both endpoints read at most default_max_drain datagrams per receive.
   InMemoryLink() noexcept : a_(a_to_b_, b_to_a_), b_(b_to_a_, a_to_b_) {}
+  //! Both endpoints read at most `max_drain` datagrams per receive (Error unless in range).
+  explicit InMemoryLink(std::size_t max_drain)
+      : a_(a_to_b_, b_to_a_, max_drain), b_(b_to_a_, a_to_b_, max_drain) {}
   InMemoryLink(const InMemoryLink&) = delete;
   InMemoryLink& operator=(const InMemoryLink&) = delete;
 

@@ -9,9 +9,33 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <string_view>
 
+#include "endohaptics/core/error.hpp"
+
 namespace endohaptics::transport {
+
+//! Default bound on the datagrams one `receive` reads (UdpConfig, UdpServerConfig,
+//! InMemoryTransport): a flood cannot keep the tick inside `receive`; what is left stays queued
+//! for the next call. A read costs about a microsecond, so 64 reads stay well inside a 1 ms tick.
+inline constexpr std::size_t default_max_drain = 64;
+//! Largest drain bound a transport accepts.
+inline constexpr std::size_t max_drain_limit = 4096;
+
+namespace detail {
+
+//! `max_drain` if it is in 1..max_drain_limit; otherwise throws Error naming `who`'s field.
+inline std::size_t checked_max_drain(std::size_t max_drain, std::string_view who) {
+  if (max_drain < 1 || max_drain > max_drain_limit) {
+    ENDOHAPTICS_THROW(Error(std::string(who) + ": max_drain must be 1.." +
+                            std::to_string(max_drain_limit) + " datagrams per receive, got " +
+                            std::to_string(max_drain)));
+  }
+  return max_drain;
+}
+
+}  // namespace detail
 
 //! Outcome of a send or receive.
 enum class TransportStatus : std::uint8_t {
@@ -37,6 +61,8 @@ enum class TransportStatus : std::uint8_t {
 
 //! What a receive produced: status, bytes written into the caller's buffer, and how many older
 //! datagrams were discarded so that only the newest is returned (queue of one, worksheet 3.1.3).
+//! A receive reads at most its transport's `max_drain` datagrams: under a flood it returns the
+//! newest of those, and the rest are read (and counted) by the next call.
 struct ReceiveResult {
   TransportStatus status = TransportStatus::timeout;
   std::size_t size = 0;     //!< bytes of the returned datagram (valid when status is ok)
@@ -44,8 +70,8 @@ struct ReceiveResult {
 };
 
 //! A datagram transport usable from the real-time tick: both calls are noexcept, allocation-free
-//! and bounded in time. `receive` waits at most `timeout` for a datagram, then drains whatever
-//! else is queued and returns the newest one.
+//! and bounded in time. `receive` waits at most `timeout` for a datagram, then drains what else is
+//! queued, up to a bounded number of datagrams, and returns the newest one it read.
 template <typename T>
 concept Transport = requires(T& transport, std::span<const std::byte> datagram,
                              std::span<std::byte> buffer, std::chrono::nanoseconds timeout) {

@@ -25,12 +25,17 @@ namespace endohaptics::transport {
 struct UdpServerConfig {
   std::string bind_address = "0.0.0.0";
   std::uint16_t port = 61556;  //!< 0: any free port (see local_endpoint())
+  //! Datagrams one receive reads at most (1..max_drain_limit); the rest wait for the next call.
+  std::size_t max_drain = default_max_drain;
 };
 
 class UdpServerTransport {
  public:
-  //! Opens and binds the socket. Throws Error naming the address on failure.
-  explicit UdpServerTransport(const UdpServerConfig& config) : socket_(io_) {
+  //! Opens and binds the socket. Throws Error naming the address on failure, or the field and
+  //! value of an invalid max_drain.
+  explicit UdpServerTransport(const UdpServerConfig& config)
+      : socket_(io_),
+        max_drain_(detail::checked_max_drain(config.max_drain, "UdpServerTransport")) {
     namespace ip = boost::asio::ip;
     boost::system::error_code ec;
     const ip::address local = ip::make_address(config.bind_address, ec);
@@ -69,11 +74,12 @@ class UdpServerTransport {
     }
   }
 
-  //! Waits up to `timeout`, drains the socket, returns the newest datagram and remembers its
-  //! sender as the peer `send` answers.
+  //! Waits up to `timeout`, drains the socket (at most max_drain datagrams), returns the newest
+  //! one read and remembers its sender as the peer `send` answers.
   ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds timeout) noexcept {
     sockaddr_storage from{};
-    const ReceiveResult r = detail::receive_newest(socket_.native_handle(), buffer, timeout, &from);
+    const ReceiveResult r =
+        detail::receive_newest(socket_.native_handle(), buffer, timeout, &from, max_drain_);
     if (r.status == TransportStatus::ok || r.status == TransportStatus::truncated) {
       peer_ = from;
       peer_size_ = from.ss_family == AF_INET6 ? sizeof(sockaddr_in6) : sizeof(sockaddr_in);
@@ -89,9 +95,13 @@ class UdpServerTransport {
   //! True once a datagram has been received (there is someone to answer).
   [[nodiscard]] bool has_peer() const noexcept { return peer_size_ != 0; }
 
+  //! Datagrams one receive reads at most.
+  [[nodiscard]] std::size_t max_drain() const noexcept { return max_drain_; }
+
  private:
   boost::asio::io_context io_;
   boost::asio::ip::udp::socket socket_;
+  std::size_t max_drain_;
   sockaddr_storage peer_{};
   socklen_t peer_size_ = 0;
 };

@@ -42,17 +42,18 @@ inline TransportStatus wait_readable(int fd, std::chrono::nanoseconds timeout) n
   }
 }
 
-//! Waits up to `timeout`, then drains `fd` and keeps the newest datagram in `buffer`. With
-//! `from` != nullptr, the newest datagram's sender is written there (unconnected sockets).
+//! Waits up to `timeout`, then drains `fd`, reading at most `max_drain` (>= 1) datagrams, and
+//! keeps the newest one read in `buffer`; the rest stay queued. With `from` != nullptr, that
+//! datagram's sender is written there (unconnected sockets).
 inline ReceiveResult receive_newest(int fd, std::span<std::byte> buffer,
-                                    std::chrono::nanoseconds timeout,
-                                    sockaddr_storage* from) noexcept {
+                                    std::chrono::nanoseconds timeout, sockaddr_storage* from,
+                                    std::size_t max_drain) noexcept {
   ReceiveResult result;
   result.status = wait_readable(fd, timeout);
   if (result.status != TransportStatus::ok) return result;
   result.status = TransportStatus::timeout;  // readable but nothing to read (e.g. bad checksum)
   bool any = false;
-  for (;;) {
+  for (std::size_t reads = 0; reads < max_drain;) {
     sockaddr_storage sender{};
     socklen_t sender_size = sizeof(sender);
     const ssize_t n =
@@ -65,6 +66,7 @@ inline ReceiveResult receive_newest(int fd, std::span<std::byte> buffer,
       if (!any) result.status = TransportStatus::error;
       return result;
     }
+    ++reads;
     if (any) ++result.dropped;
     any = true;
     if (from != nullptr) *from = sender;
@@ -84,12 +86,16 @@ struct UdpConfig {
   std::string remote_address = "169.254.4.42";
   std::uint16_t remote_port = 61556;
   int receive_buffer_bytes = 0;  //!< SO_RCVBUF; 0 keeps the system default
+  //! Datagrams one receive reads at most (1..max_drain_limit); the rest wait for the next call.
+  std::size_t max_drain = default_max_drain;
 };
 
 class UdpTransport {
  public:
-  //! Opens, binds and connects the socket. Throws Error naming the address on failure.
-  explicit UdpTransport(const UdpConfig& config) : socket_(io_) {
+  //! Opens, binds and connects the socket. Throws Error naming the address on failure, or the
+  //! field and value of an invalid max_drain.
+  explicit UdpTransport(const UdpConfig& config)
+      : socket_(io_), max_drain_(detail::checked_max_drain(config.max_drain, "UdpTransport")) {
     namespace ip = boost::asio::ip;
     boost::system::error_code ec;
     const ip::address local = ip::make_address(config.local_address, ec);
@@ -140,10 +146,14 @@ class UdpTransport {
     }
   }
 
-  //! Waits up to `timeout` for a datagram, then drains the socket and returns the newest.
+  //! Waits up to `timeout` for a datagram, then drains the socket (at most max_drain datagrams)
+  //! and returns the newest one read.
   ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds timeout) noexcept {
-    return detail::receive_newest(socket_.native_handle(), buffer, timeout, nullptr);
+    return detail::receive_newest(socket_.native_handle(), buffer, timeout, nullptr, max_drain_);
   }
+
+  //! Datagrams one receive reads at most.
+  [[nodiscard]] std::size_t max_drain() const noexcept { return max_drain_; }
 
   //! The bound local endpoint (useful with local_port = 0).
   [[nodiscard]] boost::asio::ip::udp::endpoint local_endpoint() const {
@@ -153,6 +163,7 @@ class UdpTransport {
  private:
   boost::asio::io_context io_;
   boost::asio::ip::udp::socket socket_;
+  std::size_t max_drain_;
 };
 
 static_assert(Transport<UdpTransport>);
