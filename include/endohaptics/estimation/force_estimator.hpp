@@ -38,7 +38,7 @@ using protocol::Motor;
 //! Outcome of `ForceEstimator::step`. On anything but `ok` the output and all internal state
 //! (model states, decimation windows, friction gates) are left untouched.
 enum class ForceStatus : std::uint8_t {
-  ok = 0,
+  ok = 0,             //!< forces written
   non_finite_input,   //!< NaN or +-Inf in position, velocity, current or setpoint
   non_finite_result,  //!< finite input, but a model produced NaN/Inf (diverging model, overflow)
 };
@@ -60,6 +60,7 @@ enum class ForceStatus : std::uint8_t {
 template <typename Scalar = double>
 struct JointState {
   static_assert(std::is_floating_point_v<Scalar>, "JointState Scalar must be floating point");
+  //! One value per motor, motor order.
   using Vector = Eigen::Matrix<Scalar, 4, 1>;
   Vector position = Vector::Zero();  //!< rad, motor side after gearing (sbRIO packet)
   Vector velocity = Vector::Zero();  //!< rad/s (sbRIO packet)
@@ -263,11 +264,11 @@ concept CurrentVelocityModel =
 template <CurrentVelocityModel Model>
 class OpenLoop {
  public:
-  using ModelType = Model;
-  using ScalarType = typename Model::ScalarType;
-  using State = typename Model::State;
-  using Input = typename Model::Input;
-  using Signals = JointSignals<ScalarType>;
+  using ModelType = Model;                        //!< the wrapped model type
+  using ScalarType = typename Model::ScalarType;  //!< floating-point type of the model
+  using State = typename Model::State;            //!< model state x
+  using Input = typename Model::Input;       //!< u = [current A] or [current A; velocity rad/s]
+  using Signals = JointSignals<ScalarType>;  //!< one joint's signals for one tick
 
   //! Takes a copy of `model`, starting from its current state.
   explicit OpenLoop(Model model)
@@ -333,13 +334,14 @@ class KalmanCorrected {
   static_assert(Ny >= 2, "KalmanCorrected: output 0 is the force, outputs 1.. are measured");
 
  public:
-  static constexpr int measurements = Ny - 1;
-  using ScalarType = Scalar;
-  using Model = model::StateSpace<Nx, Nu, Ny, Scalar>;
-  using Filter = SteadyStateKalman<Model, Ny - 1>;
-  using State = typename Filter::State;
-  using Input = typename Filter::Input;
-  using Signals = JointSignals<Scalar>;
+  static constexpr int measurements = Ny - 1;           //!< measured outputs (all but the force)
+  using ScalarType = Scalar;                            //!< floating-point type of the model
+  using Model = model::StateSpace<Nx, Nu, Ny, Scalar>;  //!< outputs [force; measured signals]
+  using Filter = SteadyStateKalman<Model, Ny - 1>;      //!< filter on outputs 1..Ny-1
+  using State = typename Filter::State;                 //!< model state x
+  using Input = typename Filter::Input;  //!< u = [current A] or [current A; velocity rad/s]
+  using Signals = JointSignals<Scalar>;  //!< one joint's signals for one tick
+  //! measured[i]: the joint signal that model output i + 1 predicts.
   using MeasuredSignals = std::array<Measured, static_cast<std::size_t>(Ny - 1)>;
 
   //! Output i + 1 of `model` predicts `measured[i]`. Q = cov of the process noise (Nx x Nx),
@@ -580,6 +582,7 @@ namespace rate {
 //! No conversion: every dynamic model's sample time must equal the loop period (ratio 1 within
 //! 1e-9), else the constructor throws Error. Memoryless models (y = D u) run at any period.
 struct SameRate {
+  //! Runs `M` at its own sample time, one step per loop tick.
   template <JointForceModel M>
   using Stepper = detail::force::RateStepper<M, detail::force::RateMode::same>;
 };
@@ -588,6 +591,7 @@ struct SameRate {
 //! Error). The signals are averaged over R ticks and the model is stepped once per window; the
 //! output between steps uses the held state (added latency: 0 to R - 1 ticks, see docs).
 struct Decimate {
+  //! Runs `M` once per R loop ticks on the window's mean signals.
   template <JointForceModel M>
   using Stepper = detail::force::RateStepper<M, detail::force::RateMode::decimate>;
 };
@@ -596,6 +600,7 @@ struct Decimate {
 //! with ZOH at the loop period, then stepped every tick. Error if a model's A is singular or has
 //! an eigenvalue on the closed negative real axis (the appendix C pitch model has -0.095).
 struct Resample {
+  //! Runs `M` resampled (ZOH) at the loop period, one step per tick.
   template <JointForceModel M>
   requires ResamplableJointForceModel<M>
   using Stepper = detail::force::RateStepper<M, detail::force::RateMode::resample>;
@@ -657,7 +662,7 @@ models_2016() {
 template <typename Scalar = double>
 struct ForceEstimatorSettings {
   static_assert(std::is_floating_point_v<Scalar>, "ForceEstimatorSettings Scalar must be floating");
-  using Vector = Eigen::Matrix<Scalar, 4, 1>;
+  using Vector = Eigen::Matrix<Scalar, 4, 1>;  //!< one value per tool joint (index = Motor)
 
   //! s, the period at which `step` is called (1 kHz loop).
   Scalar loop_period = Scalar(0.001);
@@ -702,17 +707,17 @@ requires RatePolicyFor<Rate, RollModel> && RatePolicyFor<Rate, PitchModel> &&
     RatePolicyFor<Rate, ClampModel>
 class ForceEstimator {
  public:
-  using ScalarType = typename RollModel::ScalarType;
+  using ScalarType = typename RollModel::ScalarType;  //!< floating-point type of every model
   static_assert(std::is_same_v<ScalarType, typename PitchModel::ScalarType> &&
                     std::is_same_v<ScalarType, typename ClampModel::ScalarType>,
                 "ForceEstimator: all joint models must use the same Scalar");
-  static constexpr int joints = 4;
-  using Input = JointState<ScalarType>;            //!< motor order
-  using Forces = Eigen::Matrix<ScalarType, 4, 1>;  //!< tool-joint order (index = Motor)
-  using Settings = ForceEstimatorSettings<ScalarType>;
-  using Models = ForceModels<RollModel, PitchModel, ClampModel>;
-  using Friction = model::FrictionModel<4, ScalarType>;
-  using GateState = typename Friction::GateState;
+  static constexpr int joints = 4;                      //!< roll, pitch, clamp1, clamp2
+  using Input = JointState<ScalarType>;                 //!< motor order
+  using Forces = Eigen::Matrix<ScalarType, 4, 1>;       //!< tool-joint order (index = Motor)
+  using Settings = ForceEstimatorSettings<ScalarType>;  //!< everything but the models
+  using Models = ForceModels<RollModel, PitchModel, ClampModel>;  //!< one model per tool joint
+  using Friction = model::FrictionModel<4, ScalarType>;           //!< the 5.2.3 friction gates
+  using GateState = typename Friction::GateState;                 //!< per tool joint: gate open
 
   //! Validates everything; throws Error naming the field or joint and the offending value
   //! (rate mismatch, bad motor_order, current_sign not +-1, scale/limit not > 0, dead zone < 0,

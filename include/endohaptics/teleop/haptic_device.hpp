@@ -11,12 +11,14 @@
 
 namespace endohaptics::teleop {
 
+//! Outcome of a device read or force command.
 enum class DeviceStatus : std::uint8_t {
-  ok = 0,
+  ok = 0,     //!< the sample was read / the force was commanded
   not_ready,  //!< no new sample yet / device still calibrating: try again next tick
   error,      //!< the device failed (unplugged, driver error): the loop must not trust it
 };
 
+//! Short human-readable description of `status` (for logs and error messages).
 [[nodiscard]] constexpr std::string_view to_string(DeviceStatus status) noexcept {
   switch (status) {
     case DeviceStatus::ok:
@@ -35,6 +37,8 @@ struct StylusSample {
   std::uint8_t buttons = 0;                            //!< bit i: button i pressed
 };
 
+//! A stylus usable from the real-time tick: `read` fills a StylusSample, `command_force` applies
+//! a Cartesian force (N); both are noexcept and return DeviceStatus.
 template <typename D>
 concept HapticDevice = requires(D& device, StylusSample& sample, const Eigen::Vector3d& force) {
   { device.read(sample) }

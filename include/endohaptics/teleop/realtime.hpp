@@ -15,6 +15,7 @@
 
 namespace endohaptics::teleop {
 
+//! Which real-time settings apply_realtime() should request; the defaults request none.
 struct RealtimeOptions {
   int fifo_priority = 0;     //!< 1..99 requests SCHED_FIFO at that priority; 0 leaves the scheduler
   int cpu = -1;              //!< >= 0 pins the calling thread to that CPU
@@ -26,11 +27,11 @@ struct RealtimeOptions {
 
 //! What was applied and what was refused, one line each, for the user to read.
 struct RealtimeReport {
-  bool fifo = false;
-  bool pinned = false;
-  bool locked = false;
-  bool slack = false;
-  std::vector<std::string> messages;
+  bool fifo = false;                  //!< SCHED_FIFO priority applied
+  bool pinned = false;                //!< thread pinned to the requested CPU
+  bool locked = false;                //!< memory locked with mlockall
+  bool slack = false;                 //!< timer slack set
+  std::vector<std::string> messages;  //!< one line per setting applied or refused
 };
 
 //! Applies `options` to the calling thread; never throws for a refusal, it reports it.

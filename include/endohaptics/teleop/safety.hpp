@@ -24,6 +24,7 @@ enum class SafeStatePolicy : std::uint8_t {
   zero_force,      //!< keep following the operator, only the force feedback stops
 };
 
+//! The policy's name for logs ("hold-position", "disable-motors", "zero-force").
 [[nodiscard]] constexpr std::string_view to_string(SafeStatePolicy p) noexcept {
   switch (p) {
     case SafeStatePolicy::hold_position:
@@ -45,6 +46,7 @@ enum class LinkState : std::uint8_t {
   recovering,  //!< valid packets again after a loss: force ramps back in
 };
 
+//! The state's name for logs ("waiting", "up", "degraded", "lost", "recovering").
 [[nodiscard]] constexpr std::string_view to_string(LinkState s) noexcept {
   switch (s) {
     case LinkState::waiting:
@@ -61,9 +63,10 @@ enum class LinkState : std::uint8_t {
   return "unknown";
 }
 
+//! Safety limits and link-loss behaviour of a TeleopLoop. Units: s, rad/s, N.
 struct SafetyConfig {
   int max_consecutive_misses = 10;  //!< link lost when misses exceed this (2016: "superior to 10")
-  SafeStatePolicy policy = SafeStatePolicy::hold_position;
+  SafeStatePolicy policy = SafeStatePolicy::hold_position;  //!< robot behaviour while lost
   double force_ramp_time = 0.5;     //!< s, force scale 0 -> 1 after recovery (and at start)
   double max_setpoint_rate = 4.0;   //!< rad/s per joint (motor side); the tool cannot go faster
   double max_stylus_force = 3.0;    //!< N, last guard before the device (Touch peak: 3.3 N)
@@ -104,6 +107,7 @@ struct SafetyConfig {
 //! Consecutive-miss counter with link-lost and recovery events. `update` once per exchange.
 class Watchdog {
  public:
+  //! Link lost once more than `max_consecutive_misses` exchanges in a row have missed.
   explicit Watchdog(int max_consecutive_misses = 10) noexcept : max_(max_consecutive_misses) {}
 
   //! `received`: a valid state packet arrived this tick. `ramp_done`: the force ramp finished.
@@ -134,13 +138,19 @@ class Watchdog {
     return state_;
   }
 
+  //! Current link state (waiting until the first valid packet).
   [[nodiscard]] LinkState state() const noexcept { return state_; }
+  //! Misses since the last valid packet.
   [[nodiscard]] int consecutive_misses() const noexcept { return misses_; }
+  //! Misses since construction or reset().
   [[nodiscard]] std::uint64_t total_misses() const noexcept { return total_misses_; }
+  //! Transitions into LinkState::lost since construction or reset().
   [[nodiscard]] std::uint64_t link_losses() const noexcept { return losses_; }
+  //! Valid packets received after a loss (lost -> recovering) since construction or reset().
   [[nodiscard]] std::uint64_t recoveries() const noexcept { return recoveries_; }
   //! True while the robot must be in its safe state.
   [[nodiscard]] bool safe_state() const noexcept { return state_ == LinkState::lost; }
+  //! Back to LinkState::waiting with every counter zeroed; keeps the miss limit.
   void reset() noexcept { *this = Watchdog(max_); }
 
  private:
@@ -155,15 +165,20 @@ class Watchdog {
 //! Linear force scale 0 -> 1 over `ramp_time` seconds; restarted on every recovery.
 class ForceRamp {
  public:
+  //! `ramp_time`: s from scale 0 to 1; <= 0 jumps straight to 1 on the first advance().
   explicit ForceRamp(double ramp_time) noexcept : ramp_time_(ramp_time) {}
+  //! Starts the ramp again from scale 0 (after a recovery or first contact).
   void restart() noexcept { scale_ = 0.0; }
+  //! Sets the scale to 0 while no force is rendered; the next advance() ramps up from there.
   void hold_at_zero() noexcept { scale_ = 0.0; }
   //! Advances by dt seconds; returns the scale to apply this tick.
   double advance(double dt) noexcept {
     scale_ = ramp_time_ > 0.0 ? std::fmin(1.0, scale_ + dt / ramp_time_) : 1.0;
     return scale_;
   }
+  //! Current scale, 0..1.
   [[nodiscard]] double scale() const noexcept { return scale_; }
+  //! True once the scale has reached 1.
   [[nodiscard]] bool done() const noexcept { return scale_ >= 1.0; }
 
  private:
@@ -175,7 +190,8 @@ class ForceRamp {
 template <int N>
 class SetpointRateLimiter {
  public:
-  using Vector = Eigen::Matrix<double, N, 1>;
+  using Vector = Eigen::Matrix<double, N, 1>;  //!< one setpoint per joint, rad
+  //! `max_rate`: rad/s per joint (+inf: no limit).
   explicit SetpointRateLimiter(double max_rate) noexcept : max_rate_(max_rate) {}
 
   //! Starts from a known position (the robot's measured one), so the first step is bounded too.
@@ -183,6 +199,7 @@ class SetpointRateLimiter {
     previous_ = from;
     initialized_ = true;
   }
+  //! True once initialize() or shape() has set a starting position.
   [[nodiscard]] bool initialized() const noexcept { return initialized_; }
 
   //! Moves the previous output towards `desired`; returns true when it had to limit.
@@ -195,6 +212,7 @@ class SetpointRateLimiter {
     out = previous_;
     return limited;
   }
+  //! The last output (rad), or the initial position; zero before initialization.
   [[nodiscard]] const Vector& previous() const noexcept { return previous_; }
 
  private:

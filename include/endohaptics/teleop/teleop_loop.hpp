@@ -53,6 +53,7 @@ enum class TickStatus : std::uint8_t {
   device_error,  //!< the haptic device failed: zero force commanded, robot held
 };
 
+//! The status's name for logs ("ok", "degraded", "link lost", ...).
 [[nodiscard]] constexpr std::string_view to_string(TickStatus s) noexcept {
   switch (s) {
     case TickStatus::ok:
@@ -71,17 +72,20 @@ enum class TickStatus : std::uint8_t {
 
 //! Everything a tick did, for logging and tests. Look at `status`.
 struct [[nodiscard]] TickResult {
-  TickStatus status = TickStatus::waiting;
-  LinkState link = LinkState::waiting;
-  TickOutcome exchange = TickOutcome::timeout;
-  protocol::CodecStatus decode = protocol::CodecStatus::ok;
+  TickStatus status = TickStatus::waiting;                   //!< overall outcome
+  LinkState link = LinkState::waiting;                       //!< watchdog state after this tick
+  TickOutcome exchange = TickOutcome::timeout;               //!< how the send/receive ended
+  protocol::CodecStatus decode = protocol::CodecStatus::ok;  //!< decoding of the state packet
+  //! Status of the send, or of the receive when the send succeeded.
   transport::TransportStatus transport = transport::TransportStatus::ok;
+  //! Stylus read status; error also when commanding the force failed.
   DeviceStatus device = DeviceStatus::ok;
   bool mapper_rejected = false;     //!< stylus sample non-finite: previous setpoint kept
   bool estimator_rejected = false;  //!< estimator gave no finite force: force held/zeroed
   std::uint8_t clamped_mask = 0;    //!< joints limited to their range by the mapper
   bool rate_limited = false;        //!< setpoint change limited by max_setpoint_rate
   bool force_limited = false;       //!< stylus force scaled down to a limit
+  //! The watchdog's count of misses in a row after this tick.
   int consecutive_misses = 0;
   double force_scale = 0.0;                       //!< ramp factor applied to the force, 0..1
   MotorVector setpoint = MotorVector::Zero();     //!< rad, what was sent (motor order)
@@ -89,16 +93,18 @@ struct [[nodiscard]] TickResult {
   MotorState4 measured{};                         //!< newest valid state (held on a miss)
   MotorVector joint_force = MotorVector::Zero();  //!< estimate, motor order
   Eigen::Vector3d stylus_force = Eigen::Vector3d::Zero();  //!< N, what the device was told
-  std::chrono::nanoseconds round_trip{0};
+  std::chrono::nanoseconds round_trip{0};  //!< ns from send to receive return; 0 if not sent
 
+  //! True when `status` is TickStatus::ok.
   [[nodiscard]] bool ok() const noexcept { return status == TickStatus::ok; }
 };
 
+//! Timing and safety settings of a TeleopLoop.
 struct TeleopLoopConfig {
   //! Nominal period; 0 runs ticks back to back (as fast as the link allows).
   std::chrono::nanoseconds period = std::chrono::milliseconds(1);
   std::chrono::nanoseconds receive_timeout = std::chrono::milliseconds(1);  //!< 2016: 1 ms
-  SafetyConfig safety{};
+  SafetyConfig safety{};  //!< watchdog, safe state, ramp and limits
 
   //! Largest dt a tick gives the setpoint rate limit and the force ramp: the period, or with
   //! period 0 the receive timeout (a tick's longest wait) but at least 1 ms.
@@ -121,12 +127,14 @@ struct TeleopLoopConfig {
   }
 };
 
+//! The single-thread teleoperation cycle, composed of a Transport to the sbRIO, a HapticDevice,
+//! a JointForceEstimator, a TeleopMapper and a Clock (all borrowed). Drive it with tick() or run().
 template <transport::Transport Transport, HapticDevice Device, JointForceEstimator Estimator,
           TeleopMapper Mapper, Clock ClockT = SteadyClock>
 class TeleopLoop {
  public:
-  using Codec = protocol::PacketCodec<loop_motors>;
-  using Config = TeleopLoopConfig;
+  using Codec = protocol::PacketCodec<loop_motors>;  //!< packet codec for the four motors
+  using Config = TeleopLoopConfig;                   //!< the loop's configuration
 
   //! All parts are owned by the caller and must outlive the loop. Throws Error on a bad config.
   TeleopLoop(Transport& transport, Device& device, Estimator& estimator, Mapper& mapper,
@@ -319,8 +327,11 @@ class TeleopLoop {
     return n;
   }
 
+  //! Timing and exchange statistics of every tick so far.
   [[nodiscard]] const LoopStats& stats() const noexcept { return stats_; }
+  //! The link watchdog (state and miss counters).
   [[nodiscard]] const Watchdog& watchdog() const noexcept { return watchdog_; }
+  //! The validated configuration.
   [[nodiscard]] const Config& config() const noexcept { return config_; }
 
   //! Orderly stop: zero force on the device and one setpoint with all motors disabled.

@@ -32,15 +32,17 @@ struct FaultRates {
 
 //! Exact counts of the faults injected so far.
 struct FaultCounters {
-  std::uint64_t dropped_send = 0;
-  std::uint64_t dropped_receive = 0;
-  std::uint64_t delayed = 0;
-  std::uint64_t duplicated = 0;
-  std::uint64_t corrupted = 0;
-  std::uint64_t truncated = 0;
-  std::uint64_t reordered = 0;
+  std::uint64_t dropped_send = 0;     //!< outgoing datagrams silently not sent
+  std::uint64_t dropped_receive = 0;  //!< incoming datagrams discarded as if lost
+  std::uint64_t delayed = 0;          //!< incoming datagrams held back for a later receive
+  std::uint64_t duplicated = 0;       //!< outgoing datagrams sent a second time
+  std::uint64_t corrupted = 0;        //!< incoming datagrams with 1-3 bits flipped
+  std::uint64_t truncated = 0;        //!< incoming datagrams cut to a shorter length
+  std::uint64_t reordered = 0;        //!< held-back datagrams delivered in place of a newer one
 };
 
+//! Wraps the Transport `Inner` (not owned; must outlive this) and injects the faults of
+//! FaultRates. Held-back datagrams are kept up to MaxDatagram bytes. Models Transport.
 template <Transport Inner, std::size_t MaxDatagram = 128>
 class FaultInjectingTransport {
  public:
@@ -57,6 +59,8 @@ class FaultInjectingTransport {
     }
   }
 
+  //! Sends through the inner transport, unless dropped (still reports ok, as UDP would) or
+  //! duplicated (sent twice). Otherwise returns the inner transport's status.
   TransportStatus send(std::span<const std::byte> datagram) noexcept {
     if (happens(rates_.drop_send)) {
       ++counters_.dropped_send;
@@ -70,6 +74,8 @@ class FaultInjectingTransport {
     return status;
   }
 
+  //! Receives through the inner transport, then may drop, delay, reorder, corrupt or truncate
+  //! the datagram; a held-back datagram is delivered when nothing usable arrives.
   ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds timeout) noexcept {
     ReceiveResult result = inner_->receive(buffer, timeout);
     if (result.status != TransportStatus::ok) return deliver_held(buffer, result);
@@ -95,7 +101,9 @@ class FaultInjectingTransport {
     return damage(buffer, result);
   }
 
+  //! Faults injected since construction.
   [[nodiscard]] const FaultCounters& counters() const noexcept { return counters_; }
+  //! The fault rates currently in effect.
   [[nodiscard]] const FaultRates& rates() const noexcept { return rates_; }
   //! Changes the rates at run time (e.g. to simulate a link dying and recovering).
   //! Precondition: every rate in [0, 1].

@@ -50,8 +50,11 @@ class DatagramQueue {
     return true;
   }
 
+  //! Datagrams currently queued.
   [[nodiscard]] std::size_t size() const noexcept { return size_; }
+  //! Datagrams overwritten because the queue was full, since construction.
   [[nodiscard]] std::size_t overflowed() const noexcept { return overflowed_; }
+  //! Discards every queued datagram (the overflow count is kept).
   void clear() noexcept { head_ = size_ = 0; }
 
  private:
@@ -70,7 +73,7 @@ class DatagramQueue {
 template <std::size_t MaxDatagram = 128, std::size_t Capacity = 16>
 class InMemoryTransport {
  public:
-  using Queue = DatagramQueue<MaxDatagram, Capacity>;
+  using Queue = DatagramQueue<MaxDatagram, Capacity>;  //!< queue type of `tx` and `rx`
 
   //! Receives read at most default_max_drain datagrams each.
   InMemoryTransport(Queue& tx, Queue& rx) noexcept : tx_(&tx), rx_(&rx) {}
@@ -78,6 +81,7 @@ class InMemoryTransport {
   InMemoryTransport(Queue& tx, Queue& rx, std::size_t max_drain)
       : tx_(&tx), rx_(&rx), max_drain_(detail::checked_max_drain(max_drain, "InMemoryTransport")) {}
 
+  //! Queues a copy into `tx` (never blocks; a full queue drops its oldest); error when closed.
   TransportStatus send(std::span<const std::byte> datagram) noexcept {
     if (closed_) return TransportStatus::error;
     tx_->push(datagram);
@@ -108,6 +112,7 @@ class InMemoryTransport {
 
   //! Simulates a dead socket: every call fails until reopened.
   void close() noexcept { closed_ = true; }
+  //! Undoes close(): send and receive work again.
   void reopen() noexcept { closed_ = false; }
 
   //! Datagrams one receive reads at most.
@@ -124,8 +129,8 @@ class InMemoryTransport {
 template <std::size_t MaxDatagram = 128, std::size_t Capacity = 16>
 class InMemoryLink {
  public:
-  using Endpoint = InMemoryTransport<MaxDatagram, Capacity>;
-  using Queue = typename Endpoint::Queue;
+  using Endpoint = InMemoryTransport<MaxDatagram, Capacity>;  //!< type of `a` and `b`
+  using Queue = typename Endpoint::Queue;                     //!< one direction's queue
 
   //! Both endpoints read at most default_max_drain datagrams per receive.
   InMemoryLink() noexcept : a_(a_to_b_, b_to_a_), b_(b_to_a_, a_to_b_) {}
@@ -135,10 +140,13 @@ class InMemoryLink {
   InMemoryLink(const InMemoryLink&) = delete;
   InMemoryLink& operator=(const InMemoryLink&) = delete;
 
+  //! Endpoint a: sends into a_to_b(), receives from b_to_a().
   Endpoint& a() noexcept { return a_; }
+  //! Endpoint b: sends into b_to_a(), receives from a_to_b().
   Endpoint& b() noexcept { return b_; }
-  //! Datagrams sent by a and not yet received by b (and the reverse).
+  //! Datagrams sent by a and not yet received by b.
   Queue& a_to_b() noexcept { return a_to_b_; }
+  //! Datagrams sent by b and not yet received by a.
   Queue& b_to_a() noexcept { return b_to_a_; }
 
  private:
@@ -154,12 +162,14 @@ class InMemoryLink {
 template <typename Responder, std::size_t MaxDatagram = 128, std::size_t Capacity = 16>
 class RespondingTransport {
  public:
-  using Queue = DatagramQueue<MaxDatagram, Capacity>;
+  using Queue = DatagramQueue<MaxDatagram, Capacity>;  //!< queue type holding the replies
 
+  //! Takes ownership of `responder`, called as `responder(datagram, reply)` on each send.
   explicit RespondingTransport(Responder responder) noexcept(
       std::is_nothrow_move_constructible_v<Responder>)
       : responder_(std::move(responder)) {}
 
+  //! Hands `datagram` to the responder, which may queue replies; error when closed.
   TransportStatus send(std::span<const std::byte> datagram) noexcept {
     if (closed_) return TransportStatus::error;
     Reply reply{&replies_};
@@ -167,19 +177,25 @@ class RespondingTransport {
     return TransportStatus::ok;
   }
 
+  //! Returns the newest queued reply like InMemoryTransport::receive (never waits; reads at most
+  //! default_max_drain replies); error when closed.
   ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds timeout) noexcept {
     InMemoryTransport<MaxDatagram, Capacity> view(unused_, replies_);
     if (closed_) view.close();
     return view.receive(buffer, timeout);
   }
 
+  //! The owned responder (e.g. to inspect or reconfigure an emulated sbRIO).
   Responder& responder() noexcept { return responder_; }
+  //! Simulates a dead socket: send and receive fail until reopened.
   void close() noexcept { closed_ = true; }
+  //! Undoes close(): send and receive work again.
   void reopen() noexcept { closed_ = false; }
 
   //! What the responder writes its answers into.
   struct Reply {
-    Queue* queue;
+    Queue* queue;  //!< the transport's reply queue (not owned)
+    //! Queues `datagram` as a reply for the next receive; always ok.
     TransportStatus send(std::span<const std::byte> datagram) noexcept {
       queue->push(datagram);
       return TransportStatus::ok;

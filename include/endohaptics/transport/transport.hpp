@@ -39,12 +39,13 @@ inline std::size_t checked_max_drain(std::size_t max_drain, std::string_view who
 
 //! Outcome of a send or receive.
 enum class TransportStatus : std::uint8_t {
-  ok = 0,
+  ok = 0,     //!< sent, or a datagram was received into the buffer
   timeout,    //!< receive: nothing arrived before the deadline
   truncated,  //!< receive: the datagram was larger than the caller's buffer (content dropped)
   error,      //!< the operating system refused the operation (socket closed, unreachable, ...)
 };
 
+//! Short human-readable description of `status` (for logs and error messages).
 [[nodiscard]] constexpr std::string_view to_string(TransportStatus status) noexcept {
   switch (status) {
     case TransportStatus::ok:
@@ -64,7 +65,7 @@ enum class TransportStatus : std::uint8_t {
 //! A receive reads at most its transport's `max_drain` datagrams: under a flood it returns the
 //! newest of those, and the rest are read (and counted) by the next call.
 struct ReceiveResult {
-  TransportStatus status = TransportStatus::timeout;
+  TransportStatus status = TransportStatus::timeout;  //!< outcome of the receive
   std::size_t size = 0;     //!< bytes of the returned datagram (valid when status is ok)
   std::size_t dropped = 0;  //!< stale datagrams discarded before the returned one
 };

@@ -23,12 +23,14 @@ namespace endohaptics::transport {
 
 //! Where the server listens. Default: the sbRIO's port on every interface.
 struct UdpServerConfig {
-  std::string bind_address = "0.0.0.0";
-  std::uint16_t port = 61556;  //!< 0: any free port (see local_endpoint())
+  std::string bind_address = "0.0.0.0";  //!< local IPv4/IPv6 address to bind; 0.0.0.0: all
+  std::uint16_t port = 61556;            //!< 0: any free port (see local_endpoint())
   //! Datagrams one receive reads at most (1..max_drain_limit); the rest wait for the next call.
   std::size_t max_drain = default_max_drain;
 };
 
+//! Server (sbRIO) side of the UDP link: bound, unconnected socket that replies to the sender of
+//! the newest datagram received. Non-copyable; models Transport.
 class UdpServerTransport {
  public:
   //! Opens and binds the socket. Throws Error naming the address on failure, or the field and

@@ -81,15 +81,17 @@ inline ReceiveResult receive_newest(int fd, std::span<std::byte> buffer,
 
 //! Where to bind and whom to talk to. Defaults: the 2016 rig's sbRIO (worksheet appendix B).
 struct UdpConfig {
-  std::string local_address = "0.0.0.0";
-  std::uint16_t local_port = 0;  //!< 0: any free port
-  std::string remote_address = "169.254.4.42";
-  std::uint16_t remote_port = 61556;
-  int receive_buffer_bytes = 0;  //!< SO_RCVBUF; 0 keeps the system default
+  std::string local_address = "0.0.0.0";        //!< local IPv4/IPv6 address to bind; 0.0.0.0: any
+  std::uint16_t local_port = 0;                 //!< 0: any free port
+  std::string remote_address = "169.254.4.42";  //!< the sbRIO's address
+  std::uint16_t remote_port = 61556;            //!< the sbRIO's UDP port
+  int receive_buffer_bytes = 0;                 //!< SO_RCVBUF; 0 keeps the system default
   //! Datagrams one receive reads at most (1..max_drain_limit); the rest wait for the next call.
   std::size_t max_drain = default_max_drain;
 };
 
+//! PC side of the UDP link to the sbRIO: bound and connected socket, non-blocking sends and
+//! deadline-bounded receives returning the newest datagram. Non-copyable; models Transport.
 class UdpTransport {
  public:
   //! Opens, binds and connects the socket. Throws Error naming the address on failure, or the
@@ -134,6 +136,8 @@ class UdpTransport {
   UdpTransport(const UdpTransport&) = delete;
   UdpTransport& operator=(const UdpTransport&) = delete;
 
+  //! Sends `datagram` without blocking. A full send buffer counts as ok (dropped, as on the
+  //! wire); error on any other failure, e.g. ECONNREFUSED when the peer is not listening.
   TransportStatus send(std::span<const std::byte> datagram) noexcept {
     for (;;) {
       const ssize_t n = ::send(socket_.native_handle(), datagram.data(), datagram.size(),
