@@ -459,10 +459,10 @@ TEST_CASE("invalid configurations throw endohaptics::Error naming field and valu
   CHECK(message(c) == "CylindricalMapper: range of pitch is empty: lower 0.5 > upper -0.5");
   c = Config{};
   c.a_roll = not_a_number;
-  CHECK(message(c) == "CylindricalMapper: a_roll must be finite, got nan");
+  CHECK(message(c) == "CylindricalMapper: a_roll is not finite (nan)");
   c = Config{};
   c.upper[3] = inf;
-  CHECK(message(c) == "CylindricalMapper: upper[clamp2] must be finite, got inf");
+  CHECK(message(c) == "CylindricalMapper: upper[clamp2] is not finite (inf)");
   c = Config{};
   c.force_limit = 0.0;
   CHECK(message(c) == "CylindricalMapper: force_limit must be > 0 N, got 0");
@@ -474,7 +474,7 @@ TEST_CASE("invalid configurations throw endohaptics::Error naming field and valu
   CHECK(message(c) == "CylindricalMapper: theta_neutral must be in [-pi, pi] rad, got 4");
   c = Config{};
   c.force_scale[1] = -inf;
-  CHECK(message(c) == "CylindricalMapper: force_scale[1] must be finite, got -inf");
+  CHECK(message(c) == "CylindricalMapper: force_scale[1] is not finite (-inf)");
 }
 
 TEST_CASE_TEMPLATE("float and double give the hand-computed values", Scalar, double, float) {

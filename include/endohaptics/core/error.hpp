@@ -14,7 +14,16 @@
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <type_traits>
+
+//! Throws a configuration-time exception, or, in a build without exceptions (-fno-exceptions),
+//! prints its message and aborts. Never used on the real-time path.
+#if defined(__cpp_exceptions) || defined(__EXCEPTIONS)
+#define ENDOHAPTICS_THROW(...) throw __VA_ARGS__
+#else
+#define ENDOHAPTICS_THROW(...) ::endohaptics::detail::fail_fast(__VA_ARGS__)
+#endif
 
 namespace endohaptics {
 
@@ -50,17 +59,47 @@ template <std::floating_point Scalar>
   return format_number(value.real()) + (value.imag() < Scalar(0) ? " - " : " + ") +
          format_number(std::abs(value.imag())) + "i";
 }
+
+//! "owner: " in front of a message, or nothing when `owner` is empty.
+[[nodiscard]] inline std::string owner_prefix(std::string_view owner) {
+  return owner.empty() ? std::string() : std::string(owner) + ": ";
+}
+
+//! Throws Error "<owner>: <what> is not finite (<value>)" when `value` is NaN or +-Inf.
+template <std::floating_point Scalar>
+void require_finite(Scalar value, std::string_view owner, std::string_view what) {
+  if (!std::isfinite(value)) {
+    ENDOHAPTICS_THROW(Error(owner_prefix(owner) + std::string(what) + " is not finite (" +
+                            format_number(value) + ")"));
+  }
+}
+
+//! Anything with rows(), cols() and (i, j) access: Eigen matrices, arrays and expressions.
+template <typename M>
+concept MatrixLike = requires(const M& m) {
+  m.rows();
+  m.cols();
+  m(0, 0);
+};
+
+//! Throws Error "<owner>: <what>(i,j) is not finite (<value>)" naming the first NaN or +-Inf
+//! entry of `m`, column by column.
+template <MatrixLike M>
+void require_finite(const M& m, std::string_view owner, std::string_view what) {
+  for (decltype(m.cols()) j = 0; j < m.cols(); ++j) {
+    for (decltype(m.rows()) i = 0; i < m.rows(); ++i) {
+      if (!std::isfinite(m(i, j))) {
+        ENDOHAPTICS_THROW(Error(owner_prefix(owner) + std::string(what) + "(" + std::to_string(i) +
+                                "," + std::to_string(j) + ") is not finite (" +
+                                format_number(m(i, j)) + ")"));
+      }
+    }
+  }
+}
 }  // namespace detail
 
 }  // namespace endohaptics
 
-//! Throws a configuration-time exception, or, in a build without exceptions (-fno-exceptions),
-//! prints its message and aborts. Never used on the real-time path.
-#if defined(__cpp_exceptions) || defined(__EXCEPTIONS)
-#define ENDOHAPTICS_THROW(...) throw __VA_ARGS__
-#else
-#define ENDOHAPTICS_THROW(...) ::endohaptics::detail::fail_fast(__VA_ARGS__)
-#endif
 
 #ifndef ENDOHAPTICS_ASSERT
 #include <cassert>

@@ -66,19 +66,7 @@ Scalar structure_tolerance(Eigen::Index n, Scalar eps) noexcept {
   return Scalar(100) * static_cast<Scalar>(n) * eps;
 }
 
-//! Throws Error naming `owner: what(i,j)` and its value when `m` holds NaN or +-Inf.
-template <typename Derived>
-void require_finite(const Eigen::MatrixBase<Derived>& m, std::string_view owner,
-                    std::string_view what) {
-  for (Eigen::Index j = 0; j < m.cols(); ++j) {
-    for (Eigen::Index i = 0; i < m.rows(); ++i) {
-      if (!std::isfinite(m(i, j))) {
-        ENDOHAPTICS_THROW(Error(std::string(owner) + ": " + entry_name(what, i, j) +
-                                " is not finite (" + format_number(m(i, j)) + ")"));
-      }
-    }
-  }
-}
+using endohaptics::detail::require_finite;
 
 //! Checks that square `M` is symmetric to a relative 100 n eps and returns (M + M') / 2.
 template <typename Scalar>

@@ -75,7 +75,7 @@ using nlohmann::json;
 
 [[noreturn]] inline void fail(const std::string& message) { ENDOHAPTICS_THROW(Error(message)); }
 
-inline std::string num(double v) { return identification::detail::subspace::num(v); }
+using endohaptics::detail::format_number;
 
 //! Throws unless sizes agree and every number is finite; `where` prefixes the message.
 inline void validate(const ModelFile& m, const std::string& where) {
@@ -93,14 +93,15 @@ inline void validate(const ModelFile& m, const std::string& where) {
       for (Eigen::Index i = 0; i < M.rows(); ++i) {
         if (!std::isfinite(M(i, j))) {
           fail(where + ": field \"" + field + "[" + std::to_string(i) + "][" + std::to_string(j) +
-               "]\" is not finite (" + num(M(i, j)) + ")");
+               "]\" is not finite (" + format_number(M(i, j)) + ")");
         }
       }
     }
   };
   if (n < 1) fail(where + ": field \"A\" must have at least one state, got 0");
   if (!std::isfinite(m.sample_time) || !(m.sample_time > 0.0)) {
-    fail(where + ": field \"sample_time_s\" must be finite and > 0, got " + num(m.sample_time));
+    fail(where + ": field \"sample_time_s\" must be finite and > 0, got " +
+         format_number(m.sample_time));
   }
   if (ny < 1) fail(where + ": field \"outputs\" must name at least one output");
   size("A", m.A, n, n, "states", "states");
@@ -118,11 +119,12 @@ inline void validate(const ModelFile& m, const std::string& where) {
       const std::string at = where + ": field \"" + field + "[" + std::to_string(i) + "]\"";
       if (v[i].kind == StaticMapKind::none) continue;
       if (!std::isfinite(v[i].lower) || !std::isfinite(v[i].upper)) {
-        fail(at + ": breakpoints must be finite, got [" + num(v[i].lower) + ", " + num(v[i].upper) +
-             "]");
+        fail(at + ": breakpoints must be finite, got [" + format_number(v[i].lower) + ", " +
+             format_number(v[i].upper) + "]");
       }
       if (!(v[i].lower <= v[i].upper)) {
-        fail(at + ": lower " + num(v[i].lower) + " is greater than upper " + num(v[i].upper));
+        fail(at + ": lower " + format_number(v[i].lower) + " is greater than upper " +
+             format_number(v[i].upper));
       }
     }
   };

@@ -229,7 +229,7 @@ double minimise_1d(Cost&& cost, double lo, double hi, int grid, int iterations, 
 [[nodiscard]] inline HammersteinWienerFit fit_hammerstein_wiener(
     std::span<const DataSet> data, const HammersteinWienerFitOptions& options = {}) {
   using detail::subspace::fail;
-  using detail::subspace::num;
+  using endohaptics::detail::format_number;
   if (data.empty()) fail("fit_hammerstein_wiener: no data sets");
   const Eigen::Index nu = data.front().u.cols();
   const Eigen::Index ny = data.front().y.cols();

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/core/median.hpp"
 
 namespace endohaptics::identification {
 
@@ -44,15 +45,7 @@ inline void require_positive(double value, std::string_view function, std::strin
   }
 }
 
-//! Median of a copy (NaN when empty); even counts average the two middle values.
-inline double median(std::vector<double> values) {
-  if (values.empty()) return std::numeric_limits<double>::quiet_NaN();
-  const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), mid, values.end());
-  double m = *mid;
-  if (values.size() % 2 == 0) m = 0.5 * (m + *std::max_element(values.begin(), mid));
-  return m;
-}
+using endohaptics::detail::median;
 
 //! Throws unless `time` is finite and strictly increasing.
 inline void require_increasing(const Eigen::Ref<const Eigen::VectorXd>& time,

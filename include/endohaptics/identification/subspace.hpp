@@ -105,23 +105,13 @@ using Index = Eigen::Index;
 
 [[noreturn]] inline void fail(const std::string& message) { ENDOHAPTICS_THROW(Error(message)); }
 
-inline std::string num(double value) {
-  std::array<char, 64> buffer{};
-  const auto result = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
-  return std::string(buffer.data(), result.ptr);
-}
+using endohaptics::detail::format_number;
 
 inline std::string idx(Index value) { return std::to_string(value); }
 
 //! Throws Error naming `what`, its (row, col) and the value when an entry is NaN or +-Inf.
 inline void require_finite(const Matrix& m, const std::string& what) {
-  for (Index j = 0; j < m.cols(); ++j) {
-    for (Index i = 0; i < m.rows(); ++i) {
-      if (!std::isfinite(m(i, j))) {
-        fail(what + "(" + idx(i) + "," + idx(j) + ") is not finite (" + num(m(i, j)) + ")");
-      }
-    }
-  }
+  endohaptics::detail::require_finite(m, {}, what);
 }
 
 //! The matrices of a linear model, whatever type held them.
@@ -289,14 +279,14 @@ inline Regressed regress_b_d_x0(const Matrix& A, const Matrix& C, std::span<cons
 [[nodiscard]] inline int select_order(const Eigen::VectorXd& singular_values, int max_order,
                                       double gap_ratio = 0.5) {
   using detail::subspace::fail;
-  using detail::subspace::num;
+  using endohaptics::detail::format_number;
   if (singular_values.size() < 2) {
     fail("select_order: needs at least 2 singular values, got " +
          std::to_string(singular_values.size()));
   }
   if (max_order < 1) fail("select_order: max_order must be >= 1, got " + std::to_string(max_order));
   if (!(gap_ratio > 0.0 && gap_ratio <= 1.0)) {
-    fail("select_order: gap_ratio must be in (0, 1], got " + num(gap_ratio));
+    fail("select_order: gap_ratio must be in (0, 1], got " + format_number(gap_ratio));
   }
   if (!(singular_values[0] > 0.0)) return 1;  // no signal at all
   const auto count =
@@ -370,7 +360,7 @@ inline Regressed regress_b_d_x0(const Matrix& A, const Matrix& C, std::span<cons
     fail("identify: max_order must be >= 1, got " + std::to_string(options.max_order));
   }
   if (!std::isfinite(options.sample_time) || !(options.sample_time > 0.0)) {
-    fail("identify: sample time must be finite and > 0 s, got " + ds::num(options.sample_time));
+    fail("identify: sample time must be finite and > 0 s, got " + ds::format_number(options.sample_time));
   }
   const int wanted = options.order > 0 ? options.order : options.max_order;
   const auto sets = static_cast<int>(data.size());

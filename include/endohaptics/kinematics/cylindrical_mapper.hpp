@@ -234,24 +234,19 @@ class CylindricalMapper {
     return theta;
   }
 
-  static void require_finite(Scalar value, const char* field) {
-    if (!std::isfinite(value)) {
-      ENDOHAPTICS_THROW(Error(std::string("CylindricalMapper: ") + field + " must be finite, got " +
-                              endohaptics::detail::format_number(value)));
-    }
-  }
-
   void validate() {
-    require_finite(config_.a_roll, "a_roll");
-    require_finite(config_.b_roll, "b_roll");
-    require_finite(config_.a_pitch, "a_pitch");
-    require_finite(config_.b_pitch, "b_pitch");
-    require_finite(config_.a_clamp, "a_clamp");
-    require_finite(config_.b_clamp, "b_clamp");
+    endohaptics::detail::require_finite(config_.a_roll, "CylindricalMapper", "a_roll");
+    endohaptics::detail::require_finite(config_.b_roll, "CylindricalMapper", "b_roll");
+    endohaptics::detail::require_finite(config_.a_pitch, "CylindricalMapper", "a_pitch");
+    endohaptics::detail::require_finite(config_.b_pitch, "CylindricalMapper", "b_pitch");
+    endohaptics::detail::require_finite(config_.a_clamp, "CylindricalMapper", "a_clamp");
+    endohaptics::detail::require_finite(config_.b_clamp, "CylindricalMapper", "b_clamp");
     for (int j = 0; j < num_joints; ++j) {
       const std::string name(to_string(static_cast<Motor>(j)));
-      require_finite(config_.lower[j], ("lower[" + name + "]").c_str());
-      require_finite(config_.upper[j], ("upper[" + name + "]").c_str());
+      endohaptics::detail::require_finite(config_.lower[j], "CylindricalMapper",
+                                          ("lower[" + name + "]").c_str());
+      endohaptics::detail::require_finite(config_.upper[j], "CylindricalMapper",
+                                          ("upper[" + name + "]").c_str());
       if (config_.lower[j] > config_.upper[j]) {
         ENDOHAPTICS_THROW(Error("CylindricalMapper: range of " + name + " is empty: lower " +
                                 endohaptics::detail::format_number(config_.lower[j]) + " > upper " +
@@ -273,20 +268,22 @@ class CylindricalMapper {
       seen[j] = true;
       motor_of_joint_[j] = static_cast<int>(m);
     }
-    require_finite(config_.min_radius, "min_radius");
+    endohaptics::detail::require_finite(config_.min_radius, "CylindricalMapper", "min_radius");
     if (config_.min_radius < 0) {
       ENDOHAPTICS_THROW(Error("CylindricalMapper: min_radius must be >= 0 m, got " +
                               endohaptics::detail::format_number(config_.min_radius)));
     }
-    require_finite(config_.theta_neutral, "theta_neutral");
+    endohaptics::detail::require_finite(config_.theta_neutral, "CylindricalMapper",
+                                        "theta_neutral");
     if (std::fabs(config_.theta_neutral) > std::numbers::pi_v<Scalar>) {
       ENDOHAPTICS_THROW(Error("CylindricalMapper: theta_neutral must be in [-pi, pi] rad, got " +
                               endohaptics::detail::format_number(config_.theta_neutral)));
     }
     for (int k = 0; k < 3; ++k) {
-      require_finite(config_.force_scale[k], ("force_scale[" + std::to_string(k) + "]").c_str());
+      endohaptics::detail::require_finite(config_.force_scale[k], "CylindricalMapper",
+                                          ("force_scale[" + std::to_string(k) + "]").c_str());
     }
-    require_finite(config_.force_limit, "force_limit");
+    endohaptics::detail::require_finite(config_.force_limit, "CylindricalMapper", "force_limit");
     if (!(config_.force_limit > 0)) {
       ENDOHAPTICS_THROW(Error("CylindricalMapper: force_limit must be > 0 N, got " +
                               endohaptics::detail::format_number(config_.force_limit)));

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/core/median.hpp"
 
 namespace endohaptics::model {
 
@@ -288,14 +289,7 @@ struct FrictionIdentification {
 
 namespace detail::friction {
 
-inline double median_of(std::vector<double> values) {
-  if (values.empty()) return std::numeric_limits<double>::quiet_NaN();
-  const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), mid, values.end());
-  double m = *mid;
-  if (values.size() % 2 == 0) m = (m + *std::max_element(values.begin(), mid)) / 2.0;
-  return m;
-}
+using endohaptics::detail::median;
 
 //! Huber M-estimate of y = a + b x by iteratively reweighted least squares; scale from the
 //! median absolute deviation of the residuals (1.4826 MAD). Returns {a, b}.
@@ -322,10 +316,10 @@ inline std::array<double, 2> huber_line(const std::vector<double>& x, const std:
     ab = next;
     if (converged && iteration > 0) break;
     for (std::size_t i = 0; i < x.size(); ++i) r[i] = y[i] - ab[0] - ab[1] * x[i];
-    const double centre = median_of(r);
+    const double centre = median(r);
     std::vector<double> deviation(r.size());
     for (std::size_t i = 0; i < r.size(); ++i) deviation[i] = std::abs(r[i] - centre);
-    const double scale = 1.4826 * median_of(deviation);
+    const double scale = 1.4826 * median(deviation);
     if (!(scale > 0)) break;
     for (std::size_t i = 0; i < x.size(); ++i) {
       const double u = std::abs(r[i]) / (k * scale);
@@ -444,7 +438,7 @@ inline void require_positive(double value, std::string_view name) {
           if (std::abs(omega[c]) > options.moving_velocity) {
             const std::size_t first = g - 1;
             const std::size_t last = std::min(g + window_steps, points);
-            const double level = detail::friction::median_of(
+            const double level = detail::friction::median(
                 std::vector<double>(amp.begin() + static_cast<std::ptrdiff_t>(first),
                                     amp.begin() + static_cast<std::ptrdiff_t>(last)));
             onsets.emplace_back(omega[c] > 0 ? 1.0 : -1.0, level);

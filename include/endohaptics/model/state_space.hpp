@@ -25,20 +25,13 @@ namespace detail {
 
 using endohaptics::detail::format_number;  // round-trip digits in error messages
 
-//! Throws Error naming `what`(row,col) when a matrix holds NaN or +-Inf.
-template <typename Derived>
-void require_finite(const Eigen::MatrixBase<Derived>& m, std::string_view owner,
-                    std::string_view what) {
-  for (Eigen::Index j = 0; j < m.cols(); ++j) {
-    for (Eigen::Index i = 0; i < m.rows(); ++i) {
-      if (!std::isfinite(m(i, j))) {
-        ENDOHAPTICS_THROW(Error(std::string(owner) + ": " + std::string(what) + "(" +
-                                std::to_string(i) + "," + std::to_string(j) + ") is not finite (" +
-                                format_number(m(i, j)) + ")"));
-      }
-    }
-  }
-}
+//! Configuration-time numerics (eigenvalues, LU, the matrix exponential) run on dynamic-size
+//! matrices: each decomposition is then compiled once per Scalar, not once per model size (a
+//! fixed-size EigenSolver costs seconds of compile time for every size). Not on the tick path.
+template <typename Scalar>
+using DynamicMatrix = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
+
+using endohaptics::detail::require_finite;
 
 //! Throws Error unless `sample_time` is finite and > 0.
 template <typename Scalar>
@@ -180,7 +173,8 @@ class StateSpace {
 
   //! Eigenvalues (poles) of A. Configuration time: throws Error if the QR iteration fails.
   [[nodiscard]] Eigenvalues eigenvalues() const {
-    Eigen::EigenSolver<MatrixA> solver(A_, /*computeEigenvectors=*/false);
+    const Eigen::EigenSolver<detail::DynamicMatrix<Scalar>> solver(
+        detail::DynamicMatrix<Scalar>(A_), /*computeEigenvectors=*/false);
     if (solver.info() != Eigen::Success) {
       ENDOHAPTICS_THROW(Error("StateSpace: eigenvalue computation of A did not converge"));
     }
@@ -196,8 +190,8 @@ class StateSpace {
   //! Steady-state gain C (I - A)^-1 B + D (Ny x Nu). Throws Error if I - A is singular
   //! (a pole at z = 1, e.g. an integrator).
   [[nodiscard]] MatrixD dc_gain() const {
-    const MatrixA I_minus_A = MatrixA::Identity() - A_;
-    const Eigen::FullPivLU<MatrixA> lu(I_minus_A);
+    const Eigen::FullPivLU<detail::DynamicMatrix<Scalar>> lu(
+        detail::DynamicMatrix<Scalar>(MatrixA::Identity() - A_));
     if (!lu.isInvertible()) {
       ENDOHAPTICS_THROW(Error("StateSpace: DC gain undefined, I - A is singular (rank " +
                               std::to_string(lu.rank()) + " of " + std::to_string(Nx) +
@@ -206,7 +200,7 @@ class StateSpace {
     if constexpr (Nu == 0) {
       return MatrixD{};
     } else {
-      const MatrixB X = lu.solve(B_);
+      const MatrixB X = lu.solve(detail::DynamicMatrix<Scalar>(B_));
       return C_ * X + D_;
     }
   }
@@ -271,10 +265,10 @@ template <int Nx, int Nu, int Ny, typename Scalar>
     const ContinuousStateSpace<Nx, Nu, Ny, Scalar>& continuous, Scalar sample_time) {
   detail::require_sample_time(sample_time, "discretize_zoh");
   constexpr int n = Nx + Nu;
-  Eigen::Matrix<Scalar, n, n> M = Eigen::Matrix<Scalar, n, n>::Zero();
+  detail::DynamicMatrix<Scalar> M = detail::DynamicMatrix<Scalar>::Zero(n, n);
   M.template topLeftCorner<Nx, Nx>() = continuous.A() * sample_time;
   if constexpr (Nu > 0) M.template topRightCorner<Nx, Nu>() = continuous.B() * sample_time;
-  const Eigen::Matrix<Scalar, n, n> E = M.exp();
+  const detail::DynamicMatrix<Scalar> E = M.exp();
   typename StateSpace<Nx, Nu, Ny, Scalar>::MatrixB Bd;
   if constexpr (Nu > 0) Bd = E.template topRightCorner<Nx, Nu>();
   return StateSpace<Nx, Nu, Ny, Scalar>(E.template topLeftCorner<Nx, Nx>(), Bd, continuous.C(),
@@ -291,24 +285,26 @@ template <int Nx, int Nu, int Ny, typename Scalar>
   using SS = StateSpace<Nx, Nu, Ny, Scalar>;
   const Scalar half = sample_time / Scalar(2);
   const typename SS::MatrixA I = SS::MatrixA::Identity();
-  const typename SS::MatrixA M = I - continuous.A() * half;
-  const Eigen::FullPivLU<typename SS::MatrixA> lu(M);
+  const detail::DynamicMatrix<Scalar> M = I - continuous.A() * half;
+  const Eigen::FullPivLU<detail::DynamicMatrix<Scalar>> lu(M);
   if (!lu.isInvertible()) {
     ENDOHAPTICS_THROW(Error(
         "discretize_tustin: I - A Ts/2 is singular for Ts = " + detail::format_number(sample_time) +
         " s (A has an eigenvalue at 2/Ts)"));
   }
-  const typename SS::MatrixA Ad = lu.solve(I + continuous.A() * half);
+  const typename SS::MatrixA Ad =
+      lu.solve(detail::DynamicMatrix<Scalar>(I + continuous.A() * half));
   typename SS::MatrixB Bd;
   typename SS::MatrixD Dd = continuous.D();
   if constexpr (Nu > 0) {
-    Bd = lu.solve(continuous.B() * sample_time);
+    Bd = lu.solve(detail::DynamicMatrix<Scalar>(continuous.B() * sample_time));
     Dd += continuous.C() * Bd / Scalar(2);
   }
   // Cd = C M^-1, i.e. the solution of M^T Cd^T = C^T.
-  const typename SS::MatrixC Cd = Eigen::FullPivLU<typename SS::MatrixA>(M.transpose())
-                                      .solve(continuous.C().transpose())
-                                      .transpose();
+  const typename SS::MatrixC Cd =
+      Eigen::FullPivLU<detail::DynamicMatrix<Scalar>>(detail::DynamicMatrix<Scalar>(M.transpose()))
+          .solve(detail::DynamicMatrix<Scalar>(continuous.C().transpose()))
+          .transpose();
   return SS(Ad, Bd, Cd, Dd, sample_time);
 }
 

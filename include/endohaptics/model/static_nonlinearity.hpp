@@ -33,13 +33,7 @@ concept StaticNonlinearity = requires(const NL& nl, typename NL::ScalarType u) {
 
 namespace detail::nl {
 
-template <typename Scalar>
-void require_finite(Scalar value, const char* owner, const char* what) {
-  if (!std::isfinite(value)) {
-    ENDOHAPTICS_THROW(Error(std::string(owner) + ": " + what + " is not finite (" +
-                            endohaptics::detail::format_number(value) + ")"));
-  }
-}
+using endohaptics::detail::require_finite;
 
 //! Returns `value` if finite and >= 0, throws Error otherwise.
 template <typename Scalar>

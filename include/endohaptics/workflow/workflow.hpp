@@ -98,7 +98,7 @@ namespace detail {
 
 [[noreturn]] inline void fail(const std::string& message) { ENDOHAPTICS_THROW(Error(message)); }
 
-inline std::string num(double value) { return endohaptics::detail::format_number(value); }
+using endohaptics::detail::format_number;
 
 //! Whole-string number; throws naming `what` and the text otherwise.
 inline double parse_double(std::string_view text, const std::string& what) {
@@ -266,7 +266,7 @@ struct PreparedLog {
   if (sel.inputs.empty()) wf::fail(path + ": no input signal named");
   if (sel.outputs.empty()) wf::fail(path + ": no output signal named");
   if (!std::isfinite(ts) || !(ts > 0.0))
-    wf::fail(path + ": sample time must be finite and > 0 s, got " + wf::num(ts));
+    wf::fail(path + ": sample time must be finite and > 0 s, got " + wf::format_number(ts));
   const files::Log log = read_selected_format(path, sel);
   if (!sel.drop_non_finite && log.report.non_finite > 0) {
     std::string where;
@@ -290,9 +290,9 @@ struct PreparedLog {
   const double span = log.time[log.rows() - 1] - log.time[0];
   if (std::floor(span / ts + 1e-9) + 1.0 < static_cast<double>(min_samples)) {
     wf::fail(path + ": too few samples: " + std::to_string(log.rows()) + " rows spanning " +
-             wf::num(span) + " s give at most " +
+             wf::format_number(span) + " s give at most " +
              std::to_string(static_cast<long long>(std::floor(span / ts + 1e-9)) + 1) +
-             " samples at ts = " + wf::num(ts) + " s, at least " + std::to_string(min_samples) +
+             " samples at ts = " + wf::format_number(ts) + " s, at least " + std::to_string(min_samples) +
              " needed");
   }
   const auto nu = static_cast<Eigen::Index>(sel.inputs.size());
@@ -354,7 +354,7 @@ struct PreparedLog {
   }
   if (out.samples() < min_samples) {
     wf::fail(path + ": too few samples: " + std::to_string(out.samples()) +
-             " on the grid at ts = " + wf::num(ts) + " s in segments of >= " +
+             " on the grid at ts = " + wf::format_number(ts) + " s in segments of >= " +
              std::to_string(pre.min_segment) + " (from " + std::to_string(log.rows()) +
              " rows), at least " + std::to_string(min_samples) + " needed");
   }
