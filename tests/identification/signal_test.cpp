@@ -37,7 +37,9 @@ struct Reference {
 
 void check_values(const Eigen::VectorXd& y, const std::vector<Reference>& refs,
                   double rel = 1e-11) {
-  for (const auto& [i, v] : refs) {
+  for (const Reference& ref : refs) {  // no structured binding: clang 14 cannot capture one
+    const auto i = ref.index;
+    const double v = ref.value;
     INFO("index " << i << ": got " << y[i] << ", want " << v);
     CHECK(close(y[i], v, rel, 1e-13));
   }

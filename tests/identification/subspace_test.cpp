@@ -142,7 +142,9 @@ const bool have_daisy = endohaptics::test::has_shared_data("daisy");
 }  // namespace
 
 TEST_CASE("synthetic systems, order 2..6, SISO and MIMO: poles, order and fit") {
-  for (const auto& [nu, ny] : {std::pair{1, 1}, std::pair{2, 1}, std::pair{2, 2}}) {
+  for (const auto& sizes : {std::pair{1, 1}, std::pair{2, 1}, std::pair{2, 2}}) {
+    const int nu = sizes.first;  // not a structured binding: clang 14 cannot capture one
+    const int ny = sizes.second;
     for (int n = 2; n <= 6; ++n) {
       CAPTURE(nu);
       CAPTURE(ny);

@@ -88,8 +88,12 @@ class SteadyStateKalman {
 
   //! Every model output is measured: Cm = C, Dm = D. Throws Error as `solve_filter_dare` does
   //! (bad Q or R, (A, C) not detectable, no convergence) or on a non-finite B or D.
-  SteadyStateKalman(const Model& model, const ProcessNoise& Q, const MeasurementNoise& R,
-                    const DareOptions<ScalarType>& options = {}) requires(Nm == Model::outputs)
+  //! (A template, so that an explicit instantiation of the class does not instantiate it for
+  //! an Nm it does not apply to: clang 14 would.)
+  template <int Measured = Nm>
+  requires(Measured == Model::outputs)
+      SteadyStateKalman(const Model& model, const ProcessNoise& Q, const MeasurementNoise& R,
+                        const DareOptions<ScalarType>& options = {})
       : SteadyStateKalman(model, model.C(), model.D(), Q, R, options) {}
 
   //! Measurements z = Cm x + Dm u + v separate from the model outputs y = C x + D u (e.g. the
