@@ -100,7 +100,6 @@ void require_finite(const M& m, std::string_view owner, std::string_view what) {
 
 }  // namespace endohaptics
 
-
 #ifndef ENDOHAPTICS_ASSERT
 #include <cassert>
 //! Programmer-error check (precondition violated by the caller's code, never by data).

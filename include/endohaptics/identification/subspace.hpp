@@ -360,7 +360,8 @@ inline Regressed regress_b_d_x0(const Matrix& A, const Matrix& C, std::span<cons
     fail("identify: max_order must be >= 1, got " + std::to_string(options.max_order));
   }
   if (!std::isfinite(options.sample_time) || !(options.sample_time > 0.0)) {
-    fail("identify: sample time must be finite and > 0 s, got " + ds::format_number(options.sample_time));
+    fail("identify: sample time must be finite and > 0 s, got " +
+         ds::format_number(options.sample_time));
   }
   const int wanted = options.order > 0 ? options.order : options.max_order;
   const auto sets = static_cast<int>(data.size());

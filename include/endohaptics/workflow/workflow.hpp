@@ -292,8 +292,8 @@ struct PreparedLog {
     wf::fail(path + ": too few samples: " + std::to_string(log.rows()) + " rows spanning " +
              wf::format_number(span) + " s give at most " +
              std::to_string(static_cast<long long>(std::floor(span / ts + 1e-9)) + 1) +
-             " samples at ts = " + wf::format_number(ts) + " s, at least " + std::to_string(min_samples) +
-             " needed");
+             " samples at ts = " + wf::format_number(ts) + " s, at least " +
+             std::to_string(min_samples) + " needed");
   }
   const auto nu = static_cast<Eigen::Index>(sel.inputs.size());
   const auto ny = static_cast<Eigen::Index>(sel.outputs.size());
