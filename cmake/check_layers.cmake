@@ -16,7 +16,7 @@ set(allowed_transport core protocol)
 set(allowed_teleop core protocol model kinematics estimation transport)
 set(allowed_sim core protocol model kinematics estimation transport teleop)
 set(allowed_identification core model)
-set(allowed_files core protocol model identification)
+set(allowed_files core protocol model kinematics estimation transport teleop sim identification)
 set(allowed_workflow core protocol model estimation identification files)
 # The real-time core: never reaches an offline header or library.
 set(realtime_areas core protocol model kinematics estimation transport teleop)

@@ -1,13 +1,15 @@
 // endohaptics-force-report: how good was the force feedback? Compares the bridge's per-tick log
 // (estimated joint force, stylus force) with the emulator's truth log (true contact force),
-// prints fit %, correlation and delay (sim::force_accuracy), the tick period distribution, and
-// plots both with gnuplot when it is installed.
+// prints fit %, correlation and delay (sim::force_accuracy), the tick period distribution
+// (teleop::LoopStats), and plots both with gnuplot when it is installed. The tick log's columns are
+// found by name (files::read_tick_log).
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
 #include <endohaptics/files/log_reader.hpp>
+#include <endohaptics/files/tick_log.hpp>
 #include <endohaptics/sim/force_accuracy.hpp>
 #include <filesystem>
 #include <string>
@@ -20,7 +22,7 @@ namespace {
 
 std::vector<double> to_vector(const Eigen::VectorXd& v) { return {v.data(), v.data() + v.size()}; }
 
-files::Log read(const std::string& path) {
+files::Log read_truth(const std::string& path) {
   files::CsvOptions options;
   options.read.rebase_time = false;  // both logs use CLOCK_MONOTONIC: keep them aligned
   files::Log log = files::read_csv(path, options);
@@ -61,16 +63,18 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   try {
-    const files::Log truth = read(truth_path);
-    const files::Log ticks = read(log_path);
+    const files::Log truth = read_truth(truth_path);
+    const files::TickLog ticks = files::read_tick_log(log_path);
+    if (ticks.dropped > 0) fmt::print("force-report: {}", ticks.report());
+    if (ticks.rows() == 0) throw endohaptics::Error(log_path + ": the tick log has no rows");
     const std::string j = std::to_string(joint);
     const Eigen::VectorXd t_truth = truth.time;
     const Eigen::VectorXd f_truth = truth.signal("force" + j);
-    const Eigen::VectorXd t_all = ticks.time;
-    const Eigen::VectorXd f_all = ticks.signal("joint_force" + j);
+    const std::vector<double>& t_all = ticks.column("time");
+    const std::vector<double>& f_all = ticks.column("joint_force" + j);
     const double t0 = t_all[0] + skip;
     std::vector<double> t_est, f_est;
-    for (Eigen::Index i = 0; i < t_all.size(); ++i) {
+    for (std::size_t i = 0; i < t_all.size(); ++i) {
       if (t_all[i] >= t0) {
         t_est.push_back(t_all[i]);
         f_est.push_back(f_all[i]);
@@ -85,21 +89,19 @@ int main(int argc, char** argv) {
         a.correlation_at_delay, a.truth_peak, a.estimate_peak);
 
     // Tick-to-tick periods from the bridge log (time stamps taken as each tick ended).
-    std::vector<double> periods;
-    for (Eigen::Index i = 1; i < t_all.size(); ++i) periods.push_back(t_all[i] - t_all[i - 1]);
-    std::vector<double> sorted = periods;
-    std::sort(sorted.begin(), sorted.end());
-    const auto q = [&](double p) {
-      return sorted[static_cast<std::size_t>(p * static_cast<double>(sorted.size() - 1))];
-    };
+    const endohaptics::teleop::LoopStats stats = files::tick_period_stats(ticks);
+    const auto& periods = stats.period();
     fmt::print(
         "tick periods: {} ticks, median {:.1f} us, p1 {:.1f} us, p99 {:.1f} us, max {:.1f} us\n",
-        t_all.size(), q(0.5) * 1e6, q(0.01) * 1e6, q(0.99) * 1e6, sorted.back() * 1e6);
+        t_all.size(), periods.quantile(0.5) * 1e6, periods.quantile(0.01) * 1e6,
+        periods.quantile(0.99) * 1e6, periods.max() * 1e6);
 
     if (!plot_dir.empty()) {
       std::filesystem::create_directories(plot_dir);
       const std::string forces = plot_dir + "/forces.png";
       const std::string period = plot_dir + "/period.png";
+      // gnuplot reads the bridge log itself: by the column numbers the reader found by name.
+      const auto col = [&ticks](const std::string& name) { return ticks.index(name) + 1; };
       const std::string script = fmt::format(
           "set terminal pngcairo size 1400,600 noenhanced\n"
           "set datafile separator ','\nset datafile columnheaders\n"
@@ -108,10 +110,10 @@ int main(int argc, char** argv) {
           "(bridge)'\n"
           "set xlabel 'time (s)'; set ylabel 'force (N)'; set grid; set key top left\n"
           "t0 = {5:.9f}\n"
-          "plot '{2}' using ($1-t0):(column('force{4}')) with lines lw 2 title 'true', "
-          "'{3}' using ($1-t0):(column('joint_force{4}')) with lines lw 2 title "
-          "'estimated', "
-          "'{3}' using ($1-t0):(sqrt($28**2+$29**2+$30**2)) with lines title "
+          "plot '{2}' using (column('time')-t0):(column('force{4}')) with lines lw 2 title "
+          "'true', "
+          "'{3}' using (${6}-t0):{7} with lines lw 2 title 'estimated', "
+          "'{3}' using (${6}-t0):(sqrt(${8}**2+${9}**2+${10}**2)) with lines title "
           "'stylus |F|'\n"
           "set output '{1}'\n"
           "set title 'Bridge tick period (tick to tick)'\n"
@@ -119,9 +121,10 @@ int main(int argc, char** argv) {
           "binwidth = 5; bin(x) = binwidth * floor(x / binwidth + 0.5)\n"
           "set style fill solid 0.6\n"
           "prev = {5:.9f}\n"
-          "plot '{3}' every ::1 using (d = ($1 - prev) * 1e6, prev = $1, bin(d)):(1) "
+          "plot '{3}' every ::1 using (d = (${6} - prev) * 1e6, prev = ${6}, bin(d)):(1) "
           "smooth frequency with boxes\n",
-          forces, period, truth_path, log_path, joint, t_all[0]);
+          forces, period, truth_path, log_path, joint, t_all[0], col("time"),
+          col("joint_force" + j), col("stylus_fx"), col("stylus_fy"), col("stylus_fz"));
       if (plot(script)) {
         fmt::print("plots: {} and {}\n", forces, period);
       } else {

@@ -12,7 +12,7 @@
 #include <cstdio>
 #include <endohaptics/estimation/force_estimator.hpp>
 #include <endohaptics/estimation/paced_estimator.hpp>
-#include <endohaptics/files/model_file.hpp>
+#include <endohaptics/files/bridge_config.hpp>
 #include <endohaptics/kinematics/cylindrical_mapper.hpp>
 #include <endohaptics/sim/scripted_operator.hpp>
 #include <endohaptics/teleop/realtime.hpp>
@@ -24,7 +24,6 @@
 #include <string>
 #include <thread>
 
-#include "config.hpp"
 #ifdef ENDOHAPTICS_HAVE_OPENHAPTICS
 #include "openhaptics_device.hpp"
 #endif
@@ -85,7 +84,7 @@ std::pair<std::string, std::uint16_t> parse_endpoint(const std::string& s) {
 
 template <typename Device>
 int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& opt,
-               const bridge::Config& cfg) {
+               const files::BridgeConfig& cfg) {
   const auto [host, port] = parse_endpoint(opt.sbrio);
   transport::UdpConfig udp;
   udp.remote_address = host;
@@ -97,17 +96,11 @@ int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& o
   // keeps that grid whatever the loop rate (--rate max) and through lost packets.
   auto settings = cfg.estimator;
   settings.loop_period = 1e-3;
-  auto models = est::models_2016<double>();
-  if (!cfg.clamp_model.empty()) {  // an identified model (endohaptics-identify) for both clamps
-    using Clamp = est::ClampModel2016<double>;
-    models.clamp1 = Clamp(files::load_hammerstein_wiener<6, 2, 1>(cfg.clamp_model));
-    models.clamp2 = models.clamp1;
-  }
-  est::ForceEstimator<est::rate::Decimate> estimator(models, settings);
+  est::ForceEstimator<est::rate::Decimate> estimator(files::bridge_force_models(cfg), settings);
   est::PacedEstimator paced(estimator, clock, std::chrono::milliseconds(1));
   endohaptics::kinematics::CylindricalMapper<> mapper(cfg.mapping);
 
-  tp::TeleopLoopConfig loop_config;
+  tp::TeleopLoopConfig loop_config = cfg.loop;  // safety and receive timeout from --config
   if (opt.rate == "max") {
     loop_config.period = nanoseconds(0);
   } else {
@@ -122,8 +115,6 @@ int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& o
     }
     loop_config.period = nanoseconds(static_cast<std::int64_t>(1e9 / hz + 0.5));
   }
-  loop_config.receive_timeout = nanoseconds(static_cast<std::int64_t>(cfg.receive_timeout * 1e9));
-  loop_config.safety = cfg.safety;
   tp::TeleopLoop loop(transport, device, paced, mapper, clock, loop_config);
 
   // Per-tick log and per-second windows leave the loop thread through lock-free rings.
@@ -173,7 +164,7 @@ int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& o
 
   fmt::print("bridge: sbRIO {}:{}, rate {}, device {}, clamp model {} (paced at 1 kHz)\n", host,
              port, opt.rate == "max" ? "max" : opt.rate + " Hz", opt.device,
-             cfg.clamp_model.empty() ? "appendix C yaw (2016)" : cfg.clamp_model);
+             cfg.clamp_model.empty() ? "appendix C yaw (2016)" : cfg.clamp_model.string());
   std::fflush(stdout);
   const auto start = clock.now();
   const auto end = opt.duration > 0 ? start + std::chrono::duration_cast<nanoseconds>(
@@ -255,8 +246,9 @@ int main(int argc, char** argv) {
   try {
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
-    const bridge::Config cfg =
-        opt.config_path.empty() ? bridge::Config{} : bridge::load_config(opt.config_path);
+    const files::BridgeConfig cfg = opt.config_path.empty()
+                                        ? files::BridgeConfig{}
+                                        : files::load_bridge_config(opt.config_path);
     endohaptics::SteadyClock clock;
     if (opt.device == "sim") {
       endohaptics::sim::ScriptedOperator<endohaptics::SteadyClock> device(clock,

@@ -1,6 +1,6 @@
 //! @file
 //! Umbrella header: everything endohaptics offers. Include single component headers instead
-//! to keep compile times down. The JSON model files (files/model_file.hpp,
+//! to keep compile times down. The JSON headers (files/model_file.hpp, files/bridge_config.hpp,
 //! workflow/workflow.hpp) are not included: they need nlohmann-json, which the target
 //! endohaptics::model_files brings (find_package(endohaptics COMPONENTS model_files)).
 #pragma once
@@ -12,6 +12,7 @@
 #include "endohaptics/estimation/paced_estimator.hpp"
 #include "endohaptics/estimation/steady_state_kalman.hpp"
 #include "endohaptics/files/log_reader.hpp"
+#include "endohaptics/files/tick_log.hpp"
 #include "endohaptics/identification/fit_metrics.hpp"
 #include "endohaptics/identification/hammerstein_wiener_fit.hpp"
 #include "endohaptics/identification/signal.hpp"

@@ -57,20 +57,30 @@ case $scenario in
     start_emulator "$first_port"
     wait "$bridge_pid" || fail "bridge exited with $?: $(cat "$work/bridge.out")"
     cat "$work/bridge.out"
-    # Columns: 1 time, 2 status, 3 link (0 waiting, 1 up, 2 degraded, 3 lost, 4 recovering),
-    # 7 force_scale, 28-30 stylus force.
+    # Columns by header name (teleop::tick_log_columns), never by position. link: 0 waiting,
+    # 1 up, 2 degraded, 3 lost, 4 recovering.
     awk -F, '
-      NR == 1 { next }
+      NR == 1 {
+        for (i = 1; i <= NF; i++) col[$i] = i
+        n_need = split("time link force_scale stylus_fx stylus_fy stylus_fz", need, " ")
+        for (k = 1; k <= n_need; k++) {
+          if (!(need[k] in col)) { print "FAIL: the tick log has no column " need[k]; bad = 1; exit 1 }
+        }
+        T = col["time"]; L = col["link"]; S = col["force_scale"]
+        FX = col["stylus_fx"]; FY = col["stylus_fy"]; FZ = col["stylus_fz"]
+        next
+      }
       { n++ }
-      $3 == 1 && !lost_at { last_up = $1; up_rows++ }
-      $3 == 2 && !lost_at { misses++ }
-      $3 == 1 { misses = 0 }
-      $3 == 3 && !lost_at { lost_at = $1; misses_at_loss = misses + 1 }
-      $3 == 3 { lost_rows++; if ($28 != 0 || $29 != 0 || $30 != 0) forced++ }
-      lost_at && $3 == 4 && !rec_at { rec_at = $1; first_scale = $7 }
-      rec_at && $1 > rec_at + 0.25 && $1 < rec_at + 0.3 { mid_scale = $7 }
-      rec_at && $1 > rec_at + 0.7 && $3 == 1 { back_up = 1; final_scale = $7 }
+      $L == 1 && !lost_at { last_up = $T; up_rows++ }
+      $L == 2 && !lost_at { misses++ }
+      $L == 1 { misses = 0 }
+      $L == 3 && !lost_at { lost_at = $T; misses_at_loss = misses + 1 }
+      $L == 3 { lost_rows++; if ($FX != 0 || $FY != 0 || $FZ != 0) forced++ }
+      lost_at && $L == 4 && !rec_at { rec_at = $T; first_scale = $S }
+      rec_at && $T > rec_at + 0.25 && $T < rec_at + 0.3 { mid_scale = $S }
+      rec_at && $T > rec_at + 0.7 && $L == 1 { back_up = 1; final_scale = $S }
       END {
+        if (bad) exit 1
         printf "rows %d, up before kill %d, lost at %.4f s after last up (%d misses), lost rows %d, " \
                "recovering at %.3f s, ramp %.3f -> %.3f -> %.3f\n", n, up_rows, lost_at - last_up,
                misses_at_loss, lost_rows, rec_at, first_scale, mid_scale, final_scale

@@ -3,37 +3,52 @@
 //! `push`es a fixed-size record into a lock-free single-producer/single-consumer ring
 //! (Boost.Lockfree, preallocated); another thread `drain`s it to a file. A full ring drops the
 //! record and counts it (never blocks the loop). Times in s, angles in rad, forces in N.
+//! `tick_log_columns` names the CSV's columns: readers find them by these names
+//! (files/tick_log.hpp), never by position.
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <atomic>
 #include <boost/lockfree/spsc_queue.hpp>
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
 #include <string>
+#include <string_view>
 
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/teleop/teleop_loop.hpp"
 
 namespace endohaptics::teleop {
 
+//! The tick log's columns in the order `TickRecorder::drain` writes them: the one definition of
+//! the header line (`TickRecorder::write_header`) and of the names readers look columns up by.
+//! status and link are the numeric values of TickStatus and LinkState.
+inline constexpr std::array<std::string_view, 7 + 5 * loop_motors + 3> tick_log_columns = {
+    "time",         "status",       "link",         "enable_mask", "active_mask", "round_trip",
+    "force_scale",  "setpoint0",    "setpoint1",    "setpoint2",   "setpoint3",   "position0",
+    "position1",    "position2",    "position3",    "velocity0",   "velocity1",   "velocity2",
+    "velocity3",    "current0",     "current1",     "current2",    "current3",    "joint_force0",
+    "joint_force1", "joint_force2", "joint_force3", "stylus_fx",   "stylus_fy",   "stylus_fz"};
+
 //! One CSV row: what a tick sent, received, estimated and rendered.
 struct TickRecord {
-  double time = 0.0;  //!< s, the clock's time when the tick ended
-  TickStatus status = TickStatus::waiting;
-  LinkState link = LinkState::waiting;
-  std::uint8_t enable_mask = 0;
-  std::uint8_t active_mask = 0;
-  double round_trip = 0.0;  //!< s
-  double force_scale = 0.0;
-  MotorVector setpoint = MotorVector::Zero();              //!< rad
-  MotorVector position = MotorVector::Zero();              //!< rad (newest valid)
-  MotorVector velocity = MotorVector::Zero();              //!< rad/s
-  MotorVector current = MotorVector::Zero();               //!< A
-  MotorVector joint_force = MotorVector::Zero();           //!< estimate, motor order (N; roll N m)
+  double time = 0.0;                              //!< s, the clock's time when the tick ended
+  TickStatus status = TickStatus::waiting;        //!< the tick's overall status
+  LinkState link = LinkState::waiting;            //!< the watchdog's link state
+  std::uint8_t enable_mask = 0;                   //!< motors enabled in the packet sent
+  std::uint8_t active_mask = 0;                   //!< motors the sbRIO reported active
+  double round_trip = 0.0;                        //!< s
+  double force_scale = 0.0;                       //!< force ramp factor, 0..1
+  MotorVector setpoint = MotorVector::Zero();     //!< rad
+  MotorVector position = MotorVector::Zero();     //!< rad (newest valid)
+  MotorVector velocity = MotorVector::Zero();     //!< rad/s
+  MotorVector current = MotorVector::Zero();      //!< A
+  MotorVector joint_force = MotorVector::Zero();  //!< estimate, motor order (N; roll N m)
   Eigen::Vector3d stylus_force = Eigen::Vector3d::Zero();  //!< N
 
+  //! The record of tick result `r`, stamped `now` (the loop clock's time).
   [[nodiscard]] static TickRecord from(const TickResult& r, std::chrono::nanoseconds now) noexcept {
     TickRecord rec;
     rec.time = std::chrono::duration<double>(now).count();
@@ -57,6 +72,7 @@ struct TickRecord {
 //! allocated once, at construction.
 class TickRecorder {
  public:
+  //! A ring of `capacity` records.
   explicit TickRecorder(std::size_t capacity = std::size_t{1} << 16) : queue_(capacity) {}
 
   //! Loop thread: wait-free, allocation-free. False (and counted) when the ring is full.
@@ -66,18 +82,23 @@ class TickRecorder {
     return false;
   }
 
-  //! CSV header matching `drain`'s rows.
+  //! CSV header matching `drain`'s rows: `tick_log_columns`, comma-separated. Throws Error when
+  //! the file cannot be written.
   static void write_header(std::FILE* out) {
-    std::fputs(
-        "time,status,link,enable_mask,active_mask,round_trip,force_scale,"
-        "setpoint0,setpoint1,setpoint2,setpoint3,position0,position1,position2,position3,"
-        "velocity0,velocity1,velocity2,velocity3,current0,current1,current2,current3,"
-        "joint_force0,joint_force1,joint_force2,joint_force3,stylus_fx,stylus_fy,stylus_fz\n",
-        out);
+    int written = 0;
+    for (std::size_t c = 0; c < tick_log_columns.size() && written >= 0; ++c) {
+      if (c > 0) written = std::fputc(',', out);
+      if (written >= 0) {
+        written = std::fprintf(out, "%.*s", static_cast<int>(tick_log_columns[c].size()),
+                               tick_log_columns[c].data());
+      }
+    }
+    if (written >= 0) written = std::fputc('\n', out);
+    if (written < 0) ENDOHAPTICS_THROW(Error("TickRecorder: cannot write the tick log header"));
   }
 
-  //! Writer thread: writes every queued record as a CSV row; returns how many. Throws Error when
-  //! the file cannot be written.
+  //! Writer thread: writes every queued record as a CSV row, its fields in the order of
+  //! `tick_log_columns`; returns how many. Throws Error when the file cannot be written.
   std::size_t drain(std::FILE* out) {
     std::size_t n = 0;
     TickRecord r;
@@ -99,9 +120,11 @@ class TickRecorder {
     return n;
   }
 
+  //! Records dropped because the ring was full.
   [[nodiscard]] std::uint64_t dropped() const noexcept {
     return dropped_.load(std::memory_order_relaxed);
   }
+  //! Rows written by `drain` (writer thread).
   [[nodiscard]] std::uint64_t written() const noexcept { return written_; }
 
  private:

@@ -1,0 +1,723 @@
+//! @file
+//! The bridge's configuration file (JSON) <-> the library's configuration structs: mapping
+//! (kinematics::CylindricalMapperConfig), safety and receive timeout (teleop::TeleopLoopConfig),
+//! force estimator settings and clamp model file, scripted operator (sim::OperatorScript).
+//! Strict: every key optional, defaults are the library's; unknown or duplicate keys, wrong
+//! types, non-integral or out-of-range values are errors naming the file, the key and the range.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <set>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "endohaptics/core/error.hpp"
+#include "endohaptics/estimation/force_estimator.hpp"
+#include "endohaptics/files/model_file.hpp"
+#include "endohaptics/kinematics/cylindrical_mapper.hpp"
+#include "endohaptics/sim/scripted_operator.hpp"
+#include "endohaptics/teleop/safety.hpp"
+#include "endohaptics/teleop/teleop_loop.hpp"
+
+namespace endohaptics::files {
+
+//! Everything the bridge's --config file sets. Keys (docs/rig.md, "The configuration file"):
+//! "mapping" -> mapping, "safety" -> loop.safety, "loop.receive_timeout" (s) ->
+//! loop.receive_timeout, "estimator" -> estimator and clamp_model, "operator" -> operator_script.
+struct BridgeConfig {
+  kinematics::CylindricalMapperConfig<double> mapping{};  //!< eqs. 5.8/5.9
+  //! Safety and receive timeout; `period` is not in the file (the bridge's --rate sets it).
+  teleop::TeleopLoopConfig loop{};
+  estimation::ForceEstimatorSettings<double> estimator{};  //!< friction levels, signs, limits
+  //! "estimator.clamp_model": an identified Hammerstein-Wiener model file (endohaptics-identify,
+  //! 6 states, 2 inputs, 1 output) for both clamps, resolved against the configuration file's
+  //! folder; empty: the 2016 appendix C yaw model.
+  std::filesystem::path clamp_model;
+  sim::OperatorScript operator_script{};  //!< the scripted operator of `--device sim`
+};
+
+//! Largest configuration file `load_bridge_config` reads, bytes (a complete one is < 2 kB).
+inline constexpr std::size_t bridge_config_max_bytes = std::size_t{1} << 20;
+//! Deepest nesting of arrays and objects accepted (the schema itself needs 3).
+inline constexpr int bridge_config_max_depth = 64;
+
+namespace detail::bridge_config {
+
+using nlohmann::json;
+
+//! At most 60 characters of `text`, with "..." when cut, non-ASCII bytes as '?': every value a
+//! message echoes.
+inline std::string excerpt(std::string_view text, std::size_t max = 60) {
+  std::string out(text.substr(0, max));
+  for (char& c : out) {  // control characters and bytes of (possibly invalid) UTF-8
+    if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7F) c = '?';
+  }
+  return text.size() > max ? out + "..." : out;
+}
+
+//! A JSON value as a short, ASCII-only text for messages.
+inline std::string show(const json& value) {
+  if (value.is_number_float() && !std::isfinite(value.get<double>())) {
+    return "a number beyond the double range";
+  }
+  return excerpt(value.dump(-1, ' ', /*ensure_ascii=*/true));
+}
+
+//! A key name as it appears in messages: quoted, escaped, at most 60 characters.
+inline std::string key_name(std::string_view key) {
+  const std::string escaped = json(std::string(key)).dump(-1, ' ', /*ensure_ascii=*/true);
+  return "'" + excerpt(std::string_view(escaped).substr(1, escaped.size() - 2)) + "'";
+}
+
+//! The allowed values of a number: an interval (finite bounds or infinite), or exactly -1/+1.
+struct Range {
+  double lo = -std::numeric_limits<double>::infinity();  //!< lower bound
+  double hi = std::numeric_limits<double>::infinity();   //!< upper bound
+  bool lo_open = false;                                  //!< lo itself excluded
+  bool hi_open = false;                                  //!< hi itself excluded
+  std::string_view unit;                                 //!< appended to the description
+  std::string_view text;                                 //!< description override
+  bool sign = false;                                     //!< only -1 and +1
+
+  //! Any finite number.
+  [[nodiscard]] static Range any(std::string_view units = "") {
+    Range r;
+    r.unit = units;
+    return r;
+  }
+  //! Finite and >= low.
+  [[nodiscard]] static Range at_least(double low, std::string_view units = "") {
+    Range r = any(units);
+    r.lo = low;
+    return r;
+  }
+  //! Finite and > low.
+  [[nodiscard]] static Range above(double low, std::string_view units = "") {
+    Range r = at_least(low, units);
+    r.lo_open = true;
+    return r;
+  }
+  //! In [low, high].
+  [[nodiscard]] static Range between(double low, double high, std::string_view units = "") {
+    Range r = at_least(low, units);
+    r.hi = high;
+    return r;
+  }
+  //! Exactly -1 or +1.
+  [[nodiscard]] static Range plus_minus_one() {
+    Range r;
+    r.text = "-1 or +1";
+    r.sign = true;
+    return r;
+  }
+  //! In [low, high], described by `description` (e.g. "a number in [-pi, pi] rad").
+  [[nodiscard]] static Range described(double low, double high, std::string_view description) {
+    Range r = between(low, high);
+    r.text = description;
+    return r;
+  }
+
+  //! True when `v` is allowed.
+  [[nodiscard]] bool contains(double v) const noexcept {
+    if (sign) return v == 1.0 || v == -1.0;
+    return std::isfinite(v) && (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
+  }
+  //! "a finite number >= 0 s", "a number in [0, 1] s", "-1 or +1", ...
+  [[nodiscard]] std::string describe() const {
+    using endohaptics::detail::format_number;
+    if (!text.empty()) return std::string(text);
+    const bool has_lo = std::isfinite(lo);
+    const bool has_hi = std::isfinite(hi);
+    std::string d;
+    if (has_lo && has_hi) {
+      d = "a number in " + std::string(lo_open ? "(" : "[") + format_number(lo) + ", " +
+          format_number(hi) + (hi_open ? ")" : "]");
+    } else if (has_lo) {
+      d = "a finite number " + std::string(lo_open ? "> " : ">= ") + format_number(lo);
+    } else if (has_hi) {
+      d = "a finite number " + std::string(hi_open ? "< " : "<= ") + format_number(hi);
+    } else {
+      d = "a finite number";
+    }
+    return unit.empty() ? d : d + " " + std::string(unit);
+  }
+};
+
+//! The schema: every key of the file, its field and its range, in file order. `v` is one of the
+//! visitors below (key collection, reading, writing, checking); `c` a (const) BridgeConfig.
+template <typename Config, typename Visitor>
+void visit_schema(Config& c, Visitor& v) {
+  constexpr double pi = std::numbers::pi;
+  auto& m = c.mapping;
+  v.number("mapping", "a_roll", m.a_roll, Range::any("rad/rad"));
+  v.number("mapping", "b_roll", m.b_roll, Range::any("rad"));
+  v.number("mapping", "a_pitch", m.a_pitch, Range::any("rad/m"));
+  v.number("mapping", "b_pitch", m.b_pitch, Range::any("rad"));
+  v.number("mapping", "a_clamp", m.a_clamp, Range::any("rad/m"));
+  v.number("mapping", "b_clamp", m.b_clamp, Range::any("rad"));
+  v.vector("mapping", "lower", m.lower, Range::any("rad"));
+  v.vector("mapping", "upper", m.upper, Range::any("rad"));
+  v.number("mapping", "min_radius", m.min_radius, Range::at_least(0.0, "m"));
+  v.number("mapping", "theta_neutral", m.theta_neutral,
+           Range::described(-pi, pi, "a number in [-pi, pi] rad"));
+  v.vector("mapping", "force_scale", m.force_scale, Range::any("N per unit"));
+  v.number("mapping", "force_limit", m.force_limit, Range::above(0.0, "N"));
+
+  auto& s = c.loop.safety;
+  v.integer("safety", "max_consecutive_misses", s.max_consecutive_misses, 0, 1000000);
+  v.policy("safety", "policy", s.policy);
+  v.number("safety", "force_ramp_time", s.force_ramp_time, Range::at_least(0.0, "s"));
+  v.number("safety", "max_setpoint_rate", s.max_setpoint_rate, Range::above(0.0, "rad/s"));
+  v.number("safety", "max_stylus_force", s.max_stylus_force, Range::at_least(0.0, "N"));
+  v.integer("safety", "enable_mask", s.enable_mask, 0, 15);
+
+  auto& e = c.estimator;
+  v.vector("estimator", "current_sign", e.current_sign, Range::plus_minus_one());
+  v.vector("estimator", "unit_scale", e.unit_scale, Range::above(0.0));
+  v.friction("estimator", "friction_level", e.friction, Range::at_least(0.0, "A"));
+  v.vector("estimator", "output_deadzone", e.output_deadzone, Range::at_least(0.0));
+  v.vector("estimator", "output_limit", e.output_limit, Range::above(0.0));
+  v.path("estimator", "clamp_model", c.clamp_model);
+
+  auto& o = c.operator_script;
+  v.number("operator", "theta", o.theta, Range::any("rad"));
+  v.number("operator", "z", o.z, Range::any("m"));
+  v.number("operator", "r_open", o.r_open, Range::above(0.0, "m"));
+  v.number("operator", "r_closed", o.r_closed, Range::at_least(0.0, "m"));
+  v.number("operator", "open_time", o.open_time, Range::at_least(0.0, "s"));
+  v.number("operator", "close_time", o.close_time, Range::above(0.0, "s"));
+  v.number("operator", "hold_time", o.hold_time, Range::at_least(0.0, "s"));
+  v.number("operator", "release_time", o.release_time, Range::above(0.0, "s"));
+
+  v.seconds("loop", "receive_timeout", c.loop.receive_timeout, Range::between(0.0, 1.0, "s"));
+}
+
+//! "section.key".
+inline std::string dotted(std::string_view section, std::string_view key) {
+  return std::string(section) + "." + std::string(key);
+}
+
+//! The policies by their names in the file.
+inline const std::array<std::pair<std::string_view, teleop::SafeStatePolicy>, 3>& policies() {
+  static const std::array<std::pair<std::string_view, teleop::SafeStatePolicy>, 3> table = {{
+      {"hold_position", teleop::SafeStatePolicy::hold_position},
+      {"disable_motors", teleop::SafeStatePolicy::disable_motors},
+      {"zero_force", teleop::SafeStatePolicy::zero_force},
+  }};
+  return table;
+}
+
+//! Throws Error "<source>: <key>: <what>".
+[[noreturn]] inline void fail(std::string_view source, std::string_view key,
+                              const std::string& what) {
+  ENDOHAPTICS_THROW(Error(std::string(source) + ": " + std::string(key) + ": " + what));
+}
+
+//! Throws unless `value` lies in `range`.
+inline void check(std::string_view source, const std::string& key, double value,
+                  const Range& range) {
+  if (!range.contains(value)) {
+    fail(source, key,
+         "must be " + range.describe() + ", got " + endohaptics::detail::format_number(value));
+  }
+}
+
+//! Visitor: the keys of each section, in schema order.
+struct KeyCollector {
+  std::map<std::string, std::vector<std::string>, std::less<>> keys;  //!< section -> keys
+
+  void add(std::string_view section, std::string_view key) {
+    keys[std::string(section)].emplace_back(key);
+  }
+  template <typename T>
+  void number(std::string_view s, std::string_view k, T&, const Range&) {
+    add(s, k);
+  }
+  template <typename T>
+  void vector(std::string_view s, std::string_view k, T&, const Range&) {
+    add(s, k);
+  }
+  template <typename T>
+  void integer(std::string_view s, std::string_view k, T&, long long, long long) {
+    add(s, k);
+  }
+  template <typename T>
+  void policy(std::string_view s, std::string_view k, T&) {
+    add(s, k);
+  }
+  template <typename T>
+  void friction(std::string_view s, std::string_view k, T&, const Range&) {
+    add(s, k);
+  }
+  template <typename T>
+  void path(std::string_view s, std::string_view k, T&) {
+    add(s, k);
+  }
+  template <typename T>
+  void seconds(std::string_view s, std::string_view k, T&, const Range&) {
+    add(s, k);
+  }
+};
+
+//! Visitor: reads the keys present in `root` into a BridgeConfig.
+struct Reader {
+  const json& root;                //!< the whole file, an object with known sections only
+  std::string_view source;         //!< for messages
+  std::filesystem::path base_dir;  //!< relative clamp_model paths start here
+
+  [[nodiscard]] const json* find(std::string_view section, std::string_view key) const {
+    const auto s = root.find(std::string(section));
+    if (s == root.end()) return nullptr;
+    const auto k = s->find(std::string(key));
+    return k == s->end() ? nullptr : &*k;
+  }
+  [[nodiscard]] double read(const json& j, const std::string& key, const Range& range) const {
+    if (!j.is_number()) {
+      fail(source, key, "must be " + range.describe() + ", got " + show(j));
+    }
+    const double value = j.get<double>();
+    if (!std::isfinite(value)) {
+      fail(source, key, "must be " + range.describe() + ", got " + show(j));
+    }
+    check(source, key, value, range);
+    return value;
+  }
+  void number(std::string_view s, std::string_view k, double& out, const Range& range) const {
+    if (const json* j = find(s, k)) out = read(*j, dotted(s, k), range);
+  }
+  template <int N>
+  void read_vector(const json& j, const std::string& key, Eigen::Matrix<double, N, 1>& out,
+                   const Range& range) const {
+    if (!j.is_array() || j.size() != static_cast<std::size_t>(N)) {
+      fail(source, key,
+           "must be an array of " + std::to_string(N) + " numbers, each " + range.describe() +
+               ", got " + show(j));
+    }
+    for (int i = 0; i < N; ++i) {
+      out[i] = read(j[static_cast<std::size_t>(i)], key + "[" + std::to_string(i) + "]", range);
+    }
+  }
+  template <int N>
+  void vector(std::string_view s, std::string_view k, Eigen::Matrix<double, N, 1>& out,
+              const Range& range) const {
+    if (const json* j = find(s, k)) read_vector(*j, dotted(s, k), out, range);
+  }
+  template <typename Int>
+  void integer(std::string_view s, std::string_view k, Int& out, long long lo, long long hi) const {
+    const json* j = find(s, k);
+    if (j == nullptr) return;
+    const auto bad = [&] {
+      fail(source, dotted(s, k),
+           "must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " +
+               show(*j));
+    };
+    // Compared in the type the parser chose, converted only once known to be in range.
+    if (j->is_number_unsigned()) {
+      const auto u = j->get<std::uint64_t>();
+      if (u > static_cast<std::uint64_t>(hi)) bad();
+      out = static_cast<Int>(u);
+    } else if (j->is_number_integer()) {
+      const auto i = j->get<std::int64_t>();
+      if (i < lo || i > hi) bad();
+      out = static_cast<Int>(i);
+    } else if (j->is_number_float()) {
+      const double d = j->get<double>();
+      if (!(std::isfinite(d) && d == std::trunc(d) && d >= static_cast<double>(lo) &&
+            d <= static_cast<double>(hi))) {
+        bad();
+      }
+      out = static_cast<Int>(static_cast<long long>(d));
+    } else {
+      bad();
+    }
+  }
+  void policy(std::string_view s, std::string_view k, teleop::SafeStatePolicy& out) const {
+    const json* j = find(s, k);
+    if (j == nullptr) return;
+    if (j->is_string()) {
+      for (const auto& [name, value] : policies()) {
+        if (j->get_ref<const std::string&>() == name) {
+          out = value;
+          return;
+        }
+      }
+    }
+    fail(source, dotted(s, k),
+         "must be \"hold_position\", \"disable_motors\" or \"zero_force\", got " + show(*j));
+  }
+  void friction(std::string_view s, std::string_view k,
+                std::array<model::JointFriction<double>, 4>& out, const Range& range) const {
+    const json* j = find(s, k);
+    if (j == nullptr) return;
+    Eigen::Vector4d levels;
+    read_vector(*j, dotted(s, k), levels, range);
+    for (int i = 0; i < 4; ++i) {
+      out[static_cast<std::size_t>(i)] = model::JointFriction<double>::simplified(levels[i]);
+    }
+  }
+  void path(std::string_view s, std::string_view k, std::filesystem::path& out) const {
+    const json* j = find(s, k);
+    if (j == nullptr) return;
+    if (!j->is_string() || j->get_ref<const std::string&>().empty()) {
+      fail(source, dotted(s, k),
+           "must be the name of a model file (a non-empty string), got " + show(*j));
+    }
+    const std::filesystem::path p = j->get<std::string>();
+    out = p.is_absolute() || base_dir.empty() ? p : base_dir / p;
+  }
+  void seconds(std::string_view s, std::string_view k, std::chrono::nanoseconds& out,
+               const Range& range) const {
+    // The range is finite (at most 1 s): the conversion to ns cannot overflow.
+    if (const json* j = find(s, k)) {
+      out = std::chrono::nanoseconds(std::llround(read(*j, dotted(s, k), range) * 1e9));
+    }
+  }
+};
+
+//! Visitor: writes every key of a BridgeConfig into `out` (clamp_model only when set).
+struct Writer {
+  nlohmann::ordered_json out = nlohmann::ordered_json::object();  //!< the file, in schema order
+
+  void number(std::string_view s, std::string_view k, const double& v, const Range&) {
+    out[std::string(s)][std::string(k)] = v;
+  }
+  template <int N>
+  void vector(std::string_view s, std::string_view k, const Eigen::Matrix<double, N, 1>& v,
+              const Range&) {
+    auto a = nlohmann::ordered_json::array();
+    for (int i = 0; i < N; ++i) a.push_back(v[i]);
+    out[std::string(s)][std::string(k)] = a;
+  }
+  template <typename Int>
+  void integer(std::string_view s, std::string_view k, const Int& v, long long, long long) {
+    out[std::string(s)][std::string(k)] = static_cast<long long>(v);
+  }
+  void policy(std::string_view s, std::string_view k, const teleop::SafeStatePolicy& v) {
+    for (const auto& [name, value] : policies()) {
+      if (value == v) out[std::string(s)][std::string(k)] = std::string(name);
+    }
+  }
+  void friction(std::string_view s, std::string_view k,
+                const std::array<model::JointFriction<double>, 4>& v, const Range& r) {
+    vector(
+        s, k,
+        Eigen::Vector4d(v[0].static_level, v[1].static_level, v[2].static_level, v[3].static_level),
+        r);
+  }
+  void path(std::string_view s, std::string_view k, const std::filesystem::path& v) {
+    if (!v.empty()) out[std::string(s)][std::string(k)] = v.string();
+  }
+  void seconds(std::string_view s, std::string_view k, const std::chrono::nanoseconds& v,
+               const Range&) {
+    out[std::string(s)][std::string(k)] = static_cast<double>(v.count()) / 1e9;
+  }
+};
+
+//! Visitor: checks every field of a BridgeConfig against the schema's ranges.
+struct Checker {
+  std::string_view source;  //!< for messages
+
+  void number(std::string_view s, std::string_view k, const double& v, const Range& r) const {
+    check(source, dotted(s, k), v, r);
+  }
+  template <int N>
+  void vector(std::string_view s, std::string_view k, const Eigen::Matrix<double, N, 1>& v,
+              const Range& r) const {
+    for (int i = 0; i < N; ++i)
+      check(source, dotted(s, k) + "[" + std::to_string(i) + "]", v[i], r);
+  }
+  template <typename Int>
+  void integer(std::string_view s, std::string_view k, const Int& v, long long lo,
+               long long hi) const {
+    const auto x = static_cast<long long>(v);
+    if (x < lo || x > hi) {
+      fail(source, dotted(s, k),
+           "must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " +
+               std::to_string(x));
+    }
+  }
+  void policy(std::string_view s, std::string_view k, const teleop::SafeStatePolicy& v) const {
+    for (const auto& [name, value] : policies()) {
+      if (value == v) return;
+    }
+    fail(source, dotted(s, k),
+         "is not a SafeStatePolicy (" + std::to_string(static_cast<int>(v)) + ")");
+  }
+  void friction(std::string_view s, std::string_view k,
+                const std::array<model::JointFriction<double>, 4>& v, const Range& r) const {
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      check(source, dotted(s, k) + "[" + std::to_string(i) + "]", v[i].static_level, r);
+    }
+  }
+  void path(std::string_view, std::string_view, const std::filesystem::path&) const {}
+  void seconds(std::string_view s, std::string_view k, const std::chrono::nanoseconds& v,
+               const Range& r) const {
+    check(source, dotted(s, k), static_cast<double>(v.count()) / 1e9, r);
+  }
+};
+
+//! Refuses nesting deeper than bridge_config_max_depth before the parser sees the text: a quick
+//! scan counting brackets outside strings and comments.
+inline void check_depth(std::string_view text, std::string_view source) {
+  int depth = 0;
+  std::size_t line = 1;
+  std::size_t column = 0;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char ch = text[i];
+    ++column;
+    if (ch == '\n') {
+      ++line;
+      column = 0;
+    } else if (ch == '"') {  // a string: skip to its closing quote
+      for (++i; i < text.size() && text[i] != '"'; ++i) {
+        if (text[i] == '\\') ++i;
+        if (i < text.size() && text[i] == '\n') {  // invalid JSON; keep the position right
+          ++line;
+          column = 0;
+        }
+        ++column;
+      }
+      ++column;
+    } else if (ch == '/' && i + 1 < text.size() && text[i + 1] == '/') {
+      while (i < text.size() && text[i] != '\n') ++i;
+      ++line;
+      column = 0;
+    } else if (ch == '/' && i + 1 < text.size() && text[i + 1] == '*') {
+      for (i += 2; i + 1 < text.size() && !(text[i] == '*' && text[i + 1] == '/'); ++i) {
+        if (text[i] == '\n') {
+          ++line;
+          column = 0;
+        }
+      }
+      ++i;
+    } else if (ch == '[' || ch == '{') {
+      if (++depth > bridge_config_max_depth) {
+        ENDOHAPTICS_THROW(Error(std::string(source) + ": line " + std::to_string(line) +
+                                ", column " + std::to_string(column) + ": nested deeper than " +
+                                std::to_string(bridge_config_max_depth) +
+                                " levels (the limit; the bridge configuration needs 3)"));
+      }
+    } else if (ch == ']' || ch == '}') {
+      --depth;
+    }
+  }
+}
+
+//! nlohmann's message for an input it refused (a parse error, or a number overflow: "number
+//! overflow parsing '1e400'") without its prefix, the token it echoes cut to 60 characters.
+inline std::string parse_message(const json::exception& e) {
+  std::string m = e.what();
+  if (const auto p = m.find("] "); m.rfind("[json.exception", 0) == 0 && p != std::string::npos) {
+    m.erase(0, p + 2);
+  }
+  // The echoed token: after "last read: '" (parse errors) or the first "'" (other errors), up to
+  // "'; expected " or the final "'".
+  constexpr std::string_view marker = "; last read: '";
+  std::size_t start = std::string::npos;
+  if (const auto p = m.find(marker); p != std::string::npos) {
+    start = p + marker.size();
+  } else if (const auto q = m.find('\''); q != std::string::npos) {
+    start = q + 1;
+  }
+  if (start != std::string::npos) {
+    std::size_t end = m.find("'; expected ", start);
+    if (end == std::string::npos) {
+      end = m.size() > start && m.back() == '\'' ? m.size() - 1 : m.size();
+    }
+    m = m.substr(0, start) + excerpt(std::string_view(m).substr(start, end - start)) +
+        m.substr(end);
+  }
+  return excerpt(m, 300);
+}
+
+//! Parses `text` as JSON (comments allowed) and refuses duplicate keys anywhere in it.
+inline json parse(std::string_view text, std::string_view source) {
+  check_depth(text, source);
+  struct Frame {
+    bool object = false;
+    std::string path;         // "" for the root, "safety", "a.b", "list[]"
+    std::string current_key;  // the object's newest key
+    std::set<std::string> keys;
+  };
+  std::vector<Frame> frames;
+  std::string duplicate;
+  const json::parser_callback_t callback = [&](int, json::parse_event_t event, json& parsed) {
+    switch (event) {
+      case json::parse_event_t::object_start:
+      case json::parse_event_t::array_start: {
+        Frame f;
+        f.object = event == json::parse_event_t::object_start;
+        if (!frames.empty()) {
+          const Frame& parent = frames.back();
+          f.path = parent.object
+                       ? (parent.path.empty() ? "" : parent.path + ".") + parent.current_key
+                       : parent.path + "[]";
+        }
+        frames.push_back(std::move(f));
+        break;
+      }
+      case json::parse_event_t::object_end:
+      case json::parse_event_t::array_end:
+        if (!frames.empty()) frames.pop_back();
+        break;
+      case json::parse_event_t::key:
+        if (!frames.empty()) {
+          Frame& f = frames.back();
+          f.current_key = parsed.get<std::string>();
+          if (!f.keys.insert(f.current_key).second && duplicate.empty()) {
+            duplicate = (f.path.empty() ? "" : f.path + ".") + f.current_key;
+          }
+        }
+        break;
+      case json::parse_event_t::value:
+        break;
+    }
+    return true;
+  };
+  json j;
+  try {
+    j = json::parse(text.begin(), text.end(), callback, /*allow_exceptions=*/true,
+                    /*ignore_comments=*/true);
+  } catch (const json::exception& e) {  // parse_error; out_of_range for a number overflow
+    ENDOHAPTICS_THROW(Error(std::string(source) + ": not valid JSON: " + parse_message(e)));
+  }
+  if (!duplicate.empty()) {
+    ENDOHAPTICS_THROW(Error(std::string(source) + ": duplicate key " + key_name(duplicate) +
+                            " (a key may appear only once)"));
+  }
+  return j;
+}
+
+//! Runs a library validator; its Error gets "<source>: <key>: " in front.
+template <typename F>
+void with_prefix(std::string_view source, std::string_view key, F&& validate) {
+  try {
+    validate();
+  } catch (const Error& e) {
+    fail(source, key, e.what());
+  }
+}
+
+}  // namespace detail::bridge_config
+
+//! The force models the bridge runs: the 2016 models (estimation::models_2016), with the clamp
+//! model file of `config.clamp_model` for both clamps when set. Throws Error as
+//! load_hammerstein_wiener (naming the model file) when it cannot be loaded.
+[[nodiscard]] inline auto bridge_force_models(const BridgeConfig& config) {
+  auto models = estimation::models_2016<double>();
+  if (!config.clamp_model.empty()) {
+    using Clamp = estimation::ClampModel2016<double>;
+    models.clamp1 = Clamp(load_hammerstein_wiener<6, 2, 1>(config.clamp_model));
+    models.clamp2 = models.clamp1;
+  }
+  return models;
+}
+
+//! Checks `config` as the bridge will use it: every field in its schema range, then the
+//! library's own checks (TeleopLoopConfig, CylindricalMapper, OperatorScript, and a
+//! ForceEstimator built with the clamp model file). Throws Error "<source>: <key>: ...".
+inline void validate_bridge_config(const BridgeConfig& config,
+                                   std::string_view source = "bridge configuration") {
+  namespace bc = detail::bridge_config;
+  bc::Checker checker{source};
+  bc::visit_schema(config, checker);
+  // Cross-field checks, named by the section they concern.
+  bc::with_prefix(source, "safety", [&] { config.loop.validate(); });
+  bc::with_prefix(source, "mapping",
+                  [&] { (void)kinematics::CylindricalMapper<double>(config.mapping); });
+  bc::with_prefix(source, "operator", [&] { config.operator_script.validate(); });
+  auto models = estimation::models_2016<double>();
+  bc::with_prefix(source, "estimator.clamp_model", [&] { models = bridge_force_models(config); });
+  bc::with_prefix(source, "estimator", [&] {
+    (void)estimation::ForceEstimator<estimation::rate::Decimate>(models, config.estimator);
+  });
+}
+
+//! Reads a bridge configuration from JSON `text` over the defaults, then validates it
+//! (validate_bridge_config). `source` names the text in messages; a relative
+//! estimator.clamp_model is resolved against `base_dir` (empty: left relative). Throws Error
+//! naming the source, the key and the allowed range or values.
+[[nodiscard]] inline BridgeConfig parse_bridge_config(std::string_view text,
+                                                      std::string_view source = "<string>",
+                                                      const std::filesystem::path& base_dir = {}) {
+  namespace bc = detail::bridge_config;
+  const bc::json root = bc::parse(text, source);
+  if (!root.is_object()) {
+    ENDOHAPTICS_THROW(
+        Error(std::string(source) + ": must be a JSON object {...}, got " + bc::show(root)));
+  }
+  BridgeConfig config;
+  bc::KeyCollector schema;
+  bc::visit_schema(config, schema);
+  auto list = [](const auto& names) {
+    std::string out;
+    for (const auto& n : names) out += (out.empty() ? "" : ", ") + std::string(n);
+    return out;
+  };
+  std::vector<std::string> sections;
+  for (const auto& [section, keys] : schema.keys) sections.push_back(section);
+  for (const auto& [section, value] : root.items()) {
+    const auto known = schema.keys.find(section);
+    if (known == schema.keys.end()) {
+      ENDOHAPTICS_THROW(Error(std::string(source) + ": unknown key " + bc::key_name(section) +
+                              " (allowed: " + list(sections) + ")"));
+    }
+    if (!value.is_object()) {
+      bc::fail(source, section, "must be an object {...}, got " + bc::show(value));
+    }
+    for (const auto& [key, ignored] : value.items()) {
+      bool found = false;
+      for (const auto& k : known->second) found = found || k == key;
+      if (!found) {
+        ENDOHAPTICS_THROW(Error(std::string(source) + ": unknown key " +
+                                bc::key_name(section + "." + key) + " (allowed in '" + section +
+                                "': " + list(known->second) + ")"));
+      }
+    }
+  }
+  bc::Reader reader{root, source, base_dir};
+  bc::visit_schema(config, reader);
+  validate_bridge_config(config, source);
+  return config;
+}
+
+//! Reads the bridge configuration file `path` (at most bridge_config_max_bytes) as
+//! parse_bridge_config, with the file's name in messages and relative model files resolved
+//! against its folder.
+[[nodiscard]] inline BridgeConfig load_bridge_config(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) ENDOHAPTICS_THROW(Error(path.string() + ": cannot read the configuration file"));
+  std::string text;
+  text.resize(bridge_config_max_bytes + 1);
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  if (in.bad()) ENDOHAPTICS_THROW(Error(path.string() + ": read error"));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  if (text.size() > bridge_config_max_bytes) {
+    ENDOHAPTICS_THROW(Error(path.string() + ": larger than " +
+                            std::to_string(bridge_config_max_bytes) +
+                            " bytes; not a bridge configuration"));
+  }
+  return parse_bridge_config(text, path.string(), path.parent_path());
+}
+
+//! The configuration as JSON text in the file's format (every key; clamp_model when set):
+//! parse_bridge_config reads it back to the same values.
+[[nodiscard]] inline std::string bridge_config_json(const BridgeConfig& config, int indent = 2) {
+  detail::bridge_config::Writer writer;
+  detail::bridge_config::visit_schema(config, writer);
+  return writer.out.dump(indent);
+}
+
+}  // namespace endohaptics::files

@@ -1,0 +1,377 @@
+#include "endohaptics/files/bridge_config.hpp"
+
+#include <doctest/doctest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <system_error>
+
+#include "endohaptics/files/model_file.hpp"
+#include "endohaptics/model/presets_2016.hpp"
+
+namespace {
+
+namespace files = endohaptics::files;
+namespace tp = endohaptics::teleop;
+using endohaptics::Error;
+
+// A folder in the temp directory, removed at scope exit; one name per test case (CTest may run
+// the cases in parallel).
+struct TempDir {
+  explicit TempDir(const std::string& name)
+      : path(std::filesystem::temp_directory_path() / ("endohaptics_bridge_config_" + name)) {
+    std::filesystem::remove_all(path);
+    std::filesystem::create_directories(path);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  std::filesystem::path path;
+};
+
+void write_text(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+}
+
+std::string message_of(const auto& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "no exception";
+}
+
+// The message parse_bridge_config gives for `text` (source "bridge.json").
+std::string error_of(const std::string& text) {
+  return message_of([&] { (void)files::parse_bridge_config(text, "bridge.json"); });
+}
+
+// The docs/rig.md example file.
+const std::string rig_example = R"({
+  "mapping":   { "a_roll": 0.7096, "b_roll": -1.108, "a_pitch": 3.93, "b_pitch": -0.54,
+                 "a_clamp": 5.384, "b_clamp": 0.7,
+                 "lower": [-1.028, -1.028, -1.028, -1.028], "upper": [1.028, 1.028, 1.028, 1.028],
+                 "force_scale": [1, 1, 1], "force_limit": 2.5 },
+  "safety":    { "max_consecutive_misses": 10, "policy": "hold_position",
+                 "force_ramp_time": 0.5, "max_setpoint_rate": 4.0, "max_stylus_force": 3.0,
+                 "enable_mask": 15 },
+  "estimator": { "current_sign": [-1, -1, -1, -1], "friction_level": [0.7, 0.17, 0.21, 0.20],
+                 "output_deadzone": [0, 0, 0, 0], "output_limit": [0.084, 9.80665, 9.80665, 9.80665] },
+  "operator":  { "r_open": 0.1300, "r_closed": 0.0186, "open_time": 0.7, "close_time": 0.8,
+                 "hold_time": 0.7, "release_time": 0.8 },
+  "loop":      { "receive_timeout": 0.001 }
+})";
+
+// Nested arrays `depth` deep as the value of mapping.lower.
+std::string nested(int depth) {
+  return R"({"mapping": {"lower": )" + std::string(static_cast<std::size_t>(depth) - 2, '[') +
+         std::string(static_cast<std::size_t>(depth) - 2, ']') + "}}";
+}
+
+}  // namespace
+
+TEST_CASE("defaults: an empty object, and the defaults written and read back, give the library's") {
+  const files::BridgeConfig defaults;
+  const files::BridgeConfig empty = files::parse_bridge_config("{}");
+  CHECK(files::bridge_config_json(empty) == files::bridge_config_json(defaults));
+
+  const std::string text = files::bridge_config_json(defaults);
+  const files::BridgeConfig back = files::parse_bridge_config(text);
+  CHECK(files::bridge_config_json(back) == text);
+  CHECK(back.mapping.a_roll == defaults.mapping.a_roll);
+  CHECK(back.mapping.lower == defaults.mapping.lower);
+  CHECK(back.mapping.theta_neutral == defaults.mapping.theta_neutral);
+  CHECK(back.loop.safety.max_consecutive_misses == 10);
+  CHECK(back.loop.safety.policy == tp::SafeStatePolicy::hold_position);
+  CHECK(back.loop.safety.enable_mask == 0x0F);
+  CHECK(back.loop.receive_timeout == defaults.loop.receive_timeout);
+  CHECK(back.estimator.friction == defaults.estimator.friction);
+  CHECK(back.estimator.output_limit == defaults.estimator.output_limit);
+  CHECK(back.operator_script.r_closed == defaults.operator_script.r_closed);
+  CHECK(back.clamp_model.empty());
+  // Every section and key is written.
+  for (const char* key : {"\"mapping\"", "\"safety\"", "\"estimator\"", "\"operator\"", "\"loop\"",
+                          "\"max_consecutive_misses\"", "\"friction_level\"", "\"receive_timeout\"",
+                          "\"theta_neutral\"", "\"hold_position\""}) {
+    CHECK(text.find(key) != std::string::npos);
+  }
+}
+
+TEST_CASE("a changed value of every kind round-trips through the JSON text") {
+  files::BridgeConfig c;
+  c.mapping.b_clamp = 0.25;
+  c.mapping.upper << 1.0, 0.9, 0.8, 0.7;
+  c.loop.safety.policy = tp::SafeStatePolicy::zero_force;
+  c.loop.safety.max_consecutive_misses = 3;
+  c.loop.safety.enable_mask = 0x05;
+  c.loop.receive_timeout = std::chrono::microseconds(250);
+  c.estimator.current_sign << 1, -1, 1, -1;
+  c.estimator.friction[1] = endohaptics::model::JointFriction<double>::simplified(0.3);
+  c.operator_script.hold_time = 0.0;
+  const files::BridgeConfig back = files::parse_bridge_config(files::bridge_config_json(c));
+  CHECK(back.mapping.b_clamp == 0.25);
+  CHECK(back.mapping.upper == c.mapping.upper);
+  CHECK(back.loop.safety.policy == tp::SafeStatePolicy::zero_force);
+  CHECK(back.loop.safety.max_consecutive_misses == 3);
+  CHECK(back.loop.safety.enable_mask == 0x05);
+  CHECK(back.loop.receive_timeout == std::chrono::microseconds(250));
+  CHECK(back.estimator.current_sign == c.estimator.current_sign);
+  CHECK(back.estimator.friction[1].static_level == 0.3);
+  CHECK(back.estimator.friction[1].coulomb_level == 0.3);
+  CHECK(back.operator_script.hold_time == 0.0);
+}
+
+TEST_CASE("the docs/rig.md example loads from a file, comments allowed") {
+  TempDir dir("rig_example");
+  write_text(dir.path / "bridge.json", "// the lab's settings\n" + rig_example);
+  const files::BridgeConfig c = files::load_bridge_config(dir.path / "bridge.json");
+  CHECK(c.mapping.a_pitch == 3.93);
+  CHECK(c.loop.safety.max_setpoint_rate == 4.0);
+  CHECK(c.estimator.friction[3].static_level == 0.20);
+  CHECK(c.loop.receive_timeout == std::chrono::milliseconds(1));
+
+  const auto p = files::parse_bridge_config(
+      R"({ /* block */ "safety": { "policy": "disable_motors" } // trailing
+      })");
+  CHECK(p.loop.safety.policy == tp::SafeStatePolicy::disable_motors);
+}
+
+TEST_CASE("file errors name the file") {
+  TempDir dir("file_errors");
+  const auto missing = dir.path / "missing.json";
+  CHECK(message_of([&] { (void)files::load_bridge_config(missing); }) ==
+        missing.string() + ": cannot read the configuration file");
+
+  const auto bad = dir.path / "bad.json";
+  write_text(bad, "{\n  \"safety\": { \"policy\": \"zero_force\", }\n}");
+  const std::string m = message_of([&] { (void)files::load_bridge_config(bad); });
+  CHECK(m.rfind(bad.string() + ": not valid JSON: parse error at line 2, column ", 0) == 0);
+
+  const auto range = dir.path / "range.json";
+  write_text(range, R"({"loop": {"receive_timeout": 2}})");
+  CHECK(message_of([&] { (void)files::load_bridge_config(range); }) ==
+        range.string() + ": loop.receive_timeout: must be a number in [0, 1] s, got 2");
+
+  const auto big = dir.path / "big.json";
+  write_text(big, "{}" + std::string(files::bridge_config_max_bytes, ' '));
+  CHECK(message_of([&] { (void)files::load_bridge_config(big); }) ==
+        big.string() + ": larger than 1048576 bytes; not a bridge configuration");
+}
+
+TEST_CASE("unknown keys are errors that list the allowed keys") {
+  CHECK(error_of(R"({"safty": {}})") ==
+        "bridge.json: unknown key 'safty' (allowed: estimator, loop, mapping, operator, safety)");
+  CHECK(error_of(R"({"loop": {"recieve_timeout": 0.002}})") ==
+        "bridge.json: unknown key 'loop.recieve_timeout' (allowed in 'loop': receive_timeout)");
+  CHECK(error_of(R"({"safety": {"polcy": "zero_force"}})") ==
+        "bridge.json: unknown key 'safety.polcy' (allowed in 'safety': max_consecutive_misses, "
+        "policy, force_ramp_time, max_setpoint_rate, max_stylus_force, enable_mask)");
+  // loop_period and motor_order are the program's, not the file's.
+  CHECK(error_of(R"({"estimator": {"loop_period": 0.002}})")
+            .rfind("bridge.json: unknown key 'estimator.loop_period' (allowed in 'estimator': "
+                   "current_sign, unit_scale, friction_level, output_deadzone, output_limit, "
+                   "clamp_model)",
+                   0) == 0);
+}
+
+TEST_CASE("duplicate keys are errors, at any level") {
+  CHECK(error_of(R"({"safety": {"policy": "zero_force", "policy": "hold_position"}})") ==
+        "bridge.json: duplicate key 'safety.policy' (a key may appear only once)");
+  CHECK(error_of(R"({"loop": {}, "mapping": {}, "loop": {"receive_timeout": 0.002}})") ==
+        "bridge.json: duplicate key 'loop' (a key may appear only once)");
+  // The same key in two different objects is fine.
+  CHECK_NOTHROW((void)files::parse_bridge_config(
+      R"({"mapping": {"force_limit": 2}, "safety": {"max_stylus_force": 2}})"));
+}
+
+TEST_CASE("wrong types name the key and what it must be") {
+  CHECK(error_of("[1, 2]") == "bridge.json: must be a JSON object {...}, got [1,2]");
+  CHECK(error_of(R"({"safety": 3})") == "bridge.json: safety: must be an object {...}, got 3");
+  CHECK(error_of(R"({"mapping": {"a_roll": "0.7"}})") ==
+        "bridge.json: mapping.a_roll: must be a finite number rad/rad, got \"0.7\"");
+  CHECK(error_of(R"({"mapping": {"lower": [0, 0, 0]}})") ==
+        "bridge.json: mapping.lower: must be an array of 4 numbers, each a finite number rad, "
+        "got [0,0,0]");
+  CHECK(error_of(R"({"mapping": {"force_scale": [1, null, 1]}})") ==
+        "bridge.json: mapping.force_scale[1]: must be a finite number N per unit, got null");
+  CHECK(error_of(R"({"safety": {"policy": "freeze"}})") ==
+        "bridge.json: safety.policy: must be \"hold_position\", \"disable_motors\" or "
+        "\"zero_force\", got \"freeze\"");
+  CHECK(error_of(R"({"safety": {"policy": 1}})") ==
+        "bridge.json: safety.policy: must be \"hold_position\", \"disable_motors\" or "
+        "\"zero_force\", got 1");
+}
+
+TEST_CASE("integer fields: integral and in range, never an undefined conversion") {
+  const std::string misses =
+      "bridge.json: safety.max_consecutive_misses: must be an integer in "
+      "[0, 1000000], got ";
+  auto misses_of = [](const std::string& value) {
+    return error_of(R"({"safety": {"max_consecutive_misses": )" + value + "}}");
+  };
+  CHECK(misses_of("1e300") == misses + "1e+300");
+  CHECK(misses_of("-1e300") == misses + "-1e+300");
+  CHECK(misses_of("10.5") == misses + "10.5");
+  CHECK(misses_of("-1") == misses + "-1");
+  CHECK(misses_of("1000001") == misses + "1000001");
+  CHECK(misses_of("18446744073709551615") == misses + "18446744073709551615");
+  CHECK(misses_of("-9223372036854775808") == misses + "-9223372036854775808");
+  CHECK(misses_of("1e400") == "bridge.json: not valid JSON: number overflow parsing '1e400'");
+  CHECK(misses_of("\"10\"") == misses + "\"10\"");
+  CHECK(misses_of("true") == misses + "true");
+  // An integral float is an integer.
+  CHECK(files::parse_bridge_config(R"({"safety": {"max_consecutive_misses": 2e1}})")
+            .loop.safety.max_consecutive_misses == 20);
+  CHECK(files::parse_bridge_config(R"({"safety": {"max_consecutive_misses": 0}})")
+            .loop.safety.max_consecutive_misses == 0);
+
+  const std::string mask = "bridge.json: safety.enable_mask: must be an integer in [0, 15], got ";
+  CHECK(error_of(R"({"safety": {"enable_mask": 16}})") == mask + "16");
+  CHECK(error_of(R"({"safety": {"enable_mask": 256}})") == mask + "256");  // not 0 as a uint8
+  CHECK(error_of(R"({"safety": {"enable_mask": 1.5}})") == mask + "1.5");
+  CHECK(files::parse_bridge_config(R"({"safety": {"enable_mask": 3}})").loop.safety.enable_mask ==
+        3);
+}
+
+TEST_CASE("out-of-range numbers name the key and the allowed range") {
+  CHECK(error_of(R"({"mapping": {"force_limit": 0}})") ==
+        "bridge.json: mapping.force_limit: must be a finite number > 0 N, got 0");
+  CHECK(error_of(R"({"mapping": {"min_radius": -0.001}})") ==
+        "bridge.json: mapping.min_radius: must be a finite number >= 0 m, got -0.001");
+  CHECK(error_of(R"({"mapping": {"theta_neutral": 4}})") ==
+        "bridge.json: mapping.theta_neutral: must be a number in [-pi, pi] rad, got 4");
+  CHECK(error_of(R"({"mapping": {"a_roll": 1e999}})") ==
+        "bridge.json: not valid JSON: number overflow parsing '1e999'");
+  CHECK(error_of(R"({"safety": {"max_setpoint_rate": 0}})") ==
+        "bridge.json: safety.max_setpoint_rate: must be a finite number > 0 rad/s, got 0");
+  CHECK(error_of(R"({"safety": {"force_ramp_time": -0.5}})") ==
+        "bridge.json: safety.force_ramp_time: must be a finite number >= 0 s, got -0.5");
+  CHECK(error_of(R"({"estimator": {"current_sign": [-1, -1, 0.5, -1]}})") ==
+        "bridge.json: estimator.current_sign[2]: must be -1 or +1, got 0.5");
+  CHECK(error_of(R"({"estimator": {"friction_level": [0.7, -0.17, 0.21, 0.2]}})") ==
+        "bridge.json: estimator.friction_level[1]: must be a finite number >= 0 A, got -0.17");
+  CHECK(error_of(R"({"estimator": {"output_limit": [0.084, 9.8, 0, 9.8]}})") ==
+        "bridge.json: estimator.output_limit[2]: must be a finite number > 0, got 0");
+  CHECK(error_of(R"({"operator": {"close_time": 0}})") ==
+        "bridge.json: operator.close_time: must be a finite number > 0 s, got 0");
+  CHECK(error_of(R"({"loop": {"receive_timeout": -0.001}})") ==
+        "bridge.json: loop.receive_timeout: must be a number in [0, 1] s, got -0.001");
+}
+
+TEST_CASE("cross-field checks of the library come with the file name") {
+  CHECK(error_of(R"({"mapping": {"lower": [1, -1, -1, -1], "upper": [0, 1, 1, 1]}})") ==
+        "bridge.json: mapping: CylindricalMapper: range of roll is empty: lower 1 > upper 0");
+  // A clamp model whose sample time the 1 ms Decimate grid cannot run is refused at load.
+  files::BridgeConfig c;
+  c.estimator.loop_period = 0.003;  // not a divisor of the 2016 models' 0.02 s
+  CHECK(message_of([&] {
+          files::validate_bridge_config(c, "built");
+        }).rfind("built: estimator: ForceEstimator", 0) == 0);
+}
+
+TEST_CASE("validate_bridge_config checks a configuration built in code") {
+  files::BridgeConfig c;
+  CHECK_NOTHROW(files::validate_bridge_config(c));
+  c.loop.safety.enable_mask = 0x10;
+  CHECK(message_of([&] { files::validate_bridge_config(c, "built"); }) ==
+        "built: safety.enable_mask: must be an integer in [0, 15], got 16");
+  c = {};
+  c.loop.receive_timeout = std::chrono::seconds(2);
+  CHECK(message_of([&] { files::validate_bridge_config(c, "built"); }) ==
+        "built: loop.receive_timeout: must be a number in [0, 1] s, got 2");
+  c = {};
+  c.operator_script.r_open = std::numeric_limits<double>::quiet_NaN();
+  CHECK(message_of([&] { files::validate_bridge_config(c, "built"); }) ==
+        "built: operator.r_open: must be a finite number > 0 m, got nan");
+}
+
+TEST_CASE("echoed values and keys are cut to 60 characters") {
+  const std::string long_text(100000, 'x');
+  const std::string value = error_of(R"({"safety": {"policy": ")" + long_text + "\"}}");
+  CHECK(value ==
+        "bridge.json: safety.policy: must be \"hold_position\", \"disable_motors\" or "
+        "\"zero_force\", got \"" +
+            std::string(59, 'x') + "...");
+  const std::string key = error_of(R"({"safety": {")" + long_text + "\": 1}}");
+  CHECK(key == "bridge.json: unknown key 'safety." + std::string(53, 'x') +
+                   "...' (allowed in 'safety': max_consecutive_misses, policy, force_ramp_time, "
+                   "max_setpoint_rate, max_stylus_force, enable_mask)");
+  const std::string array =
+      error_of(R"({"mapping": {"lower": [)" + std::string(50000, '1') + ", 2, 3]}}");
+  CHECK(array ==
+        "bridge.json: not valid JSON: number overflow parsing '" + std::string(60, '1') + "...'");
+  // An invalid token: nlohmann echoes it; the message keeps 60 characters of it.
+  const std::string token = error_of(R"({"safety": {"policy": ")" + long_text);
+  CHECK(token.rfind("bridge.json: not valid JSON: parse error at line 1, column ", 0) == 0);
+  CHECK(token.size() < 300);
+  CHECK(token.find(std::string(59, 'x') + "...") != std::string::npos);
+  const std::string literal = error_of(R"({"safety": {"policy": t)" + long_text + "}}");
+  CHECK(literal.size() < 300);
+}
+
+TEST_CASE("nesting deeper than 64 levels is refused before parsing") {
+  CHECK(error_of(nested(65)) ==
+        "bridge.json: line 1, column 85: nested deeper than 64 levels (the limit; the bridge "
+        "configuration needs 3)");
+  // 64 levels parse; the schema then refuses the value.
+  CHECK(
+      error_of(nested(64)).rfind("bridge.json: mapping.lower: must be an array of 4 numbers", 0) ==
+      0);
+  // A depth that would exhaust a recursive parser's stack, and one that is unterminated.
+  const std::string deep(1000000, '[');
+  CHECK(error_of(deep).find("nested deeper than 64 levels") != std::string::npos);
+  CHECK(error_of("{\"a\":\n" + std::string(70, '{')).rfind("bridge.json: line 2, column 64: ", 0) ==
+        0);
+  // Brackets inside strings and comments do not count.
+  const std::string brackets(100, '[');
+  CHECK(error_of("{\"" + brackets + "\": 1}").rfind("bridge.json: unknown key '[[[", 0) == 0);
+  CHECK_NOTHROW((void)files::parse_bridge_config("// " + brackets + "\n/* " + brackets + " */{}"));
+  CHECK(error_of(R"({"estimator": {"clamp_model": ")" + brackets + R"("}})")
+            .rfind("bridge.json: estimator.clamp_model: ", 0) == 0);
+}
+
+TEST_CASE("estimator.clamp_model loads an identified model file, relative to the config file") {
+  TempDir dir("clamp_model");
+  // The appendix C yaw model with a 0.3 A dead zone, as endohaptics-identify would save it.
+  const auto yaw = endohaptics::model::yaw_force_2016_hw(0.3);
+  files::save_model(
+      dir.path / "clamp.json",
+      files::make_model_file(yaw, {{"current", "A"}, {"velocity", "rad/s"}}, {{"force", "N"}}));
+  write_text(dir.path / "bridge.json", R"({"estimator": {"clamp_model": "clamp.json"}})");
+  const files::BridgeConfig c = files::load_bridge_config(dir.path / "bridge.json");
+  CHECK(c.clamp_model == dir.path / "clamp.json");
+  const auto models = files::bridge_force_models(c);
+  CHECK(models.clamp1.model().input_nonlinearity().channel(0).upper() == 0.3);
+  CHECK(models.clamp2.model().input_nonlinearity().channel(0).upper() == 0.3);
+  CHECK(files::bridge_force_models(files::BridgeConfig{})
+            .clamp1.model()
+            .input_nonlinearity()
+            .channel(0)
+            .upper() == doctest::Approx(0.21));
+
+  // An absolute path stays as it is; the key round-trips.
+  const auto absolute = files::parse_bridge_config(R"({"estimator": {"clamp_model": ")" +
+                                                   (dir.path / "clamp.json").string() + "\"}}");
+  CHECK(absolute.clamp_model == dir.path / "clamp.json");
+  CHECK(files::parse_bridge_config(files::bridge_config_json(absolute)).clamp_model ==
+        absolute.clamp_model);
+
+  // A missing or unusable model file is an error of the configuration file, naming both.
+  write_text(dir.path / "missing.json", R"({"estimator": {"clamp_model": "nope.json"}})");
+  const std::string missing =
+      message_of([&] { (void)files::load_bridge_config(dir.path / "missing.json"); });
+  CHECK(missing.rfind((dir.path / "missing.json").string() + ": estimator.clamp_model: ", 0) == 0);
+  CHECK(missing.find((dir.path / "nope.json").string()) != std::string::npos);
+  CHECK(error_of(R"({"estimator": {"clamp_model": 3}})") ==
+        "bridge.json: estimator.clamp_model: must be the name of a model file (a non-empty "
+        "string), got 3");
+  CHECK(error_of(R"({"estimator": {"clamp_model": ""}})") ==
+        "bridge.json: estimator.clamp_model: must be the name of a model file (a non-empty "
+        "string), got \"\"");
+}
