@@ -24,6 +24,7 @@ class DurationStats {
   static_assert(BinWidthNs > 0);
 
  public:
+  //! Adds one duration (any sign; negative ones land in the first bin).
   void add(std::chrono::nanoseconds d) noexcept {
     const auto ns = d.count();
     const double s = static_cast<double>(ns) * 1e-9;
@@ -41,13 +42,17 @@ class DurationStats {
     }
   }
 
+  //! Durations added so far.
   [[nodiscard]] std::uint64_t count() const noexcept { return count_; }
+  //! Mean, s (0 when empty).
   [[nodiscard]] double mean() const noexcept { return count_ ? mean_ : 0.0; }
   //! Sample standard deviation (n - 1).
   [[nodiscard]] double stddev() const noexcept {
     return count_ > 1 ? std::sqrt(m2_ / static_cast<double>(count_ - 1)) : 0.0;
   }
+  //! Smallest duration, s (0 when empty).
   [[nodiscard]] double min() const noexcept { return count_ ? min_ : 0.0; }
+  //! Largest duration, s (0 when empty).
   [[nodiscard]] double max() const noexcept { return count_ ? max_ : 0.0; }
   //! Upper edge of the histogram bin holding quantile q in [0, 1] (resolution BinWidthNs),
   //! capped by the largest value seen.
@@ -64,12 +69,16 @@ class DurationStats {
     }
     return max_;  // in the overflow bin: the largest value seen bounds it
   }
+  //! Durations beyond the histogram's last bin (Bins x BinWidthNs).
   [[nodiscard]] std::uint64_t overflow() const noexcept { return overflow_; }
+  //! Counts per bin; bin i holds [i, i + 1) x BinWidthNs.
   [[nodiscard]] const std::array<std::uint32_t, static_cast<std::size_t>(Bins)>& histogram()
       const noexcept {
     return histogram_;
   }
+  //! Width of one histogram bin, s.
   static constexpr double bin_width() noexcept { return static_cast<double>(BinWidthNs) * 1e-9; }
+  //! Forgets everything added.
   void reset() noexcept { *this = DurationStats{}; }
 
  private:
@@ -163,7 +172,7 @@ struct LoopSnapshot {
 //! Loop statistics: the worksheet's table 3.1 and more. One `record_*` per tick, all noexcept.
 class LoopStats {
  public:
-  using Clock = std::chrono::steady_clock;
+  using Clock = std::chrono::steady_clock;  //!< the clock of the recorded time points
 
   //! Nominal period, for deadline-miss counting and the period-error figures.
   explicit LoopStats(
@@ -212,13 +221,21 @@ class LoopStats {
   //! Time spent computing in the tick (everything except waiting), for the compute budget.
   void record_compute(std::chrono::nanoseconds compute) noexcept { compute_.add(compute); }
 
+  //! Ticks recorded.
   [[nodiscard]] std::uint64_t ticks() const noexcept { return ticks_; }
+  //! Exchanges that brought a valid state packet.
   [[nodiscard]] std::uint64_t received() const noexcept { return received_; }
+  //! Exchanges where nothing arrived before the receive deadline.
   [[nodiscard]] std::uint64_t timeouts() const noexcept { return timeouts_; }
+  //! Exchanges whose datagram did not decode (size, NaN/Inf, mask).
   [[nodiscard]] std::uint64_t decode_errors() const noexcept { return decode_errors_; }
+  //! Exchanges the operating system refused (send or receive error).
   [[nodiscard]] std::uint64_t transport_errors() const noexcept { return transport_errors_; }
+  //! Older datagrams discarded by the transports' drains.
   [[nodiscard]] std::uint64_t stale_dropped() const noexcept { return stale_dropped_; }
+  //! Ticks that started later than one nominal period after the previous one.
   [[nodiscard]] std::uint64_t deadline_misses() const noexcept { return deadline_misses_; }
+  //! All exchanges: received + timeouts + decode errors + transport errors.
   [[nodiscard]] std::uint64_t exchanges() const noexcept {
     return received_ + timeouts_ + decode_errors_ + transport_errors_;
   }
@@ -233,13 +250,18 @@ class LoopStats {
     const double span = std::chrono::duration<double>(last_start_ - first_start_).count();
     return span > 0 ? static_cast<double>(ticks_ - 1) / span : 0.0;
   }
+  //! Tick start to tick start.
   [[nodiscard]] const DurationStats<>& period() const noexcept { return period_; }
   //! |period - nominal|: the period error the user feels as jitter.
   [[nodiscard]] const DurationStats<>& period_error() const noexcept { return period_error_; }
+  //! Send to receive (or to the deadline) of each exchange.
   [[nodiscard]] const DurationStats<>& round_trip() const noexcept { return round_trip_; }
+  //! Time each tick spent computing (everything but waiting).
   [[nodiscard]] const DurationStats<>& compute() const noexcept { return compute_; }
+  //! The nominal period given at construction.
   [[nodiscard]] std::chrono::nanoseconds nominal_period() const noexcept { return nominal_; }
 
+  //! Forgets everything recorded (keeps the nominal period).
   void reset() noexcept { *this = LoopStats{nominal_}; }
 
   //! The cumulative counters now, about 100 bytes: for per-second figures on another thread
