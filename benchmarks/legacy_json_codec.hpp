@@ -23,7 +23,7 @@ class LegacyJsonCodec {
     nlohmann::json arm;
     arm["position"] = to_vector(state.position);
     arm["velocity"] = to_vector(state.velocity);
-    arm["effort"] = to_vector(state.effort);
+    arm["effort"] = to_vector(state.current);
     nlohmann::json message;
     message["p4_primary"] = std::move(arm);
     return message.dump();
@@ -36,7 +36,7 @@ class LegacyJsonCodec {
     const auto& arm = message["p4_primary"];
     State parsed;
     if (!read(arm, "position", parsed.position) || !read(arm, "velocity", parsed.velocity) ||
-        !read(arm, "effort", parsed.effort)) {
+        !read(arm, "effort", parsed.current)) {
       return false;
     }
     parsed.active_mask = out.active_mask;

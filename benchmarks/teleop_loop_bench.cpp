@@ -25,7 +25,7 @@ struct CannedSbrio {
   CannedSbrio() {
     Codec::State s;
     s.position << 0.1, -0.2, 0.3, -0.3;
-    s.effort << 0.4, 0.5, 0.6, -0.6;
+    s.current << 0.4, 0.5, 0.6, -0.6;
     s.active_mask = 0x0F;
     (void)Codec::encode_state(s, reply);
   }
@@ -49,7 +49,7 @@ struct StillDevice {
 
 struct EffortEstimator {
   bool estimate(const tp::MotorState4& m, const tp::MotorVector&, tp::MotorVector& f) noexcept {
-    f = 0.5 * m.effort;
+    f = 0.5 * m.current;
     return true;
   }
   void reset() noexcept {}

@@ -26,7 +26,7 @@ void fake_sbrio(udp::socket& socket, int count) {
     Codec::State state;
     state.position = setpoint.position;
     state.velocity.setConstant(0.01 * i);
-    state.effort.setConstant(-0.25);
+    state.current.setConstant(-0.25);
     state.active_mask = setpoint.enable_mask;
     Codec::StateBytes out{};
     if (Codec::encode_state(state, out) == CodecStatus::ok) {

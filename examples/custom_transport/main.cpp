@@ -28,7 +28,7 @@ struct MailboxTransport {
                         (sp.enable_mask >> 3) & 1);
     robot.velocity = (0.1 * (sp.position - robot.position)).cwiseProduct(enabled) / 1e-3;
     robot.position += robot.velocity * 1e-3;
-    robot.effort = 3.0 * (sp.position - robot.position);
+    robot.current = 3.0 * (sp.position - robot.position);
     robot.active_mask = sp.enable_mask;
     has_reply = Codec::encode_state(robot, reply) == endohaptics::protocol::CodecStatus::ok;
     return transport::TransportStatus::ok;

@@ -140,7 +140,7 @@ int main(int argc, char** argv) {
         // force model sees, next to the truth it should reproduce.
         for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", state.position[i]);
         for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", state.velocity[i]);
-        for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", state.effort[i]);
+        for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", state.current[i]);
         row += '\n';
         std::fputs(row.c_str(), truth.file);
       }

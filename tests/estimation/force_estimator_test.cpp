@@ -154,7 +154,7 @@ TEST_CASE("every default template argument set constructs and runs with its defa
       endohaptics::protocol::MotorState<4> packet;
       packet.position = s.position;
       packet.velocity = s.velocity;
-      packet.effort = s.current;
+      packet.current = s.current;
       Eigen::Vector4d force = Eigen::Vector4d::Constant(std::numeric_limits<double>::quiet_NaN());
       REQUIRE(estimator.estimate(packet, s.setpoint, force));
       REQUIRE(force.allFinite());
@@ -711,7 +711,7 @@ TEST_CASE("TeleopLoop interface: estimate() = step() on the packet, forces in mo
     endohaptics::protocol::MotorState<4> packet;
     packet.position = s.position;
     packet.velocity = s.velocity;
-    packet.effort = s.current;
+    packet.current = s.current;
     Forces tool;
     REQUIRE(via_step.step(s, tool) == ForceStatus::ok);
     Eigen::Vector4d motor = Eigen::Vector4d::Zero();
@@ -720,7 +720,7 @@ TEST_CASE("TeleopLoop interface: estimate() = step() on the packet, forces in mo
     REQUIRE(motor[0] == tool[1]);  // slot 0 carries the pitch
   }
   endohaptics::protocol::MotorState<4> bad;
-  bad.effort[2] = std::numeric_limits<double>::quiet_NaN();
+  bad.current[2] = std::numeric_limits<double>::quiet_NaN();
   Eigen::Vector4d untouched = Eigen::Vector4d::Constant(3.0);
   CHECK_FALSE(via_estimate.estimate(bad, Eigen::Vector4d::Zero(), untouched));
   CHECK(via_estimate.last_status() == ForceStatus::non_finite_input);
@@ -731,13 +731,13 @@ TEST_CASE("joint_state takes the sbRIO packet and the setpoint we sent") {
   endohaptics::protocol::MotorState<4> measured;
   measured.position << 0.1, 0.2, 0.3, 0.4;
   measured.velocity << -1.0, -2.0, -3.0, -4.0;
-  measured.effort << 0.5, 0.6, 0.7, 0.8;
+  measured.current << 0.5, 0.6, 0.7, 0.8;
   endohaptics::protocol::MotorSetpoint<4> sent;
   sent.position << 0.15, 0.25, 0.35, 0.45;
   const auto s = est::joint_state(measured, sent);
   CHECK(s.position == measured.position);
   CHECK(s.velocity == measured.velocity);
-  CHECK(s.current == measured.effort);
+  CHECK(s.current == measured.current);
   CHECK(s.setpoint == sent.position);
   const auto sf = est::joint_state<float>(measured, sent);
   CHECK(sf.current[3] == 0.8f);

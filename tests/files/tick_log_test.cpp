@@ -54,7 +54,7 @@ TEST_CASE("what TickRecorder writes is read back by column name") {
       r.setpoint << 0.1, 0.2, 0.3, 0.4;
       r.measured.position << 1.1, 1.2, 1.3, 1.4;
       r.measured.velocity << 2.1, 2.2, 2.3, 2.4;
-      r.measured.effort << 3.1, 3.2, 3.3, 3.4;
+      r.measured.current << 3.1, 3.2, 3.3, 3.4;
       r.joint_force << 4.1, 4.2, 4.3 + i, 4.4;
       r.stylus_force = Eigen::Vector3d(0.5, -1.25, 2.0);
       REQUIRE(recorder.push(tp::TickRecord::from(r, std::chrono::milliseconds(1000 + i))));

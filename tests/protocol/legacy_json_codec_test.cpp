@@ -10,7 +10,7 @@ TEST_CASE("legacy JSON baseline: round trip and rejection of malformed messages"
       -0.1987191723699879841951;
   state.velocity << 0.0245981621957453203, 0.0019754796320965562379, 0.0015707947313785552979,
       0.00013089955609757453203;
-  state.effort << -0.48593282699584960938, -0.31835031509399414063, -0.36891269683837890625,
+  state.current << -0.48593282699584960938, -0.31835031509399414063, -0.36891269683837890625,
       -0.39591121673583984375;
   const std::string text = Json4::encode(state);
   CHECK(text.rfind(R"({"p4_primary":{"effort":[)", 0) == 0);
@@ -20,7 +20,7 @@ TEST_CASE("legacy JSON baseline: round trip and rejection of malformed messages"
   Json4::State back;
   REQUIRE(Json4::parse(text, back));
   CHECK(back.position == state.position);  // 17 significant digits: exact round trip
-  CHECK(back.effort == state.effort);
+  CHECK(back.current == state.current);
 
   Json4::State untouched;
   untouched.position.setConstant(3.0);

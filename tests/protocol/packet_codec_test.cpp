@@ -63,7 +63,7 @@ TEST_CASE("state packet: golden bytes worked out by hand") {
   Codec4::State state;
   state.position << 1.0, -2.0, 0.5, 0.25;
   state.velocity << 0.0, -0.0, 2.0, -0.5;
-  state.effort << 0.1875, 100.0, -1.5, 3.0;
+  state.current << 0.1875, 100.0, -1.5, 3.0;
   state.active_mask = 0x05;
 
   Codec4::StateBytes encoded{};
@@ -89,7 +89,7 @@ TEST_CASE("state packet: the values of worksheet listing 3.1 (first four motors)
   CHECK(decoded.position[0] == 0.18189164996147156);  // nearest float32 of 0.181891652918...
   CHECK(decoded.position[3] == -0.19871917366981506);
   CHECK(decoded.velocity[1] == 0.0019754795357584953);
-  CHECK(decoded.effort[0] == -0.4859328269958496);  // exactly representable in float32
+  CHECK(decoded.current[0] == -0.4859328269958496);  // exactly representable in float32
   CHECK(decoded.active_mask == 0x0F);
 
   // Encoding the listing's double values gives the same bytes (round to nearest float32).
@@ -98,7 +98,7 @@ TEST_CASE("state packet: the values of worksheet listing 3.1 (first four motors)
       -0.0001266769975192886591, -0.1987191723699879841951;
   listing.velocity << 0.0245981621957453203, 0.0019754796320965562379, 0.0015707947313785552979,
       0.00013089955609757453203;
-  listing.effort << -0.48593282699584960938, -0.31835031509399414063, -0.36891269683837890625,
+  listing.current << -0.48593282699584960938, -0.31835031509399414063, -0.36891269683837890625,
       -0.39591121673583984375;
   listing.active_mask = 0x0F;
   Codec4::StateBytes encoded{};
@@ -148,7 +148,7 @@ TEST_CASE_TEMPLATE("round trips are bit-exact for every finite float32", Codec, 
       };
       state.position[i] = pick();
       state.velocity[i] = pick();
-      state.effort[i] = pick();
+      state.current[i] = pick();
       setpoint.position[i] = pick();
     }
     state.active_mask = static_cast<std::uint8_t>(rng() & Codec::valid_mask);
@@ -161,7 +161,7 @@ TEST_CASE_TEMPLATE("round trips are bit-exact for every finite float32", Codec, 
     for (int i = 0; i < Codec::num_motors; ++i) {
       REQUIRE(same_bits(sback.position[i], state.position[i]));
       REQUIRE(same_bits(sback.velocity[i], state.velocity[i]));
-      REQUIRE(same_bits(sback.effort[i], state.effort[i]));
+      REQUIRE(same_bits(sback.current[i], state.current[i]));
     }
     REQUIRE(sback.active_mask == state.active_mask);
 
@@ -276,7 +276,7 @@ TEST_CASE("encoding refuses what it cannot send faithfully and leaves the buffer
   CHECK(buffer == untouched);
 
   Codec4::State state;
-  state.effort[3] = std::numeric_limits<double>::signaling_NaN();
+  state.current[3] = std::numeric_limits<double>::signaling_NaN();
   Codec4::StateBytes sbytes{};
   CHECK(Codec4::encode_state(state, sbytes) == CodecStatus::non_finite);
 }

@@ -40,7 +40,7 @@ struct FakeRig {
     for (int i = 0; i < 4; ++i) {
       if ((commanded.enable_mask >> i) & 1) s.position[i] = commanded.position[i];
     }
-    s.effort.setConstant(time);  // lets a test see when the answer was made
+    s.current.setConstant(time);  // lets a test see when the answer was made
     s.active_mask = commanded.enable_mask;
     return s;
   }
@@ -85,7 +85,7 @@ TEST_CASE("a valid setpoint packet is applied and answered with the rig's state"
   CHECK(state.position[0] == doctest::Approx(0.1));
   CHECK(state.position[1] == 0.0);  // not enabled: does not follow
   CHECK(state.position[2] == doctest::Approx(0.3));
-  CHECK(state.effort[0] == doctest::Approx(0.002));  // the rig ran 2 ms before answering
+  CHECK(state.current[0] == doctest::Approx(0.002));  // the rig ran 2 ms before answering
   CHECK(f.emulator.counters().received == 1);
   CHECK(f.emulator.counters().answered == 1);
   CHECK(f.emulator.poll(0ns) == sim::PollEvent::idle);

@@ -59,9 +59,9 @@ double step_delay(int joint) {
 }
 
 // Quasi-static push into an environment: the setpoint of `joint` ramps 0 -> `depth` -> 0 at
-// 0.1 rad/s; every 10 ms the reported effort and the true force are recorded.
+// 0.1 rad/s; every 10 ms the reported current and the true force are recorded.
 struct PushRecord {
-  std::vector<double> effort, force, setpoint;
+  std::vector<double> current, force, setpoint;
 };
 PushRecord push(Environment env, int joint, double depth) {
   sim::SimulatedRig<4> rig(sim::endowrist_2016_rig<4>(env));
@@ -75,7 +75,7 @@ PushRecord push(Environment env, int joint, double depth) {
     rig.command(s);
     REQUIRE(rig.advance(1e-3) == SimStatus::ok);
     if (k % 10 == 0) {
-      r.effort.push_back(rig.state().effort[joint]);
+      r.current.push_back(rig.state().current[joint]);
       r.force.push_back(rig.truth().contact_force[joint]);
       r.setpoint.push_back(x);
     }
@@ -133,7 +133,7 @@ TEST_CASE_TEMPLATE("a disabled motor draws no current and reports inactive", T, 
   }
   CHECK(max_current == 0.0);
   CHECK((rig.state().active_mask & 1u) == 0u);
-  CHECK(std::fabs(rig.state().effort[0]) < 1e-3);  // the filtered effort decays to 0 too
+  CHECK(std::fabs(rig.state().current[0]) < 1e-3);  // the filtered current decays to 0 too
   if constexpr (n > 1) CHECK((rig.state().active_mask & 2u) != 0u);  // the others still run
 }
 
@@ -243,7 +243,7 @@ TEST_CASE("free space gives zero contact force") {
 TEST_CASE("contact shows in the current with the appendix E dead zones") {
   // Appendix E: force appears at the tool only once the current exceeds ~0.2 A (grip, E.1.1,
   // table 5.2 0.20/0.21 A) and ~0.15 A (pitch, E.1.2: 131-191 mA); above it current grows with
-  // force. Onset = effort at the first record with force > 0.1 N.
+  // force. Onset = current at the first record with force > 0.1 N.
   struct Case {
     Environment env;
     int joint;
@@ -265,21 +265,21 @@ TEST_CASE("contact shows in the current with the appendix E dead zones") {
       }
     }
     REQUIRE(onset < half);
-    CHECK(r.effort[onset] > c.onset_low);
-    CHECK(r.effort[onset] < c.onset_high);
+    CHECK(r.current[onset] > c.onset_low);
+    CHECK(r.current[onset] < c.onset_high);
     // Below the dead zone: little force.
     for (std::size_t i = 0; i < half; ++i) {
-      if (r.effort[i] < 0.8 * c.onset_low) CHECK(r.force[i] < 0.05);
+      if (r.current[i] < 0.8 * c.onset_low) CHECK(r.force[i] < 0.05);
     }
     // Above it: force rises with current (least-squares slope over force > 0.2 N while loading).
     double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
     for (std::size_t i = 0; i < half; ++i) {
       if (r.force[i] > 0.2) {
         n += 1;
-        sx += r.effort[i];
+        sx += r.current[i];
         sy += r.force[i];
-        sxx += r.effort[i] * r.effort[i];
-        sxy += r.effort[i] * r.force[i];
+        sxx += r.current[i] * r.current[i];
+        sxy += r.current[i] * r.force[i];
       }
     }
     REQUIRE(n > 10);
@@ -292,7 +292,7 @@ TEST_CASE("contact shows in the current with the appendix E dead zones") {
                                                r.force.begin());
     bool held = false;
     for (std::size_t i = peak; i < r.force.size(); ++i) {
-      if (r.effort[i] < r.effort[peak] - 0.15 && r.force[i] > 0.9 * r.force[peak]) held = true;
+      if (r.current[i] < r.current[peak] - 0.15 && r.force[i] > 0.9 * r.force[peak]) held = true;
     }
     CHECK(held);
   }
@@ -405,7 +405,7 @@ TEST_CASE("no heap allocation in 10,000 advances") {
     for (int k = 0; k < 10000; ++k) {
       rig.command(setpoint_all<4>(0.5 * std::sin(k * 1e-3), 0x0F));
       if (rig.advance(50e-6) != SimStatus::ok) sink += 1.0;
-      sink += rig.state().effort[0] + rig.truth().contact_force[0];
+      sink += rig.state().current[0] + rig.truth().contact_force[0];
     }
   });
   CHECK(allocations == 0);

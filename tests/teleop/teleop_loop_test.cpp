@@ -18,7 +18,7 @@ using endohaptics::test::allocations_during;
 using namespace std::chrono_literals;
 
 // A minimal emulated sbRIO for the loop's tests: enabled motors move 5 % of the way to their
-// setpoint per exchange; effort = 2 A/rad * (setpoint - position); replies with the state.
+// setpoint per exchange; current = 2 A/rad * (setpoint - position); replies with the state.
 struct FakeSbrio {
   Codec::State state;
   std::uint64_t requests = 0;
@@ -34,10 +34,10 @@ struct FakeSbrio {
         const double step = 0.05 * (sp.position[i] - state.position[i]);
         state.position[i] += step;
         state.velocity[i] = step / 1e-3;
-        state.effort[i] = 2.0 * (sp.position[i] - state.position[i]);
+        state.current[i] = 2.0 * (sp.position[i] - state.position[i]);
       } else {
         state.velocity[i] = 0.0;
-        state.effort[i] = 0.0;
+        state.current[i] = 0.0;
       }
     }
     state.active_mask = sp.enable_mask;
@@ -69,11 +69,11 @@ struct ScriptedDevice {
   }
 };
 
-// Force = 1 N/A of effort, in motor order; can be told to produce garbage.
+// Force = 1 N/A of current, in motor order; can be told to produce garbage.
 struct EffortEstimator {
   bool produce_nan = false;
   bool estimate(const tp::MotorState4& m, const tp::MotorVector&, tp::MotorVector& f) noexcept {
-    f = m.effort;
+    f = m.current;
     if (produce_nan) f[2] = std::numeric_limits<double>::quiet_NaN();
     return true;
   }
@@ -151,7 +151,7 @@ TEST_CASE("clean link: every tick ok, force ramps in, stats exact") {
   CHECK(rig.loop.stats().received() == 2000);
   CHECK(rig.loop.stats().loss_percent() == 0.0);
   CHECK(rig.loop.stats().rate() == doctest::Approx(1000.0));
-  CHECK(rig.device.max_force > 0.0);  // the scripted motion produces effort, hence force
+  CHECK(rig.device.max_force > 0.0);  // the scripted motion produces current, hence force
 }
 
 TEST_CASE("every fault kind: never a non-finite or over-limit output, counters consistent") {

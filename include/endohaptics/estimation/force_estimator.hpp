@@ -74,7 +74,7 @@ template <typename Scalar = double>
   JointState<Scalar> state;
   state.position = measured.position.cast<Scalar>();
   state.velocity = measured.velocity.cast<Scalar>();
-  state.current = measured.effort.cast<Scalar>();
+  state.current = measured.current.cast<Scalar>();
   state.setpoint = sent.position.cast<Scalar>();
   return state;
 }
@@ -225,7 +225,7 @@ class ForceEstimator {
     Input input;
     input.position = measured.position.template cast<ScalarType>();
     input.velocity = measured.velocity.template cast<ScalarType>();
-    input.current = measured.effort.template cast<ScalarType>();
+    input.current = measured.current.template cast<ScalarType>();
     input.setpoint = setpoint.template cast<ScalarType>();
     Forces tool;
     last_status_ = step(input, tool);

@@ -1,9 +1,9 @@
 //! @file
 //! PacketCodec: the 2016 sbRIO binary UDP protocol (worksheet 3.2.2, 3.3.1, figure 3.4).
-//! State packet sbRIO -> PC: position[N], velocity[N], effort[N] as IEEE-754 float32
-//! big-endian, then one byte of active bits (12N + 1 bytes). Setpoint packet PC -> sbRIO:
-//! setpoint[N] float32 big-endian, then one byte of enable bits (4N + 1 bytes).
-//! Units on the wire: rad (motor side, after gearing), rad/s, A. See docs/protocol.md.
+//! State packet sbRIO -> PC: position[N], velocity[N], current[N] (the worksheet's "effort") as
+//! IEEE-754 float32 big-endian, then one byte of active bits (12N + 1 bytes). Setpoint packet PC ->
+//! sbRIO: setpoint[N] float32 big-endian, then one byte of enable bits (4N + 1 bytes). Units on the
+//! wire: rad (motor side, after gearing), rad/s, A. See docs/protocol.md.
 #pragma once
 
 #include <Eigen/Core>
@@ -52,7 +52,7 @@ struct MotorState {
   using Vector = Eigen::Matrix<double, N, 1>;
   Vector position = Vector::Zero();  //!< rad, motor side after gearing
   Vector velocity = Vector::Zero();  //!< rad/s
-  Vector effort = Vector::Zero();    //!< motor current, A
+  Vector current = Vector::Zero();   //!< motor current, A (the 2016 protocol's "effort" field)
   std::uint8_t active_mask = 0;      //!< bit i: motor i is enabled and following its setpoint
 
   //! Member-wise equality.
@@ -118,13 +118,13 @@ class PacketCodec {
   [[nodiscard]] static CodecStatus encode_state(
       const State& state, std::span<std::byte, state_packet_size> out) noexcept {
     if (const CodecStatus s = check_mask(state.active_mask); s != CodecStatus::ok) return s;
-    for (const auto* v : {&state.position, &state.velocity, &state.effort}) {
+    for (const auto* v : {&state.position, &state.velocity, &state.current}) {
       if (const CodecStatus s = check_encodable(*v); s != CodecStatus::ok) return s;
     }
     std::byte* p = out.data();
     store_vector(state.position, p);
     store_vector(state.velocity, p + block_size);
-    store_vector(state.effort, p + 2 * block_size);
+    store_vector(state.current, p + 2 * block_size);
     out[state_packet_size - 1] = std::byte{state.active_mask};
     return CodecStatus::ok;
   }
@@ -140,7 +140,7 @@ class PacketCodec {
     if (!all_finite(p, 3 * motors)) return CodecStatus::non_finite;
     load_vector(p, out.position);
     load_vector(p + block_size, out.velocity);
-    load_vector(p + 2 * block_size, out.effort);
+    load_vector(p + 2 * block_size, out.current);
     out.active_mask = mask;
     return CodecStatus::ok;
   }

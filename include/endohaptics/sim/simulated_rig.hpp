@@ -135,7 +135,7 @@ struct RigConfig {
   Scalar current_rate = Scalar(53600.0);  //!< Hz, ESCON PI current loop (integer multiple)
   int plant_substeps = 1;                 //!< mechanical sub-steps per current-loop period
   int velocity_window = 20;               //!< position samples in the reported velocity (1..64)
-  Scalar current_filter_cutoff = Scalar(100.0);  //!< Hz, sbRIO first-order low-pass on effort
+  Scalar current_filter_cutoff = Scalar(100.0);  //!< Hz, sbRIO first-order low-pass on the current
 
   //! Throws Error naming the first invalid field and its value.
   void validate() const;
@@ -411,7 +411,7 @@ class SimulatedRig {
       const auto& s = joints_[static_cast<std::size_t>(j)];
       out.position[j] = static_cast<double>(encoder_position(j));
       out.velocity[j] = static_cast<double>(s.reported_velocity);
-      out.effort[j] = static_cast<double>(s.filtered_current);
+      out.current[j] = static_cast<double>(s.filtered_current);
       if (s.enabled) out.active_mask = static_cast<std::uint8_t>(out.active_mask | (1u << j));
     }
     return out;
@@ -465,7 +465,7 @@ class SimulatedRig {
     }
   }
 
-  // FPGA at position_rate: encoder count, reported velocity and effort, P position control.
+  // FPGA at position_rate: encoder count, reported velocity and current, P position control.
   void position_loop(int j) noexcept {
     const auto ju = static_cast<std::size_t>(j);
     auto& s = joints_[ju];
@@ -631,7 +631,7 @@ class SimulatedRig {
   Scalar position_period_{};  // s
   Scalar position_step_{};    // position periods per tick
   Scalar position_phase_{};   // position periods elapsed since the last position-loop run
-  Scalar filter_alpha_{};     // effort low-pass coefficient at the position rate
+  Scalar filter_alpha_{};     // current low-pass coefficient at the position rate
   int speed_divider_ = 10;    // ticks per speed-loop period
   int speed_counter_ = 0;
   std::uint64_t ticks_ = 0;

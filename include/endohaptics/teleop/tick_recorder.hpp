@@ -61,7 +61,7 @@ struct TickRecord {
     rec.setpoint = r.setpoint;
     rec.position = r.measured.position;
     rec.velocity = r.measured.velocity;
-    rec.current = r.measured.effort;
+    rec.current = r.measured.current;
     rec.joint_force = r.joint_force;
     rec.stylus_force = r.stylus_force;
     return rec;
