@@ -27,12 +27,12 @@ BENCHMARK(BM_CylindricalMapper_map_position);
 
 void BM_CylindricalMapper_map_force(benchmark::State& st) {
   const Mapper mapper;
-  const Mapper::MotorVector joint_force(0.3, -0.2, 0.5, -0.5);
+  const Mapper::MotorVector motor_force(0.3, -0.2, 0.5, -0.5);
   Mapper::Vector3 force = Mapper::Vector3::Zero();
   double theta = 0;
   for (auto _ : st) {
     theta += 1e-3;
-    const auto result = mapper.map_force(joint_force, theta, force);
+    const auto result = mapper.map_force(motor_force, theta, force);
     benchmark::DoNotOptimize(result);
     benchmark::DoNotOptimize(force);
   }

@@ -71,7 +71,7 @@ int main(int argc, char** argv) {
     const Eigen::VectorXd t_truth = truth.time;
     const Eigen::VectorXd f_truth = truth.signal("force" + j);
     const std::vector<double>& t_all = ticks.column("time");
-    const std::vector<double>& f_all = ticks.column("joint_force" + j);
+    const std::vector<double>& f_all = ticks.column("motor_force" + j);
     const double t0 = t_all[0] + skip;
     std::vector<double> t_est, f_est;
     for (std::size_t i = 0; i < t_all.size(); ++i) {
@@ -124,7 +124,7 @@ int main(int argc, char** argv) {
           "plot '{3}' every ::1 using (d = (${6} - prev) * 1e6, prev = ${6}, bin(d)):(1) "
           "smooth frequency with boxes\n",
           forces, period, truth_path, log_path, joint, t_all[0], col("time"),
-          col("joint_force" + j), col("stylus_fx"), col("stylus_fy"), col("stylus_fz"));
+          col("motor_force" + j), col("stylus_fx"), col("stylus_fy"), col("stylus_fz"));
       if (plot(script)) {
         fmt::print("plots: {} and {}\n", forces, period);
       } else {

@@ -183,7 +183,7 @@ int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& o
                w.link_losses = loop.watchdog().link_losses();
                w.recoveries = loop.watchdog().recoveries();
                w.link = r.link;
-               w.clamp_force = r.joint_force[2];
+               w.clamp_force = r.motor_force[2];
                (void)windows.push(w);
              }
            },

@@ -55,7 +55,7 @@ TEST_CASE("what TickRecorder writes is read back by column name") {
       r.measured.position << 1.1, 1.2, 1.3, 1.4;
       r.measured.velocity << 2.1, 2.2, 2.3, 2.4;
       r.measured.current << 3.1, 3.2, 3.3, 3.4;
-      r.joint_force << 4.1, 4.2, 4.3 + i, 4.4;
+      r.motor_force << 4.1, 4.2, 4.3 + i, 4.4;
       r.stylus_force = Eigen::Vector3d(0.5, -1.25, 2.0);
       REQUIRE(recorder.push(tp::TickRecord::from(r, std::chrono::milliseconds(1000 + i))));
     }
@@ -84,7 +84,7 @@ TEST_CASE("what TickRecorder writes is read back by column name") {
     CHECK(log.column("velocity" + i)[0] == doctest::Approx(2.1 + 0.1 * m));
     CHECK(log.column("current" + i)[0] == doctest::Approx(3.1 + 0.1 * m));
   }
-  CHECK(log.column("joint_force2")[1] == doctest::Approx(5.3));
+  CHECK(log.column("motor_force2")[1] == doctest::Approx(5.3));
   CHECK(log.column("stylus_fx")[0] == 0.5);
   CHECK(log.column("stylus_fy")[0] == -1.25);
   CHECK(log.column("stylus_fz")[0] == 2.0);

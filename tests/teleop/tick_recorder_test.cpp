@@ -26,7 +26,7 @@ TEST_CASE("records cross to a writer thread as CSV rows, in order, none lost") {
     tp::TickResult r;
     r.status = tp::TickStatus::ok;
     r.setpoint.setConstant(1e-3 * i);
-    r.joint_force[2] = 0.5;
+    r.motor_force[2] = 0.5;
     r.stylus_force = Eigen::Vector3d(0.0, -1.25, 0.0);
     while (!recorder.push(tp::TickRecord::from(r, std::chrono::milliseconds(i)))) {
       std::this_thread::yield();  // this test wants every row; the bridge would drop and count

@@ -162,17 +162,17 @@ class CylindricalMapper {
   //! Eq. 5.8 at stylus angle `theta` (rad): joint forces (motor order; each the external force on
   //! that joint, positive along its positive setpoint) -> stylus force (N, base frame), scaled per
   //! axis and limited in magnitude. `stylus_force` is untouched unless the result is ok.
-  ForceResult map_force(const MotorVector& joint_force, Scalar theta,
+  ForceResult map_force(const MotorVector& motor_force, Scalar theta,
                         Vector3& stylus_force) const noexcept {
     ForceResult result;
-    if (!joint_force.allFinite() || !std::isfinite(theta)) {
+    if (!motor_force.allFinite() || !std::isfinite(theta)) {
       result.status = MapperStatus::non_finite;
       return result;
     }
-    const Scalar f_roll = joint_force[motor_of(Motor::roll)];
-    const Scalar f_pitch = joint_force[motor_of(Motor::pitch)];
-    const Scalar f_clamp1 = joint_force[motor_of(Motor::clamp1)];
-    const Scalar f_clamp2 = joint_force[motor_of(Motor::clamp2)];
+    const Scalar f_roll = motor_force[motor_of(Motor::roll)];
+    const Scalar f_pitch = motor_force[motor_of(Motor::pitch)];
+    const Scalar f_clamp1 = motor_force[motor_of(Motor::clamp1)];
+    const Scalar f_clamp2 = motor_force[motor_of(Motor::clamp2)];
     // Generalised forces along r, theta, z (virtual work: P_clamp2 grows with r, P_clamp1 falls).
     const Scalar clamp = sign(config_.a_clamp) * (f_clamp2 - f_clamp1) / 2 * config_.force_scale[0];
     const Scalar roll = sign(config_.a_roll) * f_roll * config_.force_scale[1];
@@ -194,8 +194,8 @@ class CylindricalMapper {
   }
 
   //! Eq. 5.8 at the theta of the last successful `map_position` (or `theta_neutral`).
-  ForceResult map_force(const MotorVector& joint_force, Vector3& stylus_force) const noexcept {
-    return map_force(joint_force, held_theta_, stylus_force);
+  ForceResult map_force(const MotorVector& motor_force, Vector3& stylus_force) const noexcept {
+    return map_force(motor_force, held_theta_, stylus_force);
   }
 
   //! Inverse of eq. 5.8 without scale or limit: stylus force (N) at `theta` -> (F_clamp along

@@ -33,15 +33,15 @@ using estimation::NoForceEstimator;
 //! Both calls run in the tick, so both must be noexcept (as every other policy's).
 template <typename M>
 concept TeleopMapper = requires(M& mapper, const Eigen::Vector3d& position, MotorVector& setpoint,
-                                const MotorVector& joint_force, Eigen::Vector3d& stylus_force) {
+                                const MotorVector& motor_force, Eigen::Vector3d& stylus_force) {
   { mapper.map_position(position, setpoint) }
   noexcept;
-  { mapper.map_force(joint_force, stylus_force) }
+  { mapper.map_force(motor_force, stylus_force) }
   noexcept;
   { mapper.map_position(position, setpoint).ok() } -> std::convertible_to<bool>;
   { mapper.map_position(position, setpoint).clamped_mask } -> std::convertible_to<std::uint8_t>;
-  { mapper.map_force(joint_force, stylus_force).ok() } -> std::convertible_to<bool>;
-  { mapper.map_force(joint_force, stylus_force).limited } -> std::convertible_to<bool>;
+  { mapper.map_force(motor_force, stylus_force).ok() } -> std::convertible_to<bool>;
+  { mapper.map_force(motor_force, stylus_force).limited } -> std::convertible_to<bool>;
 };
 
 //! Overall outcome of a tick.
@@ -91,7 +91,7 @@ struct [[nodiscard]] TickResult {
   MotorVector setpoint = MotorVector::Zero();     //!< rad, what was sent (motor order)
   std::uint8_t enable_mask = 0;                   //!< what was sent
   MotorState4 measured{};                         //!< newest valid state (held on a miss)
-  MotorVector joint_force = MotorVector::Zero();  //!< estimate, motor order
+  MotorVector motor_force = MotorVector::Zero();  //!< estimate, motor order
   Eigen::Vector3d stylus_force = Eigen::Vector3d::Zero();  //!< N, what the device was told
   std::chrono::nanoseconds round_trip{0};  //!< ns from send to receive return; 0 if not sent
 
@@ -251,13 +251,13 @@ class TeleopLoop {
     if (received) {
       MotorVector f;
       if (estimator_->estimate(state_, out.position, f) && f.allFinite()) {
-        joint_force_ = f;
+        motor_force_ = f;
       } else {
         r.estimator_rejected = true;
-        joint_force_.setZero();
+        motor_force_.setZero();
       }
     }
-    r.joint_force = joint_force_;
+    r.motor_force = motor_force_;
 
     // 6. Force to render (eq. 5.8 in the mapper), scaled by the ramp, guarded.
     Eigen::Vector3d force = Eigen::Vector3d::Zero();
@@ -265,7 +265,7 @@ class TeleopLoop {
                                       link == LinkState::recovering);
     if (render) {
       r.force_scale = ramp_.advance(dt);
-      const auto fm = mapper_->map_force(joint_force_, force);
+      const auto fm = mapper_->map_force(motor_force_, force);
       if (!fm.ok()) force.setZero();
       r.force_limited = fm.limited;
       force *= r.force_scale;
@@ -358,7 +358,7 @@ class TeleopLoop {
   MotorVector desired_ = MotorVector::Zero();
   bool have_desired_ = false;
   MotorState4 state_{};
-  MotorVector joint_force_ = MotorVector::Zero();
+  MotorVector motor_force_ = MotorVector::Zero();
   std::array<std::byte, 2 * Codec::state_packet_size> rx_buffer_{};  // room to detect long ones
   std::chrono::nanoseconds max_dt_;
   std::chrono::nanoseconds last_start_{0};

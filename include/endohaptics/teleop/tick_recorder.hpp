@@ -29,8 +29,8 @@ inline constexpr std::array<std::string_view, 7 + 5 * loop_motors + 3> tick_log_
     "time",         "status",       "link",         "enable_mask", "active_mask", "round_trip",
     "force_scale",  "setpoint0",    "setpoint1",    "setpoint2",   "setpoint3",   "position0",
     "position1",    "position2",    "position3",    "velocity0",   "velocity1",   "velocity2",
-    "velocity3",    "current0",     "current1",     "current2",    "current3",    "joint_force0",
-    "joint_force1", "joint_force2", "joint_force3", "stylus_fx",   "stylus_fy",   "stylus_fz"};
+    "velocity3",    "current0",     "current1",     "current2",    "current3",    "motor_force0",
+    "motor_force1", "motor_force2", "motor_force3", "stylus_fx",   "stylus_fy",   "stylus_fz"};
 
 //! One CSV row: what a tick sent, received, estimated and rendered.
 struct TickRecord {
@@ -45,7 +45,7 @@ struct TickRecord {
   MotorVector position = MotorVector::Zero();     //!< rad (newest valid)
   MotorVector velocity = MotorVector::Zero();     //!< rad/s
   MotorVector current = MotorVector::Zero();      //!< A
-  MotorVector joint_force = MotorVector::Zero();  //!< estimate, motor order (N; roll N m)
+  MotorVector motor_force = MotorVector::Zero();  //!< estimate, motor order (N; roll N m)
   Eigen::Vector3d stylus_force = Eigen::Vector3d::Zero();  //!< N
 
   //! The record of tick result `r`, stamped `now` (the loop clock's time).
@@ -62,7 +62,7 @@ struct TickRecord {
     rec.position = r.measured.position;
     rec.velocity = r.measured.velocity;
     rec.current = r.measured.current;
-    rec.joint_force = r.joint_force;
+    rec.motor_force = r.motor_force;
     rec.stylus_force = r.stylus_force;
     return rec;
   }
@@ -108,7 +108,7 @@ class TickRecorder {
                        static_cast<int>(r.link), unsigned{r.enable_mask}, unsigned{r.active_mask},
                        r.round_trip, r.force_scale);
       for (const MotorVector* v :
-           {&r.setpoint, &r.position, &r.velocity, &r.current, &r.joint_force}) {
+           {&r.setpoint, &r.position, &r.velocity, &r.current, &r.motor_force}) {
         for (int i = 0; i < loop_motors; ++i) written = std::fprintf(out, ",%.7g", (*v)[i]);
       }
       written = std::fprintf(out, ",%.6g,%.6g,%.6g\n", r.stylus_force.x(), r.stylus_force.y(),
