@@ -169,7 +169,7 @@ TEST_CASE("every default template argument set constructs and runs with its defa
   run(in_float);
 }
 
-TEST_CASE("rate::Decimate needs an integer ratio within 1e-9; rate::Resample refuses the pitch") {
+TEST_CASE("rate::Decimate needs an integer ratio within 1e-9, rate::Resample refuses the pitch") {
   est::ForceEstimatorSettings<double> settings;
   settings.loop_period = 0.003;  // 0.02 / 0.003 = 6.67
   CHECK(message_of([&] { (void)Decimated(settings); })
@@ -243,7 +243,7 @@ TEST_CASE("resample_zoh: the yaw model stepped 20 times at 1 ms equals one step 
         }).find("eigenvalue -0.3 + 0i on the negative real axis") != std::string::npos);
 }
 
-TEST_CASE_TEMPLATE("to_continuous_zoh inverts discretize_zoh; 20 fine steps = 1 coarse step", S,
+TEST_CASE_TEMPLATE("to_continuous_zoh inverts discretize_zoh, 20 fine steps = 1 coarse step", S,
                    Sizes<1, 1, 1>, Sizes<3, 2, 1>, Sizes<4, 2, 3>, Sizes<6, 2, 1>, Sizes<2, 0, 1>) {
   std::mt19937_64 rng(1000 + S::Nx * 100 + S::Nu * 10 + S::Ny);
   for (int trial = 0; trial < 20; ++trial) {
@@ -669,7 +669,7 @@ TEST_CASE("a tick allocates nothing (operator new counter, EIGEN_RUNTIME_NO_MALL
   CHECK(dynamic >= 1);
 }
 
-TEST_CASE("settings are validated; errors name the field, the joint and the value") {
+TEST_CASE("settings are validated, errors name the field, the joint and the value") {
   auto error_for = [](auto change) {
     est::ForceEstimatorSettings<double> s;
     change(s);

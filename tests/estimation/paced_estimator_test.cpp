@@ -29,7 +29,7 @@ struct CountingEstimator {
 
 }  // namespace
 
-TEST_CASE("faster ticks than the period hold the force; one step per elapsed period") {
+TEST_CASE("faster ticks than the period hold the force, one step per elapsed period") {
   CountingEstimator inner;
   endohaptics::ManualClock clock(10s);
   est::PacedEstimator paced(inner, clock, 1ms);

@@ -315,7 +315,7 @@ TEST_CASE("read_log and parse_log_format: the command-line entry points") {
 //   np.diff(t).max(), np.median(np.diff(t)), t[0], np.median(F[t - t[0] < 0.5]),
 //   np.sum(np.abs(F - 2.5 * V) > 0.01), len(rows) summed over the 55 files.
 
-TEST_CASE("real logs: every file of every folder loads; nothing needs dropping" *
+TEST_CASE("real logs: every file of every folder loads, nothing needs dropping" *
           doctest::skip(!endohaptics::test::has_shared_data("endowrist-2016"))) {
   const fs::path root = endohaptics::test::shared_data("endowrist-2016");
   std::size_t files = 0;

@@ -121,7 +121,7 @@ TEST_CASE("an asymmetric dead zone [-0.15, 0.35] with symmetric = false") {
   CHECK(fit.fit[0] >= 90.0);
 }
 
-TEST_CASE("input saturation and output saturation are found; none is added when absent") {
+TEST_CASE("input saturation and output saturation are found, none is added when absent") {
   const id::SubspaceModel g = linear_block(1);
   const MatrixXd u = uniform(1500, 1, 1.0, 31);
   // Input clipped at +-0.6; output clipped at [-2.0, 1.5].

@@ -247,7 +247,7 @@ TEST_CASE("savgol_filter equals scipy.signal.savgol_filter (mode='interp')") {
   CHECK_THROWS_AS((void)id::savgol_filter(x.head(4), 5, 2), Error);
 }
 
-TEST_CASE("central_difference equals numpy.gradient(x, ts); differentiate on raw stamps") {
+TEST_CASE("central_difference equals numpy.gradient(x, ts), differentiate on raw stamps") {
   const Eigen::VectorXd x = test_signal();
   // np.gradient(x, 0.02)
   check_values(id::central_difference(x, 0.02), {{0, 37.35624449928883},

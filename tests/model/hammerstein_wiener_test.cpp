@@ -83,7 +83,7 @@ TEST_CASE("dead zone in, saturation out: a first-order model stepped by hand") {
   CHECK(hw.output_nonlinearity().channel(0).upper() == 0.3);
 }
 
-TEST_CASE("NaN input: update refuses it untouched; step propagates it without UB; reset recovers") {
+TEST_CASE("NaN input: update refuses it untouched, step propagates it without UB, reset recovers") {
   auto hw = m::yaw_force_2016_hw();
   const Eigen::Vector2d good{0.5, 0.1};
   const Eigen::Vector2d nan_current{std::numeric_limits<double>::quiet_NaN(), 0.1};

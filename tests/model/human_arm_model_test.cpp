@@ -237,7 +237,7 @@ TEST_CASE("one model switches causality on the same hand state") {
   CHECK(std::abs(switching.hand_position()) < 1e-9);
 }
 
-TEST_CASE("non-finite inputs are replaced and reported; the state stays finite") {
+TEST_CASE("non-finite inputs are replaced and reported, the state stays finite") {
   HumanArmModel<> arm(1e-3);
   double x = 0, v = 0, f = 0;
   for (int k = 0; k < 100; ++k) REQUIRE(arm.apply_force(1.0, x, v) == HumanArmStatus::ok);

@@ -169,7 +169,7 @@ TEST_CASE("autonomous model (Nu == 0): harmonic oscillator discretised and stepp
 // u=[[1,0],[0.5,-1],[0,2],[-1,0.25],[0.3,0.3],[2,-0.5]]; x0=[0.1,-0.2,0.3]
 // t, y, x = scipy.signal.dlsim((Ad,Bd,Cd,Dd,0.01), u, x0=x0); x_end = Ad@x[-1] + Bd@u[-1];
 // dc = Cd @ solve(I - Ad, Bd) + Dd; eig = scipy.linalg.eigvals(Ad).
-TEST_CASE("simulate matches scipy dlsim; dc_gain, eigenvalues and spectral radius match scipy") {
+TEST_CASE("simulate matches scipy dlsim, dc_gain, eigenvalues and spectral radius match scipy") {
   using SS = StateSpace<3, 2, 2>;
   SS model(SS::MatrixA{{0.9, 0.1, 0.0}, {-0.2, 0.8, 0.05}, {0.0, 0.1, 0.5}},
            SS::MatrixB{{1.0, 0.0}, {0.0, 0.5}, {0.2, -0.3}},

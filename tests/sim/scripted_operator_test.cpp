@@ -52,7 +52,7 @@ TEST_CASE("the rendered force moves the stylus by the arm's static compliance (e
   CHECK(s.position.z() == doctest::Approx(rest.z()));
 }
 
-TEST_CASE("a non-finite force is refused; a bad script is refused with the field's name") {
+TEST_CASE("a non-finite force is refused, a bad script is refused with the field's name") {
   endohaptics::ManualClock clock;
   sim::ScriptedOperator op(clock);
   CHECK(op.command_force(Eigen::Vector3d(std::nan(""), 0, 0)) == tp::DeviceStatus::error);

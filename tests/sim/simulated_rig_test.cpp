@@ -216,7 +216,7 @@ TEST_CASE("steady state: encoder within one count, joint within play plus tendon
   }
 }
 
-TEST_CASE("setpoints are clamped to the joint range; non-finite setpoints are ignored") {
+TEST_CASE("setpoints are clamped to the joint range, non-finite setpoints are ignored") {
   sim::SimulatedRig<4> rig(sim::endowrist_2016_rig<4>(Environment::free_space));
   rig.command(setpoint_all<4>(5.0, 0x0F));
   REQUIRE(rig.advance(3.0) == SimStatus::ok);

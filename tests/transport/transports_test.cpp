@@ -270,7 +270,7 @@ TEST_CASE("UDP server transport: answers whoever sent the newest datagram") {
                        doctest::Contains("invalid bind address 'nowhere'"), endohaptics::Error);
 }
 
-TEST_CASE("in-memory receive drains at most max_drain datagrams; the rest wait for the next call") {
+TEST_CASE("in-memory receive drains at most max_drain datagrams, the rest wait for the next call") {
   transport::InMemoryLink<64, 200> link;  // room for a flood larger than the default bound (64)
   std::array<std::byte, 64> buffer{};
   for (int i = 0; i < 100; ++i) {
@@ -311,7 +311,7 @@ TEST_CASE("in-memory receive drains at most max_drain datagrams; the rest wait f
   CHECK_THROWS_WITH_AS(Link(4097), doctest::Contains("got 4097"), endohaptics::Error);
 }
 
-TEST_CASE("UDP receive drains at most max_drain datagrams; the rest wait for the next call") {
+TEST_CASE("UDP receive drains at most max_drain datagrams, the rest wait for the next call") {
   transport::UdpTransport a({.local_address = "127.0.0.1", .remote_address = "127.0.0.1"});
   transport::UdpTransport b({.local_address = "127.0.0.1",
                              .remote_address = "127.0.0.1",
