@@ -226,7 +226,7 @@ TEST_CASE("several data sets: shared A, B, C, D and one initial state per set") 
   CHECK(m.x0 == m.initial_states[0]);
 }
 
-TEST_CASE("estimate_initial_state recovers x0; simulate equals a hand-rolled loop") {
+TEST_CASE("estimate_initial_state recovers x0, simulate equals a hand-rolled loop") {
   const TrueSystem sys = make_system(poles_of_order(2), 1, 1, 31);
   const MatrixXd u = white_noise(300, 1, 32);
   const VectorXd x0 = (VectorXd(2) << 2.0, -1.0).finished();
@@ -240,7 +240,7 @@ TEST_CASE("estimate_initial_state recovers x0; simulate equals a hand-rolled loo
   CHECK((id::estimate_initial_state(as_model(sys), u, y) - x0).norm() < 1e-9);
 }
 
-TEST_CASE("options: D = 0, x0 = 0, fixed order and block rows; the run is deterministic") {
+TEST_CASE("options: D = 0, x0 = 0, fixed order and block rows, the run is deterministic") {
   const TrueSystem sys = make_system(poles_of_order(2), 1, 1, 41);
   const MatrixXd u = white_noise(800, 1, 42);
   const MatrixXd y = id::simulate(as_model(sys), u, VectorXd::Zero(2));
@@ -288,7 +288,7 @@ TEST_CASE("select_order: largest log gaps, SLICOT's dryer singular values give 4
   CHECK_THROWS_AS((void)id::select_order(VectorXd::Ones(1), 4), Error);
 }
 
-TEST_CASE("conversion to the fixed-size StateSpace; sizes must match") {
+TEST_CASE("conversion to the fixed-size StateSpace, sizes must match") {
   const TrueSystem sys = make_system(poles_of_order(2), 2, 1, 51);
   const MatrixXd u = white_noise(600, 2, 52);
   const MatrixXd y = id::simulate(as_model(sys), u, VectorXd::Zero(2));

@@ -107,7 +107,7 @@ std::string message_of(F&& f) {
 
 }  // namespace
 
-TEST_CASE("preprocessing settings round-trip through their text; bad text throws") {
+TEST_CASE("preprocessing settings round-trip through their text, bad text throws") {
   wf::Preprocessing p;
   p.cutoff = 12.5;
   p.filter_order = 3;
@@ -240,7 +240,7 @@ TEST_CASE("prepare_log: named columns, resampling, gap split, offsets, and its e
   CHECK(dropped.samples() == 100);
 }
 
-TEST_CASE("identify_logs recovers a known 2nd-order system from two CSVs; replay fits 100 %") {
+TEST_CASE("identify_logs recovers a known 2nd-order system from two CSVs, replay fits 100 %") {
   const id::SubspaceModel g = second_order();
   std::vector<std::unique_ptr<TempFile>> files;
   std::vector<wf::PreparedLog> logs;
@@ -346,7 +346,7 @@ TEST_CASE("static gain baseline: y = D u + c by least squares, c as a constant s
         }).find("needs a subspace method") != std::string::npos);
 }
 
-TEST_CASE("dead zones: a fixed width is applied and stored; auto finds a known one") {
+TEST_CASE("dead zones: a fixed width is applied and stored, auto finds a known one") {
   // 1-input system behind a dead zone of +-0.3.
   id::SubspaceModel g = second_order();
   g.B = g.B.leftCols(1).eval();
