@@ -3,6 +3,9 @@
 // size instantiates Eigen's decompositions again, and this file used to cost over 3 minutes of
 // compile time. The tests cover the other sizes.
 #include <endohaptics/endohaptics.hpp>
+#include <endohaptics/estimation/force_estimator.hpp>
+
+#include <type_traits>
 
 namespace eh = endohaptics;
 
@@ -33,6 +36,54 @@ template class eh::model::HumanArmModel<float>;
 template class eh::model::HumanArm3<double>;
 
 template class eh::estimation::SteadyStateKalman<eh::model::StateSpace<3, 1, 2>>;
+
+// ForceEstimator. The rate policies (rate::SameRate, Decimate, Resample) are not templates:
+// their code is the stepper ForceEstimator instantiates, so ForceEstimator gets one argument
+// list per policy, all on the 2016 models (those of its requires-constrained default
+// constructor, which clang 14 instantiates) and so no Eigen size beyond the first.
+// ForceEstimator2016 is an alias template (not instantiable): checked to name them. OpenLoop on
+// the three 2016 joint models (ForceEstimator uses them; here every member), KalmanCorrected on
+// the StateSpace<3, 1, 2> above. Each also in float. All of it adds ~2 s of clang 14 time.
+namespace est = eh::estimation;
+template struct est::JointState<double>;
+template struct est::JointState<float>;
+template struct est::JointSignals<double>;
+template struct est::JointSignals<float>;
+template struct est::ForceEstimatorSettings<double>;
+template struct est::ForceEstimatorSettings<float>;
+template class est::OpenLoop<eh::model::StateSpace<1, 1, 1>>;
+template class est::OpenLoop<eh::model::StateSpace<6, 2, 1>>;
+template class est::OpenLoop<eh::model::YawForceHW2016<double>>;
+template class est::OpenLoop<eh::model::StateSpace<1, 1, 1, float>>;
+template class est::OpenLoop<eh::model::StateSpace<6, 2, 1, float>>;
+template class est::OpenLoop<eh::model::YawForceHW2016<float>>;
+template class est::KalmanCorrected<3, 1, 2>;
+template class est::KalmanCorrected<3, 1, 2, float>;
+template struct est::ForceModels<est::RollModel2016<>, est::PitchModel2016<>,
+                                 est::ClampModel2016<>>;
+template struct est::ForceModels<est::RollModel2016<float>, est::PitchModel2016<float>,
+                                 est::ClampModel2016<float>>;
+template class est::ForceEstimator<est::rate::Decimate, est::RollModel2016<>, est::PitchModel2016<>,
+                                   est::ClampModel2016<>>;
+template class est::ForceEstimator<est::rate::SameRate, est::RollModel2016<>, est::PitchModel2016<>,
+                                   est::ClampModel2016<>>;
+template class est::ForceEstimator<est::rate::Resample, est::RollModel2016<>, est::PitchModel2016<>,
+                                   est::ClampModel2016<>>;
+template class est::ForceEstimator<est::rate::Decimate, est::RollModel2016<float>,
+                                   est::PitchModel2016<float>, est::ClampModel2016<float>>;
+static_assert(std::is_same_v<est::ForceEstimator2016<>,
+                             est::ForceEstimator<est::rate::Decimate, est::RollModel2016<>,
+                                                 est::PitchModel2016<>, est::ClampModel2016<>>>);
+static_assert(std::is_same_v<est::ForceEstimator2016<est::rate::SameRate>,
+                             est::ForceEstimator<est::rate::SameRate, est::RollModel2016<>,
+                                                 est::PitchModel2016<>, est::ClampModel2016<>>>);
+static_assert(std::is_same_v<est::ForceEstimator2016<est::rate::Resample>,
+                             est::ForceEstimator<est::rate::Resample, est::RollModel2016<>,
+                                                 est::PitchModel2016<>, est::ClampModel2016<>>>);
+static_assert(
+    std::is_same_v<est::ForceEstimator2016<est::rate::Decimate, float>,
+                   est::ForceEstimator<est::rate::Decimate, est::RollModel2016<float>,
+                                       est::PitchModel2016<float>, est::ClampModel2016<float>>>);
 
 template class eh::kinematics::CylindricalMapper<double>;
 template class eh::kinematics::CylindricalMapper<float>;

@@ -1,7 +1,10 @@
 // Built with -fno-exceptions: every header compiles without exceptions (configuration errors
 // then print their message and abort), and the real-time path runs.
 #include <endohaptics/endohaptics.hpp>
+#include <endohaptics/estimation/force_estimator.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 namespace {
@@ -34,6 +37,28 @@ int main() {
   const auto y = model.step(Eigen::Vector2d(0.5, 0.1));
   if (!y.allFinite()) return 1;
 
+  // The 2016 force estimator (rate::Decimate, 1 ms loop) on one second of a 2 Hz motion with
+  // currents above the friction gates: every step ok, every force finite, and not all zero.
+  namespace est = endohaptics::estimation;
+  est::ForceEstimator<est::rate::Decimate> force_estimator;
+  est::JointState<> joints;
+  est::ForceEstimator<est::rate::Decimate>::Forces forces;
+  const Eigen::Vector4d amplitude(0.1, 0.2, 0.3, 0.3);  // rad
+  const Eigen::Vector4d current(0.9, 0.4, 0.6, 0.6);    // A
+  const double omega = 2.0 * 3.14159265358979 * 2.0;    // rad/s
+  double largest_force = 0.0;
+  for (int i = 0; i < 1000; ++i) {
+    const double t = 1e-3 * i;
+    joints.position = amplitude * std::sin(omega * t);
+    joints.velocity = amplitude * (omega * std::cos(omega * t));
+    joints.current = current * std::sin(omega * t);
+    joints.setpoint = joints.position + Eigen::Vector4d::Constant(0.01);
+    if (force_estimator.step(joints, forces) != est::ForceStatus::ok) return 1;
+    if (!forces.allFinite()) return 1;
+    largest_force = std::max(largest_force, forces.cwiseAbs().maxCoeff());
+  }
+  if (!(largest_force > 0.0)) return 1;
+
   auto echo = [](std::span<const std::byte> in, auto& reply) {
     Codec::Setpoint sp;
     Codec::State s;
@@ -56,6 +81,6 @@ int main() {
     clock.advance(std::chrono::milliseconds(1));
   }
   if (ok < 99) return 1;
-  std::puts("no-exceptions build: codec, model and 100 loop ticks ok");
+  std::puts("no-exceptions build: codec, model, 1000 force estimator steps and 100 loop ticks ok");
   return 0;
 }

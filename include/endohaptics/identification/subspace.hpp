@@ -72,6 +72,11 @@ struct SubspaceOptions {
   bool estimate_x0 = true;                 //!< false: x0 = 0 in the B, D regression
   double gap_ratio = 0.5;                  //!< order rule: keep gaps >= ratio x largest, (0, 1]
   double sample_time = 1.0;                //!< s, stored in the result (the data has none)
+  //! N4SID only: the largest ||O|| / ||Yf|| (Frobenius) of the oblique projection accepted, > 0.
+  //! Above it the future inputs and the past data are nearly collinear (e.g. an input low-pass
+  //! filtered far below the Nyquist frequency) and O is mostly amplified noise: `identify` throws
+  //! Error instead of returning that model. Infinity: no check. See docs/models/subspace.md.
+  double max_projection_gain = 1e3;
 };
 
 //! An identified model with dynamic sizes and what it was identified with.
@@ -324,8 +329,9 @@ inline Regressed regress_b_d_x0(const Matrix& A, const Matrix& C, std::span<cons
 
 //! Identifies one model from one or several experiments (Hankel columns of all experiments are
 //! concatenated; B, D are shared, one x0 per experiment). Throws Error on empty or mismatched
-//! data, non-finite samples, too few samples for the horizon, or an order the horizon cannot
-//! carry (n <= (s - 1) ny).
+//! data, non-finite samples, too few samples for the horizon, an order the horizon cannot
+//! carry (n <= (s - 1) ny), or (N4SID) an oblique projection larger than
+//! `max_projection_gain` x the future outputs.
 [[nodiscard]] inline SubspaceModel identify(std::span<const DataSet> data,
                                             const SubspaceOptions& options = {}) {
   namespace ds = detail::subspace;
@@ -362,6 +368,10 @@ inline Regressed regress_b_d_x0(const Matrix& A, const Matrix& C, std::span<cons
   if (!std::isfinite(options.sample_time) || !(options.sample_time > 0.0)) {
     fail("identify: sample time must be finite and > 0 s, got " +
          ds::format_number(options.sample_time));
+  }
+  if (!(options.max_projection_gain > 0.0)) {
+    fail("identify: max_projection_gain must be > 0, got " +
+         ds::format_number(options.max_projection_gain));
   }
   const int wanted = options.order > 0 ? options.order : options.max_order;
   const auto sets = static_cast<int>(data.size());
@@ -441,6 +451,18 @@ inline Regressed regress_b_d_x0(const Matrix& A, const Matrix& C, std::span<cons
       weighted.resize(f, a + p);
       weighted.leftCols(a).noalias() = X * L21;
       weighted.rightCols(p).noalias() = X * L22;
+      // Yf = O + (its part along Uf) + (the rest), and ||Yf|| = ||[L31 L32 L33]|| (Q is
+      // orthonormal). An O far larger than Yf cancels against the Uf part: Uf and Wp are nearly
+      // collinear and X amplifies the noise in the directions where L22 is nearly singular.
+      const double yf = L.bottomRows(f).norm();
+      const double gain = yf > 0.0 ? weighted.norm() / yf : 0.0;
+      if (!(gain <= options.max_projection_gain)) {
+        fail("identify: N4SID weighting: the oblique projection is " + ds::format_number(gain) +
+             " times the future outputs (max_projection_gain " +
+             ds::format_number(options.max_projection_gain) +
+             "): the future inputs and the past data are nearly collinear (e.g. a low-pass "
+             "filtered input) and the projection is amplified noise; use moesp or cva");
+      }
       break;
     }
     case Weighting::cva: {
