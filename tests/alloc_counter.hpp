@@ -1,29 +1,46 @@
-// Allocation counting for "no heap allocation per tick" tests. Include this FIRST in a test file
-// (before any Eigen or endohaptics header), in exactly one translation unit of the executable:
+// Allocation counting for "no heap allocation per tick" tests. Include this FIRST in a test
+// translation unit (before any Eigen or endohaptics header), once per executable; the unit tests'
+// CMake includes it first in every area's unity source (tests/CMakeLists.txt), so a test file
+// includes it too only to say that it uses it:
 //  - every global operator new (scalar, array, aligned, nothrow forms) is counted;
-//  - Eigen's own heap use (malloc, not operator new) is counted through EIGEN_RUNTIME_NO_MALLOC
-//    with an eigen_assert that records instead of aborting.
+//  - Eigen's own heap use (malloc, not operator new) is counted through EIGEN_RUNTIME_NO_MALLOC:
+//    inside allocations_during, a failed eigen_assert (Eigen's "malloc is forbidden") is counted
+//    instead of aborting; everywhere else eigen_assert aborts with its message, as Eigen's does.
 // allocations_during(f) returns both counts made while running f.
 #pragma once
 
 #include <atomic>
 #include <cstddef>
+#include <cstdio>
 #include <cstdlib>
 #include <new>
 
 namespace endohaptics::test {
 inline std::atomic<long> new_calls{0};
 inline std::atomic<long> eigen_mallocs{0};
+inline std::atomic<bool> counting{false};
+
+[[gnu::noinline]] inline void eigen_assert_failed(const char* condition, const char* file,
+                                                  int line) noexcept {
+  if (counting.load()) {
+    eigen_mallocs.fetch_add(1);
+    return;
+  }
+  std::fprintf(stderr, "%s:%d: Eigen assertion failed: %s\n", file, line, condition);
+  std::abort();
+}
 }  // namespace endohaptics::test
 
 #ifndef EIGEN_RUNTIME_NO_MALLOC
 #define EIGEN_RUNTIME_NO_MALLOC
 #endif
 #ifndef eigen_assert
-#define eigen_assert(x)                                        \
-  do {                                                         \
-    if (!(x)) ::endohaptics::test::eigen_mallocs.fetch_add(1); \
+#define eigen_assert(x)                                                         \
+  do {                                                                          \
+    if (!(x)) ::endohaptics::test::eigen_assert_failed(#x, __FILE__, __LINE__); \
   } while (false)
+#else
+#error "alloc_counter.hpp must come before any Eigen header (eigen_assert is already defined)"
 #endif
 
 #include <Eigen/Core>
@@ -72,9 +89,11 @@ template <typename F>
 long allocations_during(F&& f) {
   const long before_new = new_calls.load();
   const long before_eigen = eigen_mallocs.load();
+  counting.store(true);
   Eigen::internal::set_is_malloc_allowed(false);
   f();
   Eigen::internal::set_is_malloc_allowed(true);
+  counting.store(false);
   return (new_calls.load() - before_new) + (eigen_mallocs.load() - before_eigen);
 }
 

@@ -8,6 +8,8 @@
 #include <limits>
 #include <random>
 
+namespace estimation_dare_test {
+
 namespace {
 
 using endohaptics::Error;
@@ -327,3 +329,5 @@ TEST_CASE_TEMPLATE("random systems: SDA agrees with iterating the Riccati recurs
     CHECK(smallest_eigenvalue(solution.P) > -1e-12 * solution.P.norm());
   }
 }
+
+}  // namespace estimation_dare_test

@@ -19,6 +19,8 @@
 #include "endohaptics/teleop/teleop_loop.hpp"
 #include "shared_data.hpp"
 
+namespace estimation_force_estimator_test {
+
 namespace {
 
 namespace est = endohaptics::estimation;
@@ -812,3 +814,5 @@ TEST_CASE("2016 logs: the motor current opposes the position error (current_sign
   CHECK(opposite == 14815);  // 91.9 %
   CHECK(est::ForceEstimatorSettings<double>().current_sign == Eigen::Vector4d::Constant(-1.0));
 }
+
+}  // namespace estimation_force_estimator_test

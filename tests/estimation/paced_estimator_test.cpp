@@ -5,6 +5,8 @@
 #include <chrono>
 #include <endohaptics/estimation/paced_estimator.hpp>
 
+namespace estimation_paced_estimator_test {
+
 namespace {
 
 namespace est = endohaptics::estimation;
@@ -101,3 +103,5 @@ TEST_CASE("pacing allocates nothing") {
   CHECK(n == 0);
   CHECK(inner.steps == 1700);
 }
+
+}  // namespace estimation_paced_estimator_test

@@ -13,6 +13,8 @@
 
 #include "endohaptics/model/state_space.hpp"
 
+namespace estimation_steady_state_kalman_test {
+
 namespace {
 
 using endohaptics::Error;
@@ -147,10 +149,16 @@ MonteCarlo run_monte_carlo(double r_scale, int steps) {
 
 // Every member of every class template is compiled (the all-outputs constructor only where its
 // constraint Nm == outputs holds).
-template class endohaptics::estimation::SteadyStateKalman<StateSpace<6, 2, 1>, 2>;
-template class endohaptics::estimation::SteadyStateKalman<StateSpace<3, 1, 2>>;
-template class endohaptics::estimation::SteadyStateKalman<StateSpace<2, 0, 1>>;
-template class endohaptics::estimation::SteadyStateKalman<StateSpace<3, 1, 2, float>, 1>;
+// (An explicit instantiation belongs to a namespace enclosing its template: this file's namespace
+// is closed around them.)
+}  // namespace estimation_steady_state_kalman_test
+template class endohaptics::estimation::SteadyStateKalman<endohaptics::model::StateSpace<6, 2, 1>,
+                                                          2>;
+template class endohaptics::estimation::SteadyStateKalman<endohaptics::model::StateSpace<3, 1, 2>>;
+template class endohaptics::estimation::SteadyStateKalman<endohaptics::model::StateSpace<2, 0, 1>>;
+template class endohaptics::estimation::SteadyStateKalman<
+    endohaptics::model::StateSpace<3, 1, 2, float>, 1>;
+namespace estimation_steady_state_kalman_test {
 
 TEST_CASE("DiscreteLinearModel contract: StateSpace models it, other types do not") {
   static_assert(DiscreteLinearModel<StateSpace<6, 2, 1>>);
@@ -409,3 +417,5 @@ TEST_CASE("float instance: same gain as double to float accuracy, converges") {
   }
   CHECK((plant.state() - filter.state()).norm() < 1e-5f);
 }
+
+}  // namespace estimation_steady_state_kalman_test

@@ -10,6 +10,8 @@
 #include "endohaptics/files/model_file.hpp"
 #include "endohaptics/model/presets_2016.hpp"
 
+namespace files_bridge_config_test {
+
 namespace {
 
 namespace files = endohaptics::files;
@@ -375,3 +377,5 @@ TEST_CASE("estimator.clamp_model loads an identified model file, relative to the
         "bridge.json: estimator.clamp_model: must be the name of a model file (a non-empty "
         "string), got \"\"");
 }
+
+}  // namespace files_bridge_config_test

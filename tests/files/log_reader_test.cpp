@@ -12,6 +12,8 @@
 #include "endohaptics/identification/signal.hpp"
 #include "shared_data.hpp"
 
+namespace files_log_reader_test {
+
 namespace {
 
 namespace files = endohaptics::files;
@@ -499,3 +501,5 @@ TEST_CASE("real CSV: the DaISy records load with their header names" *
                        doctest::Contains("no signal named 'temperature' (signals: time, u, y)"),
                        Error);
 }
+
+}  // namespace files_log_reader_test

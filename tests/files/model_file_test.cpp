@@ -13,6 +13,8 @@
 #include "endohaptics/identification/subspace.hpp"
 #include "endohaptics/model/presets_2016.hpp"
 
+namespace files_model_file_test {
+
 namespace {
 
 namespace id = endohaptics::identification;
@@ -264,3 +266,5 @@ TEST_CASE("saving refuses NaN and mismatched sizes, naming the field") {
   CHECK(message_of([&] { files::save_model("/nonexistent/dir/model.json", f); }) ==
         "save_model: cannot open /nonexistent/dir/model.json for writing");
 }
+
+}  // namespace files_model_file_test

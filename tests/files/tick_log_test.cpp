@@ -9,6 +9,8 @@
 #include <sstream>
 #include <string>
 
+namespace files_tick_log_test {
+
 namespace {
 
 namespace files = endohaptics::files;
@@ -186,3 +188,5 @@ TEST_CASE("tick periods come from LoopStats") {
   CHECK(message_of([] { (void)files::tick_period_stats(parse("link\n1\n")); }) ==
         "ticks.csv: no column 'time' in the tick log (header: link)");
 }
+
+}  // namespace files_tick_log_test

@@ -7,6 +7,8 @@
 
 #include "endohaptics/model/presets_2016.hpp"
 
+namespace identification_fit_metrics_test {
+
 namespace {
 
 namespace id = endohaptics::identification;
@@ -108,3 +110,5 @@ TEST_CASE("metrics refuse mismatched, empty or non-finite data") {
   CHECK_THROWS_AS((void)id::compare(m, MatrixXd::Zero(5, 2), MatrixXd::Zero(5, 1)), Error);
   CHECK_THROWS_AS((void)id::compare(m, MatrixXd::Zero(5, 1), MatrixXd::Zero(4, 1)), Error);
 }
+
+}  // namespace identification_fit_metrics_test

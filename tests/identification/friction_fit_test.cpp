@@ -16,6 +16,8 @@
 
 #include "shared_data.hpp"
 
+namespace identification_friction_fit_test {
+
 namespace {
 
 using endohaptics::Error;
@@ -287,3 +289,5 @@ TEST_CASE("friction constants identified from the 2016 free-movement logs" *
   CHECK(std::abs(roll_fmu) < 0.1);
   CHECK(std::abs(pitch_fmu) < 0.1);
 }
+
+}  // namespace identification_friction_fit_test

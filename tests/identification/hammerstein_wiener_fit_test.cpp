@@ -6,6 +6,8 @@
 #include <random>
 #include <vector>
 
+namespace identification_hammerstein_wiener_fit_test {
+
 namespace {
 
 namespace id = endohaptics::identification;
@@ -166,3 +168,5 @@ TEST_CASE("bad options throw Error naming the option") {
                        "fit_hammerstein_wiener: grid_points must be >= 3, got 2", Error);
   CHECK_THROWS_AS((void)id::apply_maps(std::vector<id::StaticMap>(2), u), Error);
 }
+
+}  // namespace identification_hammerstein_wiener_fit_test

@@ -11,6 +11,8 @@
 #include "endohaptics/files/log_reader.hpp"
 #include "shared_data.hpp"
 
+namespace identification_signal_test {
+
 namespace {
 
 namespace id = endohaptics::identification;
@@ -413,3 +415,5 @@ TEST_CASE("real log: pitch-down-02 force filtered at 20 Hz as worksheet 4.2.1" *
   CHECK(peak == 197);
   CHECK(close(force[1000], 0.7904135038801359 - 0.08955056258754246, 1e-9));
 }
+
+}  // namespace identification_signal_test

@@ -16,6 +16,8 @@
 #include "endohaptics/identification/signal.hpp"
 #include "shared_data.hpp"
 
+namespace identification_subspace_test {
+
 namespace {
 
 namespace id = endohaptics::identification;
@@ -525,3 +527,5 @@ TEST_CASE("DaISy dryer: the automatic order is 4 for raw and mean-free data, eve
     CHECK(id::identify(c.leftCols(1), c.rightCols(1), options).order == 4);
   }
 }
+
+}  // namespace identification_subspace_test

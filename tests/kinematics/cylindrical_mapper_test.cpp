@@ -13,6 +13,8 @@
 #include <random>
 #include <string>
 
+namespace kinematics_cylindrical_mapper_test {
+
 namespace {
 
 using endohaptics::kinematics::CylindricalMapper;
@@ -518,3 +520,5 @@ TEST_CASE("10000 ticks of position and force mapping allocate nothing") {
   CHECK(allocations == 0);
   CHECK(std::isfinite(sink));
 }
+
+}  // namespace kinematics_cylindrical_mapper_test

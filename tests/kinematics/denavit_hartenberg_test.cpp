@@ -13,6 +13,8 @@
 #include <random>
 #include <string>
 
+namespace kinematics_denavit_hartenberg_test {
+
 namespace {
 
 using endohaptics::kinematics::davinci_hand_chain;
@@ -352,3 +354,5 @@ TEST_CASE("forward kinematics allocates nothing over 10000 ticks") {
   CHECK(allocations == 0);
   CHECK(std::isfinite(sink));
 }
+
+}  // namespace kinematics_denavit_hartenberg_test

@@ -9,6 +9,8 @@
 #include <limits>
 #include <random>
 
+namespace model_friction_model_test {
+
 namespace {
 
 using endohaptics::Error;
@@ -236,7 +238,8 @@ TEST_CASE("constructor refuses invalid constants and options, naming them") {
   CHECK_NOTHROW(Model(good, {0.0, 1.0}));
 }
 
-TEST_CASE("a tick allocates nothing (operator new counter, EIGEN_RUNTIME_NO_MALLOC)") {
+TEST_CASE(
+    "FrictionModel: a tick allocates nothing (operator new counter, EIGEN_RUNTIME_NO_MALLOC)") {
   auto model = endohaptics::model::endowrist_2016_friction();
   using V = decltype(model)::Vector;
   V current, velocity, feedback, friction, external, level;
@@ -258,3 +261,5 @@ TEST_CASE("a tick allocates nothing (operator new counter, EIGEN_RUNTIME_NO_MALL
   CHECK(allocations == 0);
   CHECK(statuses_ok == 3 * (10000 - 100));
 }
+
+}  // namespace model_friction_model_test

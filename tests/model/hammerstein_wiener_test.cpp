@@ -10,6 +10,8 @@
 
 #include "endohaptics/model/presets_2016.hpp"
 
+namespace model_hammerstein_wiener_test {
+
 namespace {
 
 using endohaptics::model::Deadzone;
@@ -143,3 +145,5 @@ TEST_CASE("no heap allocation in 10,000 ticks (operator new counter and EIGEN_RU
   });
   CHECK(dynamic_allocations >= 10);
 }
+
+}  // namespace model_hammerstein_wiener_test

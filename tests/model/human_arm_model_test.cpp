@@ -15,6 +15,8 @@
 #include <numbers>
 #include <vector>
 
+namespace model_human_arm_model_test {
+
 namespace {
 
 using endohaptics::Error;
@@ -313,7 +315,8 @@ TEST_CASE("HumanArm3: three independent axes, each equal to the scalar model") {
   CHECK(position == Eigen::Vector3d::Zero());
 }
 
-TEST_CASE("a tick allocates nothing (operator new counter, EIGEN_RUNTIME_NO_MALLOC)") {
+TEST_CASE(
+    "HumanArmModel: a tick allocates nothing (operator new counter, EIGEN_RUNTIME_NO_MALLOC)") {
   HumanArm3<> arm(1e-3);
   HumanArmModel<float> single(1e-3f);
   Eigen::Vector3d position, velocity, force;
@@ -335,3 +338,5 @@ TEST_CASE("a tick allocates nothing (operator new counter, EIGEN_RUNTIME_NO_MALL
   CHECK(ok == 20000);
   CHECK(position.allFinite());
 }
+
+}  // namespace model_human_arm_model_test

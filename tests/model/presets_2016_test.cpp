@@ -15,6 +15,8 @@
 
 #include "shared_data.hpp"
 
+namespace model_presets_2016_test {
+
 namespace {
 
 using endohaptics::Error;
@@ -240,3 +242,5 @@ TEST_CASE("pitch model output is about one gram-force per unit on the 2016 pitch
     CHECK(std::abs(scale) < 0.0095);
   }
 }
+
+}  // namespace model_presets_2016_test

@@ -7,6 +7,8 @@
 #include <random>
 #include <string>
 
+namespace model_state_space_test {
+
 namespace {
 
 using endohaptics::Error;
@@ -419,3 +421,5 @@ TEST_CASE("float instance: zoh of the mass-spring-damper and a step response") {
         doctest::Approx(0.25f).epsilon(1e-4));
   CHECK(d.is_stable());
 }
+
+}  // namespace model_state_space_test

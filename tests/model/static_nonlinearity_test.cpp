@@ -10,6 +10,8 @@
 #include <utility>
 #include <vector>
 
+namespace model_static_nonlinearity_test {
+
 namespace {
 
 using endohaptics::Error;
@@ -210,3 +212,5 @@ TEST_CASE("PerChannel applies one nonlinearity per element (including N == 0)") 
   CHECK(identity.apply(Eigen::Vector2d{1.5, -2.5}) == Eigen::Vector2d{1.5, -2.5});
   static_assert(noexcept(identity.apply(std::declval<const Eigen::Vector2d&>())));
 }
+
+}  // namespace model_static_nonlinearity_test

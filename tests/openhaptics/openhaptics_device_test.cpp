@@ -14,6 +14,8 @@
 #include <string>
 #include <thread>
 
+namespace openhaptics_openhaptics_device_test {
+
 // The Geomagic Touch adapter (examples/teleop_bridge/openhaptics_device.hpp) against the HD API
 // stand-in (tests/openhaptics_standin). Conventions under test:
 //  - HD_CURRENT_POSITION is mm in the Touch frame (x right, y up, z towards the user); the sample
@@ -406,3 +408,5 @@ TEST_CASE("destruction: zero force sent, scheduler stopped, servo unscheduled, d
   CHECK(last_sent == kZero);  // the scheduler thread is joined: no race on last_sent
   check_released();
 }
+
+}  // namespace openhaptics_openhaptics_device_test

@@ -2,6 +2,8 @@
 
 #include <doctest/doctest.h>
 
+namespace protocol_legacy_json_codec_test {
+
 using Json4 = endohaptics::baseline::LegacyJsonCodec<4>;
 
 TEST_CASE("legacy JSON baseline: round trip and rejection of malformed messages") {
@@ -32,3 +34,5 @@ TEST_CASE("legacy JSON baseline: round trip and rejection of malformed messages"
                            out));
   CHECK(out == untouched);
 }
+
+}  // namespace protocol_legacy_json_codec_test

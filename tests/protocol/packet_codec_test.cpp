@@ -10,6 +10,8 @@
 #include <random>
 #include <vector>
 
+namespace protocol_packet_codec_test {
+
 namespace {
 
 using endohaptics::protocol::CodecStatus;
@@ -287,3 +289,5 @@ TEST_CASE("status names are readable") {
   CHECK(to_string(CodecStatus::non_finite) == "non-finite value");
   CHECK(to_string(CodecStatus::mask_out_of_range) == "mask bit at or above the number of motors");
 }
+
+}  // namespace protocol_packet_codec_test

@@ -5,6 +5,8 @@
 #include <numbers>
 #include <vector>
 
+namespace sim_force_accuracy_test {
+
 namespace sim = endohaptics::sim;
 
 namespace {
@@ -78,3 +80,5 @@ TEST_CASE("bad series are refused with a message") {
       (void)sim::force_accuracy(std::vector<double>{0.0}, std::vector<double>{1.0}, ok.t, ok.f),
       endohaptics::Error);
 }
+
+}  // namespace sim_force_accuracy_test

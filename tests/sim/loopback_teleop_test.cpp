@@ -16,6 +16,8 @@
 #include <endohaptics/transport/in_memory_transport.hpp>
 #include <memory>
 
+namespace sim_loopback_teleop_test {
+
 namespace {
 
 namespace transport = endohaptics::transport;
@@ -139,3 +141,5 @@ TEST_CASE("loopback teleoperation: 10,000 ticks of the whole loop allocate nothi
   CHECK(allocations == 0);
   CHECK(n == 10000);
 }
+
+}  // namespace sim_loopback_teleop_test

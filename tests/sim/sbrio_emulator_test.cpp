@@ -8,6 +8,8 @@
 #include <endohaptics/transport/in_memory_transport.hpp>
 #include <vector>
 
+namespace sim_sbrio_emulator_test {
+
 namespace {
 
 namespace transport = endohaptics::transport;
@@ -197,3 +199,5 @@ TEST_CASE("polling allocates nothing") {
           delete p;
         }) == 1);
 }
+
+}  // namespace sim_sbrio_emulator_test

@@ -4,6 +4,8 @@
 #include <endohaptics/kinematics/cylindrical_mapper.hpp>
 #include <endohaptics/sim/scripted_operator.hpp>
 
+namespace sim_scripted_operator_test {
+
 namespace sim = endohaptics::sim;
 namespace tp = endohaptics::teleop;
 using namespace std::chrono_literals;
@@ -62,3 +64,5 @@ TEST_CASE("a non-finite force is refused, a bad script is refused with the field
   CHECK_THROWS_WITH_AS(sim::ScriptedOperator(clock, bad), doctest::Contains("close_time"),
                        endohaptics::Error);
 }
+
+}  // namespace sim_scripted_operator_test

@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+namespace sim_simulated_rig_test {
+
 namespace {
 
 namespace sim = endohaptics::sim;
@@ -411,3 +413,5 @@ TEST_CASE("no heap allocation in 10,000 advances") {
   CHECK(allocations == 0);
   CHECK(std::isfinite(sink));
 }
+
+}  // namespace sim_simulated_rig_test

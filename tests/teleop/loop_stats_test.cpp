@@ -4,6 +4,8 @@
 #include <type_traits>
 #include <vector>
 
+namespace teleop_loop_stats_test {
+
 using endohaptics::teleop::DurationStats;
 using endohaptics::teleop::LoopSnapshot;
 using endohaptics::teleop::LoopStats;
@@ -148,3 +150,5 @@ TEST_CASE("loop snapshot: small, copy-free windows with the full stats' numbers"
     CHECK(empty.round_trip_mean == 0.0);
   }
 }
+
+}  // namespace teleop_loop_stats_test

@@ -7,6 +7,8 @@
 #include <thread>
 #include <vector>
 
+namespace teleop_realtime_test {
+
 namespace tp = endohaptics::teleop;
 
 TEST_CASE("leave_realtime: a helper thread started by a pinned thread gets every CPU back") {
@@ -61,3 +63,5 @@ TEST_CASE("leave_realtime: SCHED_FIFO inherited from the creating thread is drop
   CHECK(inherited == SCHED_FIFO);
   CHECK(after == SCHED_OTHER);
 }
+
+}  // namespace teleop_realtime_test

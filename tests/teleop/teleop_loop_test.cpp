@@ -9,6 +9,8 @@
 #include <endohaptics/transport/fault_injecting_transport.hpp>
 #include <endohaptics/transport/in_memory_transport.hpp>
 
+namespace teleop_teleop_loop_test {
+
 namespace {
 
 namespace transport = endohaptics::transport;
@@ -404,3 +406,5 @@ TEST_CASE("an enable_mask with a bit at or above the motor count is refused at c
     CHECK_NOTHROW(safety.validate());
   }
 }
+
+}  // namespace teleop_teleop_loop_test

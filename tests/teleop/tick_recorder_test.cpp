@@ -9,6 +9,8 @@
 #include <string>
 #include <thread>
 
+namespace teleop_tick_recorder_test {
+
 namespace tp = endohaptics::teleop;
 using namespace std::chrono_literals;
 
@@ -65,3 +67,5 @@ TEST_CASE("a full ring drops and counts instead of blocking, and push allocates 
   CHECK(allocations == 0);
   CHECK(recorder.dropped() == 92);
 }
+
+}  // namespace teleop_tick_recorder_test

@@ -8,6 +8,8 @@
 #include <endohaptics/transport/udp_transport.hpp>
 #include <thread>
 
+namespace transport_transports_test {
+
 namespace transport = endohaptics::transport;
 using transport::TransportStatus;
 using namespace std::chrono_literals;
@@ -353,3 +355,5 @@ TEST_CASE("UDP receive drains at most max_drain datagrams, the rest wait for the
   CHECK_THROWS_WITH_AS(transport::UdpServerTransport({.bind_address = "127.0.0.1", .max_drain = 0}),
                        doctest::Contains("UdpServerTransport: max_drain"), endohaptics::Error);
 }
+
+}  // namespace transport_transports_test

@@ -11,6 +11,8 @@
 
 #include "shared_data.hpp"
 
+namespace workflow_workflow_test {
+
 namespace {
 
 namespace id = endohaptics::identification;
@@ -451,3 +453,5 @@ TEST_CASE("real logs: a weighting that fails is skipped by --method best, not fa
           (void)wf::identify_logs(logs, {{"current", "A"}}, {{"force", "N"}}, options);
         }).starts_with("n4sid: identify: N4SID weighting: the oblique projection is "));
 }
+
+}  // namespace workflow_workflow_test
