@@ -47,7 +47,7 @@ void run(benchmark::State& state, id::Weighting weighting, int order) {
   for (auto _ : state) {
     const id::SubspaceModel m = id::identify(d.u, d.y, options);
     chosen = m.order;
-    benchmark::DoNotOptimize(m.A.data());
+    benchmark::DoNotOptimize(m.state_space.A().data());
   }
   state.counters["order"] = chosen;
 }

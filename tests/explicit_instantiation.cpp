@@ -25,6 +25,7 @@ template struct eh::protocol::MotorSetpoint<4>;
 
 template class eh::model::StateSpace<3, 2, 1>;
 template class eh::model::StateSpace<1, 1, 1, float>;
+template class eh::model::StateSpace<Eigen::Dynamic, Eigen::Dynamic, Eigen::Dynamic>;
 template class eh::model::ContinuousStateSpace<3, 1, 2>;
 // clang 14 instantiates members whose requires-clause is unsatisfied, so only argument lists
 // that satisfy every constraint are listed (default-constructible nonlinearities, Nm = Ny).

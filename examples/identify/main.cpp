@@ -157,7 +157,7 @@ int main(int argc, char** argv) {
     }
     for (const std::string& f : result.failures) fmt::print("failed: {}\n", f);
     const wf::CandidateModel& best = result.chosen();
-    fmt::print("chosen: {} (order {}){}\n", best.method, best.model.A.rows(),
+    fmt::print("chosen: {} (order {}){}\n", best.method, best.model.state_space.state_size(),
                best.spectral_radius >= 1.0 ? ", NOT STABLE: no stable candidate" : "");
     for (const wf::FileComparison& f : best.files) {
       std::string fits;

@@ -112,7 +112,7 @@ int main(int argc, char** argv) {
           model_in.size(), fmt::join(model_in, ", "), model_out.size(), fmt::join(model_out, ", "),
           sel.inputs.size(), sel.outputs.size()));
     }
-    sel.csv_row_time = ts > 0.0 ? ts : model.sample_time;
+    sel.csv_row_time = ts > 0.0 ? ts : model.state_space.sample_time();
 
     // Flags given on the command line win over the recorded preprocessing.
     const wf::Preprocessing given = pre;
@@ -129,16 +129,16 @@ int main(int argc, char** argv) {
       pre.input_offset = wf::offset_mode_from_string(input_offset);
     }
     const wf::InitialStateMode mode = wf::initial_state_from_string(x0);
-    fmt::print("{}: {} states, {} -> {}, Ts {} s, {}\n", name, model.A.rows(),
-               fmt::join(model_in, ", "), fmt::join(model_out, ", "), model.sample_time,
-               model.provenance.method);
+    fmt::print("{}: {} states, {} -> {}, Ts {} s, {}\n", name, model.state_space.state_size(),
+               fmt::join(model_in, ", "), fmt::join(model_out, ", "),
+               model.state_space.sample_time(), model.provenance.method);
     fmt::print("preprocessing ({}): {}\n", recorded ? "model file, flags override" : "flags",
                wf::describe(pre));
 
     std::vector<wf::FileComparison> results;
     double sum = 0.0;
     for (const auto& path : logs) {
-      const wf::PreparedLog log = wf::prepare_log(path, sel, model.sample_time, pre);
+      const wf::PreparedLog log = wf::prepare_log(path, sel, model.state_space.sample_time(), pre);
       fmt::print("{}", wf::summary(log));
       results.push_back(wf::compare_log(model, log, mode));
       const wf::FileComparison& c = results.back();

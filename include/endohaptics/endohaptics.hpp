@@ -1,8 +1,9 @@
 //! @file
 //! Umbrella header: everything endohaptics offers. Include single component headers instead
-//! to keep compile times down. The JSON headers (files/model_file.hpp, files/bridge_config.hpp,
-//! workflow/workflow.hpp) are not included: they need nlohmann-json, which the target
-//! endohaptics::model_files brings (find_package(endohaptics COMPONENTS model_files)).
+//! to keep compile times down. The JSON headers (files/model_file.hpp,
+//! files/identified_model_file.hpp, files/bridge_config.hpp, workflow/workflow.hpp) are not
+//! included: they need nlohmann-json, which the target endohaptics::model_files brings
+//! (find_package(endohaptics COMPONENTS model_files)).
 #pragma once
 
 #include "endohaptics/core/clock.hpp"
@@ -31,6 +32,7 @@
 #include "endohaptics/model/human_arm_model.hpp"
 #include "endohaptics/model/presets_2016.hpp"
 #include "endohaptics/model/state_space.hpp"
+#include "endohaptics/model/static_map.hpp"
 #include "endohaptics/model/static_nonlinearity.hpp"
 #include "endohaptics/protocol/packet_codec.hpp"
 #include "endohaptics/sim/force_accuracy.hpp"

@@ -10,6 +10,8 @@
 #include <type_traits>
 
 #include "endohaptics/estimation/force_estimator.hpp"
+#include "endohaptics/files/identified_model_file.hpp"
+#include "endohaptics/identification/fit_metrics.hpp"
 #include "endohaptics/identification/subspace.hpp"
 #include "endohaptics/model/presets_2016.hpp"
 
@@ -60,19 +62,14 @@ const std::vector<files::SignalInfo> yaw_outputs{{"force", "N"}};
 
 // A valid 2-state, 1-input, 1-output model as JSON, to break one field at a time.
 json valid_json() {
-  files::ModelFile f;
-  f.sample_time = 0.02;
-  f.A = (MatrixXd(2, 2) << 0.9, 0.1, 0.0, 0.5).finished();
-  f.B = (MatrixXd(2, 1) << 1.0, 0.5).finished();
-  f.C = (MatrixXd(1, 2) << 1.0, 0.0).finished();
-  f.D = MatrixXd::Zero(1, 1);
-  f.x0 = VectorXd::Zero(2);
-  f.inputs = {{"current", "A"}};
-  f.outputs = {{"force", "N"}};
-  f.input_nonlinearity = {{id::StaticMapKind::deadzone, -0.2, 0.2}};
-  f.output_nonlinearity = {{}};
-  f.provenance.method = "moesp";
-  f.provenance.date = "2016-05-01";
+  files::ModelFile f{.state_space = model::DynamicStateSpace<>(
+                         MatrixXd{{0.9, 0.1}, {0.0, 0.5}}, MatrixXd{{1.0}, {0.5}},
+                         MatrixXd{{1.0, 0.0}}, MatrixXd::Zero(1, 1), 0.02),
+                     .inputs = {{"current", "A"}},
+                     .outputs = {{"force", "N"}},
+                     .input_nonlinearity = {{model::StaticMapKind::deadzone, -0.2, 0.2}},
+                     .output_nonlinearity = {{}},
+                     .provenance = {.method = "moesp", .date = "2016-05-01"}};
   return files::to_json(f);
 }
 
@@ -83,11 +80,9 @@ TEST_CASE("an identified model round-trips through a file bit for bit, with prov
   std::normal_distribution<double> normal;
   MatrixXd u(600, 2);
   for (Eigen::Index i = 0; i < u.size(); ++i) u.data()[i] = normal(rng);
-  id::SubspaceModel truth;
-  truth.A = (MatrixXd(2, 2) << 0.9, 0.3, -0.3, 0.9).finished();
-  truth.B = (MatrixXd(2, 2) << 1.0, -0.2, 0.4, 0.3).finished();
-  truth.C = (MatrixXd(1, 2) << 1.0, -0.5).finished();
-  truth.D = MatrixXd::Zero(1, 2);
+  const model::DynamicStateSpace<> truth(MatrixXd{{0.9, 0.3}, {-0.3, 0.9}},
+                                         MatrixXd{{1.0, -0.2}, {0.4, 0.3}}, MatrixXd{{1.0, -0.5}},
+                                         MatrixXd::Zero(1, 2), 0.02);
   const MatrixXd y = id::simulate(truth, u, VectorXd::Zero(2));
   id::SubspaceOptions options;
   options.sample_time = 0.02;
@@ -106,12 +101,14 @@ TEST_CASE("an identified model round-trips through a file bit for bit, with prov
   TempFile tmp("roundtrip");
   files::save_model(tmp.path, file);
   const files::ModelFile back = files::load_model(tmp.path);
-  CHECK(back.A == file.A);  // shortest round-trip decimal: bit-exact
-  CHECK(back.B == file.B);
-  CHECK(back.C == file.C);
-  CHECK(back.D == file.D);
-  CHECK(back.x0 == file.x0);
-  CHECK(back.sample_time == 0.02);
+  CHECK(file.state_space.A() == m.state_space.A());  // the identified model, unchanged
+  CHECK(file.state_space.state() == m.initial_states[0]);
+  CHECK(back.state_space.A() == file.state_space.A());  // shortest round-trip decimal: bit-exact
+  CHECK(back.state_space.B() == file.state_space.B());
+  CHECK(back.state_space.C() == file.state_space.C());
+  CHECK(back.state_space.D() == file.state_space.D());
+  CHECK(back.state_space.state() == file.state_space.state());
+  CHECK(back.state_space.sample_time() == 0.02);
   CHECK(back.inputs[1].name == "velocity");
   CHECK(back.inputs[1].unit == "rad/s");
   CHECK(back.outputs[0].unit == "N");
@@ -127,13 +124,13 @@ TEST_CASE("an identified model round-trips through a file bit for bit, with prov
 
   auto ss = files::load_state_space<2, 2, 1>(tmp.path);
   CHECK(ss.sample_time() == 0.02);
-  CHECK(ss.state() == Eigen::Vector2d(m.x0));
+  CHECK(ss.state() == Eigen::Vector2d(m.state_space.state()));
   const auto ssf = files::load_state_space<2, 2, 1, float>(tmp.path);
-  CHECK(ssf.A()(0, 0) == static_cast<float>(m.A(0, 0)));
+  CHECK(ssf.A()(0, 0) == static_cast<float>(m.state_space.A()(0, 0)));
   CHECK(message_of([&] { (void)files::load_state_space<4, 2, 1>(tmp.path); }) ==
         "model file " + tmp.path.string() +
-            ": to_state_space: the model has 2 states, 2 inputs, 1 outputs; the target type 4, "
-            "2, 1");
+            ": StateSpace: cannot convert a model with 2 states, 2 inputs, 1 outputs into "
+            "StateSpace<4, 2, 1>");
 }
 
 TEST_CASE("a loaded yaw Hammerstein-Wiener model drives OpenLoop and the ForceEstimator") {
@@ -146,10 +143,10 @@ TEST_CASE("a loaded yaw Hammerstein-Wiener model drives OpenLoop and the ForceEs
   files::save_model(tmp.path, files::make_model_file(preset, yaw_inputs, yaw_outputs, provenance));
   const files::ModelFile file = files::load_model(tmp.path);
   REQUIRE(file.is_hammerstein_wiener());
-  CHECK(file.input_nonlinearity[0].kind == id::StaticMapKind::deadzone);
+  CHECK(file.input_nonlinearity[0].kind == model::StaticMapKind::deadzone);
   CHECK(file.input_nonlinearity[0].upper == 0.21);
   CHECK(file.input_nonlinearity[1].upper == 0.0);
-  CHECK(file.output_nonlinearity[0].kind == id::StaticMapKind::none);
+  CHECK(file.output_nonlinearity[0].kind == model::StaticMapKind::none);
 
   auto loaded = files::load_hammerstein_wiener<6, 2, 1>(tmp.path);
   static_assert(std::is_same_v<decltype(loaded), model::YawForceHW2016<double>>,
@@ -252,19 +249,30 @@ TEST_CASE("load errors name the file, the field and the value") {
   CHECK(hw.input_nonlinearity().channel(0).upper() == 0.2);
 }
 
-TEST_CASE("saving refuses NaN and mismatched sizes, naming the field") {
+TEST_CASE("saving refuses a NaN state and mismatched signal or map counts, naming the field") {
   files::ModelFile f = files::model_from_json(valid_json());
-  f.A(0, 1) = std::nan("");
+  f.state_space.reset(Eigen::VectorXd{{0.0, std::nan("")}});
   CHECK(message_of([&] { (void)files::to_json(f); }) ==
-        "to_json: field \"A[0][1]\" is not finite (nan)");
+        "to_json: field \"x0[1]\" is not finite (nan)");
   f = files::model_from_json(valid_json());
-  f.D = MatrixXd::Zero(2, 1);
+  f.inputs.push_back({"velocity", "rad/s"});
   CHECK(message_of([&] { (void)files::to_json(f); }) ==
-        "to_json: field \"D\" is 2 x 1, expected 1 x 1 (outputs x inputs)");
+        "to_json: field \"inputs\" has 2 entries, the model has 1 inputs (columns of B)");
+  f = files::model_from_json(valid_json());
+  f.output_nonlinearity.push_back({});
+  CHECK(message_of([&] { (void)files::to_json(f); }) ==
+        "to_json: field \"output_nonlinearity\" has 2 entries, expected 1 (outputs)");
   f = files::model_from_json(valid_json());
   TempFile tmp("save_errors");
   CHECK(message_of([&] { files::save_model("/nonexistent/dir/model.json", f); }) ==
         "save_model: cannot open /nonexistent/dir/model.json for writing");
+  // make_model_file refuses signal counts that differ from the model's sizes.
+  CHECK(
+      message_of([] {
+        (void)files::make_model_file(model::yaw_force_2016(), {{"current", "A"}}, {{"force", "N"}});
+      }) ==
+      "make_model_file: field \"inputs\" has 1 entries, the model has 2 inputs (columns "
+      "of B)");
 }
 
 }  // namespace files_model_file_test

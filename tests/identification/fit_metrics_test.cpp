@@ -53,11 +53,9 @@ TEST_CASE("compare: x0 estimated (MATLAB's default) or zero") {
   // y(k+1) = 0.5 y(k) + u(k) from x0 = 2 with u = 0: y = 2 1 0.5 0.25.
   // x0 = 0 predicts 0: fit = 100 (1 - ||y|| / ||y - mean y||) = -71.94539072 (numpy, same
   // formula: y = np.array([2, 1, .5, .25]); 100 * (1 - norm(y) / norm(y - y.mean()))).
-  id::SubspaceModel m;
-  m.A = MatrixXd::Constant(1, 1, 0.5);
-  m.B = MatrixXd::Constant(1, 1, 1.0);
-  m.C = MatrixXd::Constant(1, 1, 1.0);
-  m.D = MatrixXd::Zero(1, 1);
+  const endohaptics::model::DynamicStateSpace<> m(
+      MatrixXd::Constant(1, 1, 0.5), MatrixXd::Constant(1, 1, 1.0), MatrixXd::Constant(1, 1, 1.0),
+      MatrixXd::Zero(1, 1), 1.0);
   const MatrixXd u = MatrixXd::Zero(4, 1);
   MatrixXd y(4, 1);
   y << 2, 1, 0.5, 0.25;
@@ -102,11 +100,8 @@ TEST_CASE("metrics refuse mismatched, empty or non-finite data") {
   bad(2, 1) = std::numeric_limits<double>::infinity();
   CHECK_THROWS_WITH_AS((void)id::correlation(a, bad), "correlation: yhat(2,1) is not finite (inf)",
                        Error);
-  id::SubspaceModel m;
-  m.A = MatrixXd::Zero(1, 1);
-  m.B = MatrixXd::Zero(1, 1);
-  m.C = MatrixXd::Zero(1, 1);
-  m.D = MatrixXd::Zero(1, 1);
+  const endohaptics::model::DynamicStateSpace<> m(MatrixXd::Zero(1, 1), MatrixXd::Zero(1, 1),
+                                                  MatrixXd::Zero(1, 1), MatrixXd::Zero(1, 1), 1.0);
   CHECK_THROWS_AS((void)id::compare(m, MatrixXd::Zero(5, 2), MatrixXd::Zero(5, 1)), Error);
   CHECK_THROWS_AS((void)id::compare(m, MatrixXd::Zero(5, 1), MatrixXd::Zero(4, 1)), Error);
 }

@@ -31,18 +31,13 @@ MatrixXd gaussian(Eigen::Index rows, Eigen::Index cols, unsigned seed) {
   return m;
 }
 
-// A yaw-like linear block: 2 states (poles 0.9 +- 0.3i), inputs [current; velocity], one output.
-id::SubspaceModel linear_block(int inputs) {
-  id::SubspaceModel g;
-  g.A.resize(2, 2);
-  g.A << 0.9, 0.3, -0.3, 0.9;
-  g.B.resize(2, inputs);
-  g.C.resize(1, 2);
-  g.C << 1.0, -0.5;
-  g.D = MatrixXd::Zero(1, inputs);
-  g.B.col(0) << 1.0, 0.4;
-  if (inputs > 1) g.B.col(1) << -0.2, 0.3;
-  return g;
+// A yaw-like system: 2 states (poles 0.9 +- 0.3i), inputs [current; velocity], one output.
+endohaptics::model::DynamicStateSpace<> yaw_like_system(int inputs) {
+  MatrixXd B(2, inputs);
+  B.col(0) << 1.0, 0.4;
+  if (inputs > 1) B.col(1) << -0.2, 0.3;
+  return {MatrixXd{{0.9, 0.3}, {-0.3, 0.9}}, B, MatrixXd{{1.0, -0.5}}, MatrixXd::Zero(1, inputs),
+          1.0};
 }
 
 MatrixXd add_noise(const MatrixXd& y, double relative, unsigned seed) {
@@ -53,7 +48,7 @@ MatrixXd add_noise(const MatrixXd& y, double relative, unsigned seed) {
 }  // namespace
 
 TEST_CASE("a known input dead zone (+-0.3) is recovered with the linear part, fit >= 90 %") {
-  const id::SubspaceModel g = linear_block(1);
+  const auto g = yaw_like_system(1);
   const MatrixXd u = uniform(1500, 1, 1.0, 1);
   const std::vector<id::StaticMap> truth{{id::StaticMapKind::deadzone, -0.3, 0.3}};
   const MatrixXd y0 = id::simulate(g, id::apply_maps(truth, u), VectorXd::Zero(2));
@@ -67,14 +62,14 @@ TEST_CASE("a known input dead zone (+-0.3) is recovered with the linear part, fi
   CHECK(fit.linear.order == 2);
   CHECK(fit.fit[0] >= 90.0);
   // Against the noise-free output the model is near exact.
-  CHECK(id::nrmse_fit(y0, id::simulate(fit, u, fit.linear.x0))[0] > 97.0);
+  CHECK(id::nrmse_fit(y0, id::simulate(fit, u, fit.linear.state_space.state()))[0] > 97.0);
   // A linear model alone does markedly worse on the same data.
   CHECK(id::compare(id::identify(u, y), u, y).fit[0] < fit.fit[0] - 3.0);
   CHECK(fit.evaluations > 40);
 }
 
 TEST_CASE("yaw-like 2-input system: dead zone on the current only (0.21 A), velocity linear") {
-  const id::SubspaceModel g = linear_block(2);
+  const auto g = yaw_like_system(2);
   MatrixXd u(2000, 2);
   u.col(0) = uniform(2000, 1, 0.8, 11);  // current, A
   u.col(1) = uniform(2000, 1, 3.0, 12);  // velocity, rad/s
@@ -90,14 +85,14 @@ TEST_CASE("yaw-like 2-input system: dead zone on the current only (0.21 A), velo
   CHECK(fit.input[0].upper == doctest::Approx(0.21).epsilon(0.02 / 0.21));
   CHECK(fit.input[1].kind == id::StaticMapKind::none);
   CHECK(fit.fit[0] >= 90.0);
-  CHECK(fit.linear.D.isZero(0.0));
+  CHECK(fit.linear.state_space.D().isZero(0.0));
 
   // As the real-time type (the same type as the yaw preset): steps like simulate().
   auto hw = id::to_hammerstein_wiener<2, 2, 1>(fit);
   CHECK(hw.input_nonlinearity().channel(0).upper() == fit.input[0].upper);
   CHECK(hw.input_nonlinearity().channel(1).upper() == 0.0);
   CHECK(hw.linear().sample_time() == 0.02);
-  const MatrixXd y_hat = id::simulate(fit, u, fit.linear.x0);
+  const MatrixXd y_hat = id::simulate(fit, u, fit.linear.state_space.state());
   for (int k = 0; k < 100; ++k) {
     REQUIRE(hw.step(u.row(k).transpose())(0) == doctest::Approx(y_hat(k, 0)).epsilon(1e-12));
   }
@@ -109,7 +104,7 @@ TEST_CASE("yaw-like 2-input system: dead zone on the current only (0.21 A), velo
 }
 
 TEST_CASE("an asymmetric dead zone [-0.15, 0.35] with symmetric = false") {
-  const id::SubspaceModel g = linear_block(1);
+  const auto g = yaw_like_system(1);
   const MatrixXd u = uniform(1500, 1, 1.0, 21);
   const std::vector<id::StaticMap> truth{{id::StaticMapKind::deadzone, -0.15, 0.35}};
   const MatrixXd y =
@@ -124,7 +119,7 @@ TEST_CASE("an asymmetric dead zone [-0.15, 0.35] with symmetric = false") {
 }
 
 TEST_CASE("input saturation and output saturation are found, none is added when absent") {
-  const id::SubspaceModel g = linear_block(1);
+  const auto g = yaw_like_system(1);
   const MatrixXd u = uniform(1500, 1, 1.0, 31);
   // Input clipped at +-0.6; output clipped at [-2.0, 1.5].
   const std::vector<id::StaticMap> f{{id::StaticMapKind::saturation, -0.6, 0.6}};

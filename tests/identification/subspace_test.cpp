@@ -94,13 +94,8 @@ TrueSystem make_system(const std::vector<std::complex<double>>& poles, int nu, i
   return sys;
 }
 
-id::SubspaceModel as_model(const TrueSystem& sys) {
-  id::SubspaceModel m;
-  m.A = sys.A;
-  m.B = sys.B;
-  m.C = sys.C;
-  m.D = sys.D;
-  return m;
+endohaptics::model::DynamicStateSpace<> as_model(const TrueSystem& sys) {
+  return {sys.A, sys.B, sys.C, sys.D, 1.0};
 }
 
 MatrixXd white_noise(Eigen::Index rows, Eigen::Index cols, unsigned seed) {
@@ -161,8 +156,8 @@ TEST_CASE("synthetic systems, order 2..6, SISO and MIMO: poles, order and fit") 
       // Noise-free: exact up to rounding, automatic order.
       const id::SubspaceModel exact = id::identify(u, y0);
       CHECK(exact.order == n);
-      CHECK(pole_error(exact.A, sys.poles) < 1e-8);
-      CHECK((exact.D - sys.D).norm() < 1e-8);
+      CHECK(pole_error(exact.state_space.A(), sys.poles) < 1e-8);
+      CHECK((exact.state_space.D() - sys.D).norm() < 1e-8);
       CHECK(id::compare(exact, u, y0).fit.minCoeff() > 99.999);
 
       // 5 % white output noise (std relative to each output's std): same order, poles within
@@ -175,8 +170,8 @@ TEST_CASE("synthetic systems, order 2..6, SISO and MIMO: poles, order and fit") 
       }
       const id::SubspaceModel noisy = id::identify(u, y);
       CHECK(noisy.order == n);
-      CHECK(pole_error(noisy.A, sys.poles) < 0.02);
-      const MatrixXd y_hat = id::simulate(noisy, u, noisy.x0);
+      CHECK(pole_error(noisy.state_space.A(), sys.poles) < 0.02);
+      const MatrixXd y_hat = id::simulate(noisy, u, noisy.state_space.state());
       CHECK(id::nrmse_fit(y0, y_hat).minCoeff() >= 95.0);
     }
   }
@@ -193,7 +188,7 @@ TEST_CASE("the three weightings identify a noise-free 4th-order MIMO system exac
     const auto m = id::identify(u, y, options);
     CHECK(m.order == 4);
     CHECK(m.weighting == w);
-    CHECK(pole_error(m.A, sys.poles) < 1e-8);
+    CHECK(pole_error(m.state_space.A(), sys.poles) < 1e-8);
     CHECK(id::compare(m, u, y).fit.minCoeff() > 99.999);
   }
   // CVA singular values are canonical correlations: 4 of them 1 (noise-free), the rest 0.
@@ -219,7 +214,7 @@ TEST_CASE("several data sets: shared A, B, C, D and one initial state per set") 
   const auto m = id::identify(sets);
   CHECK(m.order == 3);
   REQUIRE(m.initial_states.size() == 2);
-  CHECK(pole_error(m.A, sys.poles) < 1e-8);
+  CHECK(pole_error(m.state_space.A(), sys.poles) < 1e-8);
   // States are only defined up to a similarity transform: compare their free responses.
   const MatrixXd zero_u = MatrixXd::Zero(30, 1);
   CHECK(
@@ -227,7 +222,7 @@ TEST_CASE("several data sets: shared A, B, C, D and one initial state per set") 
           .norm() < 1e-7);
   CHECK((id::simulate(m, zero_u, m.initial_states[1]) - id::simulate(as_model(sys), zero_u, x700))
             .norm() < 1e-7);
-  CHECK(m.x0 == m.initial_states[0]);
+  CHECK(m.state_space.state() == m.initial_states[0]);
 }
 
 TEST_CASE("estimate_initial_state recovers x0, simulate equals a hand-rolled loop") {
@@ -257,13 +252,13 @@ TEST_CASE("options: D = 0, x0 = 0, fixed order and block rows, the run is determ
   const auto m = id::identify(u, y, options);
   CHECK(m.order == 3);
   CHECK(m.block_rows == 8);
-  CHECK(m.sample_time == 0.02);
-  CHECK(m.D.isZero(0.0));
-  CHECK(m.x0.isZero(0.0));
+  CHECK(m.state_space.sample_time() == 0.02);
+  CHECK(m.state_space.D().isZero(0.0));
+  CHECK(m.state_space.state().isZero(0.0));
   CHECK(m.singular_values.size() == 8);
   const auto again = id::identify(u, y, options);
-  CHECK(again.A == m.A);  // bitwise: no random seeds, same operations
-  CHECK(again.B == m.B);
+  CHECK(again.state_space.A() == m.state_space.A());  // bitwise: no random seeds, same operations
+  CHECK(again.state_space.B() == m.state_space.B());
   // Default horizon: 15 block rows (SLICOT's dryer example), at least ceil(max_order/ny) + 1.
   CHECK(id::identify(u, y).block_rows == 15);
   CHECK(id::default_block_rows(800, 1, 1, 1, 20) == 21);
@@ -292,31 +287,32 @@ TEST_CASE("select_order: largest log gaps, SLICOT's dryer singular values give 4
   CHECK_THROWS_AS((void)id::select_order(VectorXd::Ones(1), 4), Error);
 }
 
-TEST_CASE("conversion to the fixed-size StateSpace, sizes must match") {
+TEST_CASE("the identified StateSpace converts to the fixed-size type, sizes must match") {
   const TrueSystem sys = make_system(poles_of_order(2), 2, 1, 51);
   const MatrixXd u = white_noise(600, 2, 52);
   const MatrixXd y = id::simulate(as_model(sys), u, VectorXd::Zero(2));
   id::SubspaceOptions options;
   options.sample_time = 0.02;
   const auto m = id::identify(u, y, options);
-  auto ss = id::to_state_space<2, 2, 1>(m);
+  endohaptics::model::StateSpace<2, 2, 1> ss(m.state_space);
   CHECK(ss.sample_time() == 0.02);
-  CHECK((ss.A() - m.A).norm() == 0.0);
-  CHECK(ss.state().isApprox(m.x0));
+  CHECK((ss.A() - m.state_space.A()).norm() == 0.0);
+  CHECK(ss.state() == m.state_space.state());  // x0 of the data set
+  CHECK(m.state_space.state() == m.initial_states[0]);
   // The fixed-size model steps like simulate().
-  const MatrixXd y_hat = id::simulate(m, u, m.x0);
+  const MatrixXd y_hat = id::simulate(m, u, m.state_space.state());
   for (int k = 0; k < 50; ++k) {
     REQUIRE(ss.step(u.row(k).transpose())(0) == doctest::Approx(y_hat(k, 0)).epsilon(1e-12));
   }
-  CHECK_THROWS_WITH_AS((void)(id::to_state_space<3, 2, 1>(m)),
-                       "to_state_space: the model has 2 states, 2 inputs, 1 outputs; the target "
-                       "type 3, 2, 1",
+  CHECK_THROWS_WITH_AS((endohaptics::model::StateSpace<3, 2, 1>(m.state_space)),
+                       "StateSpace: cannot convert a model with 2 states, 2 inputs, 1 outputs "
+                       "into StateSpace<3, 2, 1>",
                        Error);
-  CHECK_THROWS_AS((void)(id::to_state_space<2, 1, 1>(m)), Error);
-  // Back to a SubspaceModel: same matrices, x0 = current state.
-  const auto back = id::to_subspace_model(ss);
-  CHECK(back.A == m.A);
-  CHECK(back.order == 2);
+  CHECK_THROWS_AS((endohaptics::model::StateSpace<2, 1, 1>(m.state_space)), Error);
+  // simulate() takes the fixed-size model too: the same numbers.
+  CHECK((id::simulate(ss, u, VectorXd::Zero(2)) - id::simulate(m, u, VectorXd::Zero(2)))
+            .cwiseAbs()
+            .maxCoeff() == 0.0);
 }
 
 namespace {
@@ -333,15 +329,15 @@ TEST_CASE_TEMPLATE("identified models convert to StateSpace<Nx, Nu, Ny> of sever
   const MatrixXd y = id::simulate(as_model(sys), u, VectorXd::Zero(S::nx));
   const auto m = id::identify(u, y);
   REQUIRE(m.order == S::nx);
-  const auto ss = id::to_state_space<S::nx, S::nu, S::ny>(m);
+  const endohaptics::model::StateSpace<S::nx, S::nu, S::ny> ss(m.state_space);
   // Poles of the fixed-size model (dynamic eigen solver: one instantiation for all sizes).
   CHECK(pole_error(MatrixXd(ss.A()), sys.poles) < 1e-8);
   CHECK(ss.sample_time() == 1.0);
   // float instance: rounded once, the same matrices to float precision.
-  const auto ssf = id::to_state_space<S::nx, S::nu, S::ny, float>(m);
-  CHECK((ssf.A().template cast<double>() - m.A).cwiseAbs().maxCoeff() < 1e-6);
-  CHECK((ssf.B().template cast<double>() - m.B).cwiseAbs().maxCoeff() <
-        1e-5 * m.B.cwiseAbs().maxCoeff());
+  const endohaptics::model::StateSpace<S::nx, S::nu, S::ny, float> ssf(m.state_space);
+  CHECK((ssf.A().template cast<double>() - m.state_space.A()).cwiseAbs().maxCoeff() < 1e-6);
+  CHECK((ssf.B().template cast<double>() - m.state_space.B()).cwiseAbs().maxCoeff() <
+        1e-5 * m.state_space.B().cwiseAbs().maxCoeff());
   CHECK(pole_error(MatrixXd(ssf.A().template cast<double>()), sys.poles) < 1e-5);
 }
 
@@ -405,7 +401,7 @@ TEST_CASE("N4SID refuses a low-pass input with noise (its projection is amplifie
                        Error);
   // Noise-free, the same input is fine: the projection is exact (gain ~0.7).
   const auto exact = id::identify(u, y0, options);
-  CHECK(pole_error(exact.A, sys.poles) < 1e-5);
+  CHECK(pole_error(exact.state_space.A(), sys.poles) < 1e-5);
   // MOESP and CVA identify the noisy data.
   for (const auto w : {id::Weighting::moesp, id::Weighting::cva}) {
     CAPTURE(id::to_string(w));
@@ -443,13 +439,11 @@ TEST_CASE("DaISy dryer, raw data, MOESP, 15 block rows: SLICOT's singular values
   // Eigenvalues of A (IB01BD): 0.96110, 0.74552, 0.47584 +- 0.20008i. SLICOT computes A from
   // the R factor, we by least squares on Gamma: they agree to 2e-4.
   using c = std::complex<double>;
-  CHECK(pole_error(m.A, {c(0.96110, 0), c(0.74552, 0), c(0.47584, 0.20008), c(0.47584, -0.20008)}) <
-        2e-4);
+  CHECK(pole_error(m.state_space.A(), {c(0.96110, 0), c(0.74552, 0), c(0.47584, 0.20008),
+                                       c(0.47584, -0.20008)}) < 2e-4);
   // D: IB01CD (simulation least squares, like ours) -0.0018; DC gain 1.00.
-  CHECK(m.D(0, 0) == doctest::Approx(-0.0018).epsilon(0.05));
-  const double dc_gain =
-      (m.C * (MatrixXd::Identity(4, 4) - m.A).partialPivLu().solve(m.B) + m.D)(0, 0);
-  CHECK(dc_gain == doctest::Approx(1.0).epsilon(0.03));
+  CHECK(m.state_space.D()(0, 0) == doctest::Approx(-0.0018).epsilon(0.05));
+  CHECK(m.state_space.dc_gain()(0, 0) == doctest::Approx(1.0).epsilon(0.03));
   // Fit on all 1000 samples: SLICOT 89.1 % with the estimated x0, 53 % with x0 = 0.
   CHECK(id::compare(m, u, y).fit[0] == doctest::Approx(89.1).epsilon(0.5 / 89.1));
   CHECK(id::compare(m, u, y, id::InitialState::zero).fit[0] == doctest::Approx(53.0).epsilon(0.05));
@@ -509,8 +503,7 @@ TEST_CASE("DaISy ballbeam (unstable): order 2 chosen, 76 % with x0 estimated, x0
   options.block_rows = 15;
   options.sample_time = 0.1;
   const auto m = id::identify(c.topLeftCorner(half, 1), c.topRightCorner(half, 1), options);
-  const Eigen::VectorXcd poles = Eigen::EigenSolver<MatrixXd>(m.A, false).eigenvalues();
-  CHECK(poles.cwiseAbs().maxCoeff() > 1.0);  // the README: unstable
+  CHECK(m.state_space.spectral_radius() > 1.0);  // the README: unstable
   CHECK(id::compare(m, c.bottomLeftCorner(half, 1), c.bottomRightCorner(half, 1),
                     id::InitialState::zero)
             .fit[0] < 0.0);

@@ -1,3 +1,5 @@
+#include "alloc_counter.hpp"  // first: counts every heap allocation of this executable
+
 #include "endohaptics/model/state_space.hpp"
 
 #include <doctest/doctest.h>
@@ -6,17 +8,23 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <type_traits>
+#include <utility>
 
 namespace model_state_space_test {
 
 namespace {
 
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
 using endohaptics::Error;
 using endohaptics::model::ContinuousStateSpace;
 using endohaptics::model::discretize_tustin;
 using endohaptics::model::discretize_zoh;
+using endohaptics::model::DynamicStateSpace;
 using endohaptics::model::StateSpace;
 using endohaptics::model::StepStatus;
+using endohaptics::test::allocations_during;
 
 // Entry-wise |actual - expected| <= tol, reporting the entry that fails.
 template <typename A, typename B>
@@ -420,6 +428,223 @@ TEST_CASE("float instance: zoh of the mass-spring-damper and a step response") {
   CHECK(d.output(StateSpace<2, 1, 1, float>::Input{1.0f})[0] ==
         doctest::Approx(0.25f).epsilon(1e-4));
   CHECK(d.is_stable());
+}
+
+// ---------------------------------------------------------------------------------------------
+// The dynamic form (Eigen::Dynamic sizes) and the converting constructor.
+
+namespace {
+
+// The 3-state, 2-input, 2-output model of the scipy dlsim case above, as dynamic matrices.
+DynamicStateSpace<> scipy_model_dynamic() {
+  return {MatrixXd{{0.9, 0.1, 0.0}, {-0.2, 0.8, 0.05}, {0.0, 0.1, 0.5}},
+          MatrixXd{{1.0, 0.0}, {0.0, 0.5}, {0.2, -0.3}},
+          MatrixXd{{1.0, -1.0, 0.0}, {0.0, 0.5, 2.0}}, MatrixXd{{0.0, 0.1}, {0.2, 0.0}}, 0.01};
+}
+
+}  // namespace
+
+TEST_CASE("DynamicStateSpace: sizes from the matrices, state zero of size n") {
+  const DynamicStateSpace<> model = scipy_model_dynamic();
+  static_assert(DynamicStateSpace<>::states == Eigen::Dynamic);
+  static_assert(!DynamicStateSpace<>::fixed_size && StateSpace<3, 2, 2>::fixed_size);
+  static_assert(!StateSpace<3, Eigen::Dynamic, 2>::fixed_size);
+  CHECK(model.state_size() == 3);
+  CHECK(model.input_size() == 2);
+  CHECK(model.output_size() == 2);
+  CHECK(model.state() == VectorXd::Zero(3));
+  CHECK(model.sample_time() == 0.01);
+  const StateSpace<3, 2, 2> fixed(model);
+  CHECK(fixed.state_size() == 3);  // the runtime sizes of a fixed model are its template sizes
+  CHECK(fixed.input_size() == 2);
+  CHECK(fixed.output_size() == 2);
+
+  // An autonomous dynamic model: n x 0 B, ny x 0 D, an empty input.
+  DynamicStateSpace<> autonomous(MatrixXd{{0.5}}, MatrixXd(1, 0), MatrixXd{{2.0}}, MatrixXd(1, 0),
+                                 0.1);
+  CHECK(autonomous.input_size() == 0);
+  autonomous.reset(VectorXd::Ones(1));
+  CHECK(autonomous.step(VectorXd(0)) == VectorXd::Constant(1, 2.0));
+  CHECK(autonomous.state() == VectorXd::Constant(1, 0.5));
+  CHECK(autonomous.dc_gain().rows() == 1);
+  CHECK(autonomous.dc_gain().cols() == 0);
+}
+
+TEST_CASE("DynamicStateSpace refuses matrices whose sizes disagree, naming the sizes") {
+  const MatrixXd A = MatrixXd::Identity(2, 2) * 0.5;
+  const MatrixXd B = MatrixXd::Ones(2, 2);
+  const MatrixXd C = MatrixXd::Ones(1, 2);
+  const MatrixXd D = MatrixXd::Zero(1, 2);
+  CHECK_NOTHROW(DynamicStateSpace<>(A, B, C, D, 0.02));
+  auto message = [](const MatrixXd& a, const MatrixXd& b, const MatrixXd& c, const MatrixXd& d) {
+    return message_of([&] { DynamicStateSpace<>(a, b, c, d, 0.02); });
+  };
+  CHECK(message(MatrixXd::Ones(2, 3), B, C, D) ==
+        "StateSpace: A is 2 x 3, expected n x n with n >= 1 states");
+  CHECK(message(MatrixXd(0, 0), MatrixXd(0, 2), MatrixXd(1, 0), D) ==
+        "StateSpace: A is 0 x 0, expected n x n with n >= 1 states");
+  CHECK(message(A, MatrixXd::Ones(3, 2), C, D) ==
+        "StateSpace: B is 3 x 2, expected 2 x nu (A has 2 states)");
+  CHECK(message(A, B, MatrixXd::Ones(1, 3), D) ==
+        "StateSpace: C is 1 x 3, expected ny x 2 with ny >= 1 outputs (A has 2 states)");
+  CHECK(message(A, B, MatrixXd(0, 2), MatrixXd(0, 2)) ==
+        "StateSpace: C is 0 x 2, expected ny x 2 with ny >= 1 outputs (A has 2 states)");
+  CHECK(message(A, B, C, MatrixXd::Zero(1, 1)) ==
+        "StateSpace: D is 1 x 1, expected 1 x 2 (outputs of C x inputs of B)");
+  CHECK(message(A, B, C, MatrixXd::Zero(2, 2)) ==
+        "StateSpace: D is 2 x 2, expected 1 x 2 (outputs of C x inputs of B)");
+  // Values are checked as for fixed sizes.
+  MatrixXd bad = B;
+  bad(1, 0) = std::numeric_limits<double>::infinity();
+  CHECK(message(A, bad, C, D) == "StateSpace: B(1,0) is not finite (inf)");
+  CHECK(message_of([&] { DynamicStateSpace<>(A, B, C, D, 0.0); }) ==
+        "StateSpace: sample time must be finite and > 0 s, got 0");
+  // A partly dynamic type checks the dynamic sizes against the fixed ones.
+  using Mixed = StateSpace<2, Eigen::Dynamic, 1>;
+  CHECK_NOTHROW(Mixed(Mixed::MatrixA(A), B, Mixed::MatrixC(C), D, 0.02));
+  CHECK(message_of([&] { Mixed(Mixed::MatrixA(A), B, Mixed::MatrixC(C), MatrixXd(1, 1), 0.02); }) ==
+        "StateSpace: D is 1 x 1, expected 1 x 2 (outputs of C x inputs of B)");
+}
+
+TEST_CASE(
+    "DynamicStateSpace steps like scipy dlsim and the fixed form, dc_gain and eigenvalues agree") {
+  // The numbers of the scipy case above (dlsim from x0 = [0.1, -0.2, 0.3]).
+  DynamicStateSpace<> model = scipy_model_dynamic();
+  model.reset(VectorXd{{0.1, -0.2, 0.3}});
+  StateSpace<3, 2, 2> fixed(model);
+  const MatrixXd u{{1.0, 0.5, 0.0, -1.0, 0.3, 2.0}, {0.0, -1.0, 2.0, 0.25, 0.3, -0.5}};
+  const MatrixXd y_scipy{{0.30000000000000004, 1.135, 2.4760000000000004, 1.1693750000000003,
+                          0.21405750000000015, 0.2942201250000001},
+                         {0.7, 0.6775, 0.6822499999999999, -0.9801375000000001, -0.9235925000000003,
+                          -0.12689818750000026}};
+  for (Eigen::Index k = 0; k < u.cols(); ++k) {
+    const VectorXd uk = u.col(k);
+    check_close(model.output(uk), y_scipy.col(k), 1e-14);
+    check_close(model.step(uk), y_scipy.col(k), 1e-14);
+    check_close(fixed.step(Eigen::Vector2d(uk)), y_scipy.col(k), 1e-14);
+    check_close(model.state(), fixed.state(), 1e-14);
+  }
+  check_close(model.state(), Eigen::Vector3d{2.3516347375, -0.30743746250000015, 0.4172295375},
+              1e-14);
+  // update: the checked tick, on both forms.
+  VectorXd y(2);
+  const VectorXd before = model.state();
+  CHECK(model.update(VectorXd{{std::nan(""), 0.0}}, y) ==
+        endohaptics::model::StepStatus::non_finite_input);
+  CHECK(model.state() == before);
+  CHECK(model.update(VectorXd{{0.5, 0.5}}, y) == endohaptics::model::StepStatus::ok);
+  check_close(y, fixed.step(Eigen::Vector2d{0.5, 0.5}), 1e-14);
+
+  // scipy's dc gain; the same eigenvalues (one dynamic solver serves both forms).
+  check_close(model.dc_gain(),
+              MatrixXd{{10.0, 0.10000000000000045}, {-3.56923076923077, -0.11538461538461542}},
+              1e-13);
+  check_close(model.dc_gain(), fixed.dc_gain(), 1e-14);
+  CHECK(model.eigenvalues() == Eigen::VectorXcd(fixed.eigenvalues()));
+  CHECK(model.spectral_radius() == doctest::Approx(0.8670402943301219).epsilon(1e-13));
+  CHECK(model.is_stable());
+  // The DC gain error names the state count at run time.
+  const DynamicStateSpace<> integrator(MatrixXd{{1.0, 0.0}, {0.0, 0.5}}, MatrixXd::Ones(2, 1),
+                                       MatrixXd::Ones(1, 2), MatrixXd::Zero(1, 1), 0.01);
+  CHECK(message_of([&] { (void)integrator.dc_gain(); }) ==
+        "StateSpace: DC gain undefined, I - A is singular (rank 1 of 2; A has a pole at z = 1)");
+}
+
+TEST_CASE("reset: a dynamic model refuses an x0 of the wrong size, reset() zeros") {
+  DynamicStateSpace<> model = scipy_model_dynamic();
+  static_assert(!noexcept(model.reset(std::declval<const VectorXd&>())));
+  static_assert(
+      noexcept(std::declval<StateSpace<3, 2, 2>&>().reset(std::declval<const Eigen::Vector3d&>())));
+  static_assert(noexcept(model.reset()));
+  model.reset(VectorXd{{1.0, 2.0, 3.0}});
+  CHECK(model.state() == VectorXd{{1.0, 2.0, 3.0}});
+  CHECK(message_of([&] { model.reset(VectorXd::Zero(2)); }) ==
+        "StateSpace::reset: x0 has 2 entries, the model 3 states");
+  CHECK(message_of([&] { model.reset(VectorXd::Zero(4)); }) ==
+        "StateSpace::reset: x0 has 4 entries, the model 3 states");
+  CHECK(model.state() == VectorXd{{1.0, 2.0, 3.0}});  // unchanged
+  model.reset();
+  CHECK(model.state() == VectorXd::Zero(3));
+}
+
+TEST_CASE("converting constructor: dynamic -> fixed (sizes checked), fixed -> dynamic, -> float") {
+  DynamicStateSpace<> dynamic = scipy_model_dynamic();
+  dynamic.reset(VectorXd{{0.1, -0.2, 0.3}});
+
+  const StateSpace<3, 2, 2> fixed(dynamic);
+  CHECK(fixed.A() == dynamic.A());
+  CHECK(fixed.B() == dynamic.B());
+  CHECK(fixed.C() == dynamic.C());
+  CHECK(fixed.D() == dynamic.D());
+  CHECK(fixed.sample_time() == 0.01);
+  CHECK(fixed.state() == dynamic.state());  // the current state is copied
+
+  // Wrong sizes: refused, both sizes named.
+  CHECK(message_of([&] { StateSpace<2, 2, 2>{dynamic}; }) ==
+        "StateSpace: cannot convert a model with 3 states, 2 inputs, 2 outputs into "
+        "StateSpace<2, 2, 2>");
+  CHECK(message_of([&] { StateSpace<3, 1, 2>{dynamic}; }) ==
+        "StateSpace: cannot convert a model with 3 states, 2 inputs, 2 outputs into "
+        "StateSpace<3, 1, 2>");
+  CHECK(message_of([&] { StateSpace<3, 2, 1, float>{dynamic}; }) ==
+        "StateSpace: cannot convert a model with 3 states, 2 inputs, 2 outputs into "
+        "StateSpace<3, 2, 1>");
+  CHECK(message_of([&] { StateSpace<4, Eigen::Dynamic, 2>{dynamic}; }) ==
+        "StateSpace: cannot convert a model with 3 states, 2 inputs, 2 outputs into "
+        "StateSpace<4, Dynamic, 2>");
+  // Two different fixed sizes cannot convert: that is known at compile time.
+  static_assert(!std::is_constructible_v<StateSpace<2, 2, 2>, StateSpace<3, 2, 2>>);
+  static_assert(std::is_constructible_v<StateSpace<3, 2, 2, float>, StateSpace<3, 2, 2>>);
+  static_assert(!std::is_convertible_v<DynamicStateSpace<>, StateSpace<3, 2, 2>>);  // explicit
+  // A partly dynamic target takes any size where it is dynamic.
+  const StateSpace<3, Eigen::Dynamic, 2> mixed(dynamic);
+  CHECK(mixed.input_size() == 2);
+
+  // Fixed -> dynamic -> fixed: bit-exact, state included.
+  const DynamicStateSpace<> back(fixed);
+  CHECK(back.A() == fixed.A());
+  CHECK(back.state() == fixed.state());
+  CHECK(StateSpace<3, 2, 2>(back).D() == fixed.D());
+
+  // double -> float (fixed and dynamic): rounded once, then the float model steps in float.
+  const StateSpace<3, 2, 2, float> single(dynamic);
+  CHECK(single.A() == dynamic.A().cast<float>());
+  CHECK(single.B() == dynamic.B().cast<float>());
+  CHECK(single.sample_time() == 0.01f);
+  CHECK(single.state() == dynamic.state().cast<float>());
+  const DynamicStateSpace<float> single_dynamic(fixed);
+  CHECK(single_dynamic.C() == fixed.C().cast<float>());
+  CHECK(StateSpace<3, 2, 2, double>(single).A() == single.A().cast<double>());  // float -> double
+  // An entry that overflows float is refused as a non-finite entry of the target.
+  MatrixXd huge_a = dynamic.A();
+  huge_a(0, 0) = 1e300;
+  const DynamicStateSpace<> huge(huge_a, dynamic.B(), dynamic.C(), dynamic.D(), 0.01);
+  CHECK(message_of([&] { StateSpace<3, 2, 2, float>{huge}; }) ==
+        "StateSpace: A(0,0) is not finite (inf)");
+}
+
+TEST_CASE(
+    "the fixed form converted from a dynamic one ticks without allocating, the dynamic does") {
+  const DynamicStateSpace<> dynamic = scipy_model_dynamic();
+  StateSpace<3, 2, 2> fixed(dynamic);
+  DynamicStateSpace<> configured = dynamic;
+  double sink = 0.0;
+  const long fixed_allocations = allocations_during([&] {
+    Eigen::Vector2d y;
+    for (int k = 0; k < 10000; ++k) {
+      const Eigen::Vector2d u{std::sin(0.01 * k), std::cos(0.01 * k)};
+      sink += fixed.step(u)[0];
+      if (fixed.update(u, y) == endohaptics::model::StepStatus::ok) sink += y[1];
+    }
+  });
+  CHECK(std::isfinite(sink));
+  CHECK(fixed_allocations == 0);
+  // The dynamic form is for configuration and offline use: its ticks allocate (documented).
+  const VectorXd u = VectorXd::Ones(2);
+  const long dynamic_allocations = allocations_during([&] {
+    for (int k = 0; k < 10; ++k) sink += configured.step(u)[0];
+  });
+  CHECK(dynamic_allocations >= 10);
 }
 
 }  // namespace model_state_space_test

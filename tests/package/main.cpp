@@ -21,7 +21,8 @@ int main() {
   const auto yaw = endohaptics::model::yaw_force_2016();
   const files::ModelFile file =
       files::make_model_file(yaw, {{"current", "A"}, {"velocity", "rad/s"}}, {{"force", "N"}});
-  const auto loaded = files::to_state_space<6, 2, 1>(files::model_from_json(files::to_json(file)));
+  const endohaptics::model::StateSpace<6, 2, 1> loaded(
+      files::model_from_json(files::to_json(file)).state_space);
   if (!loaded.A().isApprox(yaw.A())) return 1;
   std::printf("consumer: model file JSON round trip ok\n");
   return 0;

@@ -18,6 +18,7 @@ namespace {
 namespace id = endohaptics::identification;
 namespace wf = endohaptics::workflow;
 namespace files = endohaptics::files;
+namespace model = endohaptics::model;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 using endohaptics::Error;
@@ -39,14 +40,9 @@ struct TempFile {
 
 // x(k+1) = A x + B u, y = C x + D u with A = [1.5 -0.7; 1 0] (poles 0.75 +- 0.37i),
 // B = [1 0.5; 0 -0.3], C = [0.5 0.3], D = [0.2 0]; u random levels held 1..8 samples.
-id::SubspaceModel second_order() {
-  id::SubspaceModel g;
-  g.A = MatrixXd{{1.5, -0.7}, {1.0, 0.0}};
-  g.B = MatrixXd{{1.0, 0.5}, {0.0, -0.3}};
-  g.C = MatrixXd{{0.5, 0.3}};
-  g.D = MatrixXd{{0.2, 0.0}};
-  g.sample_time = 0.01;
-  return g;
+model::DynamicStateSpace<> second_order() {
+  return {MatrixXd{{1.5, -0.7}, {1.0, 0.0}}, MatrixXd{{1.0, 0.5}, {0.0, -0.3}},
+          MatrixXd{{0.5, 0.3}}, MatrixXd{{0.2, 0.0}}, 0.01};
 }
 
 MatrixXd held_random(Eigen::Index rows, Eigen::Index cols, unsigned seed) {
@@ -138,7 +134,7 @@ TEST_CASE("preprocessing settings round-trip through their text, bad text throws
           (void)wf::offset_mode_from_string("max");
         }).find("unknown offset mode 'max'") != std::string::npos);
 
-  files::ModelFile m;
+  files::ModelFile m = wf::preset_model("yaw2016");
   m.provenance.notes = "first line\npreprocessing: " + wf::describe(p) + "\ntool: test";
   REQUIRE(wf::recorded_preprocessing(m).has_value());
   CHECK(wf::recorded_preprocessing(m)->cutoff == 12.5);
@@ -243,7 +239,7 @@ TEST_CASE("prepare_log: named columns, resampling, gap split, offsets, and its e
 }
 
 TEST_CASE("identify_logs recovers a known 2nd-order system from two CSVs, replay fits 100 %") {
-  const id::SubspaceModel g = second_order();
+  const auto g = second_order();
   std::vector<std::unique_ptr<TempFile>> files;
   std::vector<wf::PreparedLog> logs;
   const wf::LogSelection sel = csv_selection({"u1", "u2"}, {"y"});
@@ -274,7 +270,10 @@ TEST_CASE("identify_logs recovers a known 2nd-order system from two CSVs, replay
   CHECK(model.provenance.files.size() == 2);
   CHECK(model.provenance.fit_percent.at(0) > 99.9);
   CHECK_FALSE(model.is_hammerstein_wiener());
-  CHECK(model.D(0, 0) == doctest::Approx(0.2).epsilon(1e-6));
+  CHECK(model.state_space.D()(0, 0) == doctest::Approx(0.2).epsilon(1e-6));
+  // The file holds the chosen candidate's identified model itself.
+  CHECK(model.state_space.A() == r.chosen().linear.state_space.A());
+  CHECK(model.state_space.state() == r.chosen().linear.initial_states[0]);
 
   // Replay on a third experiment: 100 % with x0 estimated; with x0 = 0 too (the data start at
   // rest); a non-zero initial state is recovered by the estimate only.
@@ -296,8 +295,9 @@ TEST_CASE("identify_logs recovers a known 2nd-order system from two CSVs, replay
 
   // A model with other input counts refuses the log.
   files::ModelFile one_input = model;
-  one_input.B = model.B.leftCols(1);
-  one_input.D = model.D.leftCols(1);
+  const auto& ss = model.state_space;
+  one_input.state_space = model::DynamicStateSpace<>(ss.A(), ss.B().leftCols(1), ss.C(),
+                                                     ss.D().leftCols(1), ss.sample_time());
   one_input.inputs.resize(1);
   CHECK(message_of([&] {
           (void)wf::compare_log(one_input, v);
@@ -306,13 +306,18 @@ TEST_CASE("identify_logs recovers a known 2nd-order system from two CSVs, replay
 }
 
 TEST_CASE("best_candidate: highest mean fit, among the stable ones when there are any") {
-  std::vector<wf::CandidateModel> c(3);
-  c[0].mean_fit = 60.0;
-  c[0].spectral_radius = 0.97;
-  c[1].mean_fit = 73.0;
-  c[1].spectral_radius = 1.0001;  // a fold of the clamp-hits study chose such a model
-  c[2].mean_fit = 65.0;
-  c[2].spectral_radius = 0.99;
+  // best_candidate reads only the scores; every candidate holds the same placeholder model.
+  const auto scored = [](double mean_fit, double spectral_radius) {
+    const model::DynamicStateSpace<> g = second_order();
+    return wf::CandidateModel{
+        .method = "test",
+        .model = files::make_model_file(g, {{"u1", ""}, {"u2", ""}}, {{"y", ""}}),
+        .linear = {.state_space = g},
+        .mean_fit = mean_fit,
+        .spectral_radius = spectral_radius};
+  };
+  // A fold of the clamp-hits study chose a model like c[1].
+  std::vector<wf::CandidateModel> c{scored(60.0, 0.97), scored(73.0, 1.0001), scored(65.0, 0.99)};
   CHECK(wf::best_candidate(c, true) == 2);
   CHECK(wf::best_candidate(c, false) == 1);
   c[0].spectral_radius = c[2].spectral_radius = 1.2;  // none stable: the best fit anyway
@@ -334,11 +339,11 @@ TEST_CASE("static gain baseline: y = D u + c by least squares, c as a constant s
       wf::identify_logs(logs, {{"u1", ""}, {"u2", ""}}, {{"y", ""}}, options);
   const files::ModelFile& model = r.chosen().model;
   CHECK(r.chosen().method == "static");
-  CHECK(model.D(0, 0) == doctest::Approx(2.0));
-  CHECK(model.D(0, 1) == doctest::Approx(-1.0));
-  CHECK(model.x0[0] == doctest::Approx(0.5));
-  CHECK(model.A(0, 0) == 1.0);
-  CHECK(model.B.cwiseAbs().maxCoeff() == 0.0);
+  CHECK(model.state_space.D()(0, 0) == doctest::Approx(2.0));
+  CHECK(model.state_space.D()(0, 1) == doctest::Approx(-1.0));
+  CHECK(model.state_space.state()[0] == doctest::Approx(0.5));
+  CHECK(model.state_space.A()(0, 0) == 1.0);
+  CHECK(model.state_space.B().cwiseAbs().maxCoeff() == 0.0);
   CHECK(wf::compare_log(model, logs[0], wf::InitialStateMode::stored).fit[0] > 99.9999);
   CHECK(wf::compare_log(model, logs[0], wf::InitialStateMode::zero).rmse[0] ==
         doctest::Approx(0.5));  // the constant is lost with x0 = 0
@@ -350,10 +355,10 @@ TEST_CASE("static gain baseline: y = D u + c by least squares, c as a constant s
 
 TEST_CASE("dead zones: a fixed width is applied and stored, auto finds a known one") {
   // 1-input system behind a dead zone of +-0.3.
-  id::SubspaceModel g = second_order();
-  g.B = g.B.leftCols(1).eval();
-  g.D = MatrixXd::Zero(1, 1);
-  const std::vector<id::StaticMap> truth{{id::StaticMapKind::deadzone, -0.3, 0.3}};
+  const model::DynamicStateSpace<> two_inputs = second_order();
+  const model::DynamicStateSpace<> g(two_inputs.A(), two_inputs.B().leftCols(1), two_inputs.C(),
+                                     MatrixXd::Zero(1, 1), two_inputs.sample_time());
+  const std::vector<model::StaticMap> truth{{model::StaticMapKind::deadzone, -0.3, 0.3}};
   const MatrixXd u = held_random(1500, 1, 3);
   MatrixXd m(1500, 2);
   m << u, id::simulate(g, id::apply_maps(truth, u), VectorXd::Zero(2));
@@ -382,14 +387,14 @@ TEST_CASE("dead zones: a fixed width is applied and stored, auto finds a known o
 
 TEST_CASE("presets by name carry appendix C's matrices and signal names") {
   const files::ModelFile yaw = wf::preset_model("yaw2016");
-  CHECK(yaw.A.rows() == 6);
-  CHECK(yaw.A(0, 0) == 0.9745);   // eq. C.1, first entry
-  CHECK(yaw.B(2, 0) == 12.9892);  // eq. C.2
-  CHECK(yaw.sample_time == 0.02);
+  CHECK(yaw.state_space.state_size() == 6);
+  CHECK(yaw.state_space.A()(0, 0) == 0.9745);   // eq. C.1, first entry
+  CHECK(yaw.state_space.B()(2, 0) == 12.9892);  // eq. C.2
+  CHECK(yaw.state_space.sample_time() == 0.02);
   CHECK(yaw.inputs.at(1).name == "velocity");
   CHECK(yaw.outputs.at(0).name == "force");
   const files::ModelFile pitch = wf::preset_model("pitch2016");
-  CHECK(pitch.B(0, 0) == 27203.0);  // eq. C.5, 2.7203 x 10^4
+  CHECK(pitch.state_space.B()(0, 0) == 27203.0);  // eq. C.5, 2.7203 x 10^4
   CHECK(message_of([] { (void)wf::preset_model("roll"); }).find("unknown preset 'roll'") !=
         std::string::npos);
 }

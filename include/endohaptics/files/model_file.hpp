@@ -3,7 +3,9 @@
 //! Hammerstein-Wiener model (figure 4.1) with dead-zone/saturation breakpoints, sample time in s,
 //! input/output names and units, initial state and provenance (method, order, files, fit, date).
 //! Loading validates every field and throws Error naming the file, the field and the value.
-//! Format: docs/models/subspace.md, "Model files".
+//! Format: docs/models/subspace.md, "Model files". Includes only core/ and model/ (a program
+//! that loads a model does not compile identification); the conversions from identification
+//! results are in files/identified_model_file.hpp.
 #pragma once
 
 #include <Eigen/Core>
@@ -13,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -20,10 +23,9 @@
 #include <vector>
 
 #include "endohaptics/core/error.hpp"
-#include "endohaptics/identification/hammerstein_wiener_fit.hpp"
-#include "endohaptics/identification/subspace.hpp"
 #include "endohaptics/model/hammerstein_wiener.hpp"
 #include "endohaptics/model/state_space.hpp"
+#include "endohaptics/model/static_map.hpp"
 #include "endohaptics/model/static_nonlinearity.hpp"
 
 namespace endohaptics::files {
@@ -36,30 +38,29 @@ struct SignalInfo {
 
 //! Where a model came from.
 struct ModelProvenance {
-  std::string method;               //!< e.g. "moesp", "n4sid", "cva", "worksheet appendix C"
-  int order = 0;                    //!< model order n
-  int block_rows = 0;               //!< subspace horizon s (0: not applicable)
-  std::vector<std::string> files;   //!< data files it was identified from
-  std::vector<double> fit_percent;  //!< NRMSE fit per output, %, on the data named in `notes`
-  std::string date;                 //!< ISO 8601 (UTC) date of identification
-  std::string notes;                //!< free text
+  std::string method{};               //!< e.g. "moesp", "n4sid", "cva", "worksheet appendix C"
+  int order = 0;                      //!< model order n
+  int block_rows = 0;                 //!< subspace horizon s (0: not applicable)
+  std::vector<std::string> files{};   //!< data files it was identified from
+  std::vector<double> fit_percent{};  //!< NRMSE fit per output, %, on the data named in `notes`
+  std::string date{};                 //!< ISO 8601 (UTC) date of identification
+  std::string notes{};                //!< free text
 };
 
-//! The content of a model file: dynamic sizes, validated on load and save.
+//! The content of a model file, validated on load and save. The model (or a Hammerstein-Wiener
+//! model's linear block) is the library's one linear-model type, `model::DynamicStateSpace<>`,
+//! whose state is the file's x0; `model::StateSpace<Nx, Nu, Ny>(file.state_space)` gives the
+//! fixed-size real-time model. An aggregate without a default constructor (a StateSpace has no
+//! empty state): `model_from_json`, `make_model_file` or `ModelFile{.state_space = ...}`.
 struct ModelFile {
   static constexpr int format_version = 1;  //!< "version" written and accepted
-  double sample_time = 0.0;                 //!< s, > 0
-  Eigen::MatrixXd A;                        //!< n x n
-  Eigen::MatrixXd B;                        //!< n x nu
-  Eigen::MatrixXd C;                        //!< ny x n
-  Eigen::MatrixXd D;                        //!< ny x nu
-  Eigen::VectorXd x0;                       //!< n, initial state (zero when not identified)
-  std::vector<SignalInfo> inputs;           //!< nu entries
-  std::vector<SignalInfo> outputs;          //!< ny entries
+  model::DynamicStateSpace<> state_space;   //!< A, B, C, D, sample time (s); state() = x0
+  std::vector<SignalInfo> inputs{};         //!< nu entries
+  std::vector<SignalInfo> outputs{};        //!< ny entries
   //! Hammerstein-Wiener maps, nu and ny entries; both empty for a plain state-space model.
-  std::vector<identification::StaticMap> input_nonlinearity;
-  std::vector<identification::StaticMap> output_nonlinearity;  //!< see input_nonlinearity
-  ModelProvenance provenance;                                  //!< where it came from
+  std::vector<model::StaticMap> input_nonlinearity{};
+  std::vector<model::StaticMap> output_nonlinearity{};  //!< see input_nonlinearity
+  ModelProvenance provenance{};                         //!< where it came from
 
   //! True when the file describes a Hammerstein-Wiener model ("kind": "hammerstein_wiener").
   [[nodiscard]] bool is_hammerstein_wiener() const noexcept {
@@ -69,49 +70,39 @@ struct ModelFile {
 
 namespace detail::model_file {
 
-using identification::StaticMap;
-using identification::StaticMapKind;
+using model::StaticMap;
+using model::StaticMapKind;
 using nlohmann::json;
 
 [[noreturn]] inline void fail(const std::string& message) { ENDOHAPTICS_THROW(Error(message)); }
 
 using endohaptics::detail::format_number;
 
-//! Throws unless sizes agree and every number is finite; `where` prefixes the message.
+//! Throws unless the signal and map counts agree with the model's sizes and every number is
+//! finite (A, B, C, D and the sample time are checked by the StateSpace itself); `where`
+//! prefixes the message.
 inline void validate(const ModelFile& m, const std::string& where) {
-  const auto n = m.A.rows();
-  const auto nu = static_cast<Eigen::Index>(m.inputs.size());
-  const auto ny = static_cast<Eigen::Index>(m.outputs.size());
-  auto size = [&](const char* field, const Eigen::MatrixXd& M, Eigen::Index rows, Eigen::Index cols,
-                  const char* row_name, const char* col_name) {
-    if (M.rows() != rows || M.cols() != cols) {
-      fail(where + ": field \"" + field + "\" is " + std::to_string(M.rows()) + " x " +
-           std::to_string(M.cols()) + ", expected " + std::to_string(rows) + " x " +
-           std::to_string(cols) + " (" + row_name + " x " + col_name + ")");
-    }
-    for (Eigen::Index j = 0; j < M.cols(); ++j) {
-      for (Eigen::Index i = 0; i < M.rows(); ++i) {
-        if (!std::isfinite(M(i, j))) {
-          fail(where + ": field \"" + field + "[" + std::to_string(i) + "][" + std::to_string(j) +
-               "]\" is not finite (" + format_number(M(i, j)) + ")");
-        }
-      }
+  const model::DynamicStateSpace<>& ss = m.state_space;
+  const auto nu = static_cast<std::size_t>(ss.input_size());
+  const auto ny = static_cast<std::size_t>(ss.output_size());
+  auto signals = [&](const char* field, const std::vector<SignalInfo>& v, std::size_t count,
+                     const char* what) {
+    if (v.size() != count) {
+      fail(where + ": field \"" + field + "\" has " + std::to_string(v.size()) +
+           " entries, the model has " + std::to_string(count) + " " + what);
     }
   };
-  if (n < 1) fail(where + ": field \"A\" must have at least one state, got 0");
-  if (!std::isfinite(m.sample_time) || !(m.sample_time > 0.0)) {
-    fail(where + ": field \"sample_time_s\" must be finite and > 0, got " +
-         format_number(m.sample_time));
+  signals("inputs", m.inputs, nu, "inputs (columns of B)");
+  signals("outputs", m.outputs, ny, "outputs (rows of C)");
+  for (Eigen::Index i = 0; i < ss.state().size(); ++i) {
+    if (!std::isfinite(ss.state()[i])) {
+      fail(where + ": field \"x0[" + std::to_string(i) + "]\" is not finite (" +
+           format_number(ss.state()[i]) + ")");
+    }
   }
-  if (ny < 1) fail(where + ": field \"outputs\" must name at least one output");
-  size("A", m.A, n, n, "states", "states");
-  size("B", m.B, n, nu, "states", "inputs");
-  size("C", m.C, ny, n, "outputs", "states");
-  size("D", m.D, ny, nu, "outputs", "inputs");
-  size("x0", m.x0, n, 1, "states", "1");
-  auto maps = [&](const char* field, const std::vector<StaticMap>& v, Eigen::Index count,
+  auto maps = [&](const char* field, const std::vector<StaticMap>& v, std::size_t count,
                   const char* what) {
-    if (static_cast<Eigen::Index>(v.size()) != count) {
+    if (v.size() != count) {
       fail(where + ": field \"" + field + "\" has " + std::to_string(v.size()) +
            " entries, expected " + std::to_string(count) + " (" + what + ")");
     }
@@ -135,6 +126,21 @@ inline void validate(const ModelFile& m, const std::string& where) {
   for (double f : m.provenance.fit_percent) {
     if (std::isnan(f)) fail(where + ": field \"provenance.fit_percent\" holds NaN");
   }
+}
+
+//! Runs f(), rethrowing an Error with `prefix` in front of its message.
+template <typename F>
+auto with_context(const std::string& prefix, F&& f) -> decltype(f()) {
+#if defined(__cpp_exceptions)
+  try {
+    return f();
+  } catch (const Error& e) {
+    fail(prefix + ": " + e.what());
+  }
+#else
+  (void)prefix;
+  return f();
+#endif
 }
 
 inline json matrix_to_json(const Eigen::MatrixXd& M) {
@@ -198,6 +204,9 @@ inline Eigen::MatrixXd matrix_from_json(const json& object, const char* key, Eig
     for (Eigen::Index j = 0; j < cols; ++j) {
       const std::string entry = row_field + "[" + std::to_string(j) + "]";
       M(i, j) = number(row[static_cast<std::size_t>(j)], where, entry);
+      if (!std::isfinite(M(i, j))) {
+        fail(where + ": field \"" + entry + "\" is not finite (" + format_number(M(i, j)) + ")");
+      }
     }
   }
   return M;
@@ -218,7 +227,7 @@ inline std::vector<SignalInfo> signals_from_json(const json& object, const char*
 }
 
 inline json map_to_json(const StaticMap& m) {
-  json j{{"type", identification::to_string(m.kind)}};
+  json j{{"type", model::to_string(m.kind)}};
   if (m.kind != StaticMapKind::none) {
     j["lower"] = m.lower;
     j["upper"] = m.upper;
@@ -235,37 +244,19 @@ inline std::vector<StaticMap> maps_from_json(const json& object, const char* key
     const std::string name = std::string(key) + "[" + std::to_string(i) + "]";
     const std::string type =
         text(field(value[i], "type", where + ": " + name), where, name + ".type");
-    StaticMap m;
-    if (type == "none") {
-      m.kind = StaticMapKind::none;
-    } else if (type == "deadzone" || type == "saturation") {
-      m.kind = type == "deadzone" ? StaticMapKind::deadzone : StaticMapKind::saturation;
-      m.lower = number(field(value[i], "lower", where + ": " + name), where, name + ".lower");
-      m.upper = number(field(value[i], "upper", where + ": " + name), where, name + ".upper");
-    } else {
+    const std::optional<StaticMapKind> kind = model::static_map_kind_from_string(type);
+    if (!kind) {
       fail(where + ": field \"" + name + ".type\" is \"" + type +
            "\", expected none, deadzone or saturation");
+    }
+    StaticMap m{*kind, 0.0, 0.0};
+    if (m.kind != StaticMapKind::none) {
+      m.lower = number(field(value[i], "lower", where + ": " + name), where, name + ".lower");
+      m.upper = number(field(value[i], "upper", where + ": " + name), where, name + ".upper");
     }
     out.push_back(m);
   }
   return out;
-}
-
-//! One fixed-size channel (Deadzone / Saturation / Identity) as a StaticMap.
-template <typename NL>
-StaticMap map_of(const NL& channel) {
-  using Scalar = typename NL::ScalarType;
-  if constexpr (std::is_same_v<NL, model::Deadzone<Scalar>>) {
-    return {StaticMapKind::deadzone, static_cast<double>(channel.lower()),
-            static_cast<double>(channel.upper())};
-  } else if constexpr (std::is_same_v<NL, model::Saturation<Scalar>>) {
-    return {StaticMapKind::saturation, static_cast<double>(channel.lower()),
-            static_cast<double>(channel.upper())};
-  } else {
-    static_assert(std::is_same_v<NL, model::Identity<Scalar>>,
-                  "model files store Deadzone, Saturation or Identity channels");
-    return {};
-  }
 }
 
 }  // namespace detail::model_file
@@ -289,8 +280,9 @@ StaticMap map_of(const NL& channel) {
   j["format"] = "endohaptics-model";
   j["version"] = ModelFile::format_version;
   j["kind"] = m.is_hammerstein_wiener() ? "hammerstein_wiener" : "state_space";
-  j["sample_time_s"] = m.sample_time;
-  j["states"] = m.A.rows();
+  const model::DynamicStateSpace<>& ss = m.state_space;
+  j["sample_time_s"] = ss.sample_time();
+  j["states"] = ss.state_size();
   for (const char* key : {"inputs", "outputs"}) {
     nlohmann::json signals = nlohmann::json::array();
     for (const SignalInfo& s : std::string_view(key) == "inputs" ? m.inputs : m.outputs) {
@@ -298,11 +290,11 @@ StaticMap map_of(const NL& channel) {
     }
     j[key] = std::move(signals);
   }
-  j["A"] = mf::matrix_to_json(m.A);
-  j["B"] = mf::matrix_to_json(m.B);
-  j["C"] = mf::matrix_to_json(m.C);
-  j["D"] = mf::matrix_to_json(m.D);
-  j["x0"] = std::vector<double>(m.x0.data(), m.x0.data() + m.x0.size());
+  j["A"] = mf::matrix_to_json(ss.A());
+  j["B"] = mf::matrix_to_json(ss.B());
+  j["C"] = mf::matrix_to_json(ss.C());
+  j["D"] = mf::matrix_to_json(ss.D());
+  j["x0"] = std::vector<double>(ss.state().data(), ss.state().data() + ss.state().size());
   if (m.is_hammerstein_wiener()) {
     j["input_nonlinearity"] = nlohmann::json::array();
     for (const auto& map : m.input_nonlinearity)
@@ -345,27 +337,38 @@ StaticMap map_of(const NL& channel) {
     mf::fail(where + ": field \"kind\" is \"" + kind +
              "\", expected \"state_space\" or \"hammerstein_wiener\"");
   }
-  ModelFile m;
-  m.sample_time = mf::number(mf::field(j, "sample_time_s", where), where, "sample_time_s");
+  const double sample_time =
+      mf::number(mf::field(j, "sample_time_s", where), where, "sample_time_s");
+  if (!std::isfinite(sample_time) || !(sample_time > 0.0)) {
+    mf::fail(where + ": field \"sample_time_s\" must be finite and > 0, got " +
+             mf::format_number(sample_time));
+  }
   const int n = mf::integer(mf::field(j, "states", where), where, "states");
   if (n < 1) mf::fail(where + ": field \"states\" must be >= 1, got " + std::to_string(n));
-  m.inputs = mf::signals_from_json(j, "inputs", where);
-  m.outputs = mf::signals_from_json(j, "outputs", where);
-  const auto nu = static_cast<Eigen::Index>(m.inputs.size());
-  const auto ny = static_cast<Eigen::Index>(m.outputs.size());
-  m.A = mf::matrix_from_json(j, "A", n, n, "states", "states", where);
-  m.B = mf::matrix_from_json(j, "B", n, nu, "states", "inputs", where);
-  m.C = mf::matrix_from_json(j, "C", ny, n, "outputs", "states", where);
-  m.D = mf::matrix_from_json(j, "D", ny, nu, "outputs", "inputs", where);
+  std::vector<SignalInfo> inputs = mf::signals_from_json(j, "inputs", where);
+  std::vector<SignalInfo> outputs = mf::signals_from_json(j, "outputs", where);
+  if (outputs.empty()) mf::fail(where + ": field \"outputs\" must name at least one output");
+  const auto nu = static_cast<Eigen::Index>(inputs.size());
+  const auto ny = static_cast<Eigen::Index>(outputs.size());
+  const Eigen::MatrixXd A = mf::matrix_from_json(j, "A", n, n, "states", "states", where);
+  const Eigen::MatrixXd B = mf::matrix_from_json(j, "B", n, nu, "states", "inputs", where);
+  const Eigen::MatrixXd C = mf::matrix_from_json(j, "C", ny, n, "outputs", "states", where);
+  const Eigen::MatrixXd D = mf::matrix_from_json(j, "D", ny, nu, "outputs", "inputs", where);
   const auto& x0 = mf::field(j, "x0", where);
   if (!x0.is_array() || static_cast<int>(x0.size()) != n) {
     mf::fail(where + ": field \"x0\" must be an array of " + std::to_string(n) +
              " numbers (states), got " + x0.dump());
   }
-  m.x0.resize(n);
+  Eigen::VectorXd state(n);
   for (int i = 0; i < n; ++i) {
-    m.x0[i] = mf::number(x0[static_cast<std::size_t>(i)], where, "x0[" + std::to_string(i) + "]");
+    state[i] = mf::number(x0[static_cast<std::size_t>(i)], where, "x0[" + std::to_string(i) + "]");
   }
+  // Sizes and values are checked above, field by field; the StateSpace checks them again.
+  ModelFile m{.state_space = mf::with_context(
+                  where, [&] { return model::DynamicStateSpace<>(A, B, C, D, sample_time); }),
+              .inputs = std::move(inputs),
+              .outputs = std::move(outputs)};
+  m.state_space.reset(state);
   if (kind == "hammerstein_wiener") {
     m.input_nonlinearity = mf::maps_from_json(j, "input_nonlinearity", where);
     m.output_nonlinearity = mf::maps_from_json(j, "output_nonlinearity", where);
@@ -434,55 +437,22 @@ inline void save_model(const std::filesystem::path& path, const ModelFile& model
   return model_from_json(j, path.string());
 }
 
-//! An identified SubspaceModel with signal names/units and provenance (method, order and
-//! block rows are filled in from the model; date today if empty).
-[[nodiscard]] inline ModelFile make_model_file(const identification::SubspaceModel& m,
-                                               std::vector<SignalInfo> inputs,
-                                               std::vector<SignalInfo> outputs,
-                                               ModelProvenance provenance = {}) {
-  ModelFile f;
-  f.sample_time = m.sample_time;
-  f.A = m.A;
-  f.B = m.B;
-  f.C = m.C;
-  f.D = m.D;
-  f.x0 = m.x0.size() == m.A.rows() ? m.x0 : Eigen::VectorXd(Eigen::VectorXd::Zero(m.A.rows()));
-  f.inputs = std::move(inputs);
-  f.outputs = std::move(outputs);
-  f.provenance = std::move(provenance);
-  if (f.provenance.method.empty()) f.provenance.method = identification::to_string(m.weighting);
-  f.provenance.order = m.order;
-  f.provenance.block_rows = m.block_rows;
-  if (f.provenance.date.empty()) f.provenance.date = utc_date_today();
-  detail::model_file::validate(f, "make_model_file");
-  return f;
-}
-
-//! A fitted Hammerstein-Wiener model (maps included) with names, units and provenance.
-[[nodiscard]] inline ModelFile make_model_file(const identification::HammersteinWienerFit& hw,
-                                               std::vector<SignalInfo> inputs,
-                                               std::vector<SignalInfo> outputs,
-                                               ModelProvenance provenance = {}) {
-  if (provenance.fit_percent.empty()) {
-    provenance.fit_percent.assign(hw.fit.data(), hw.fit.data() + hw.fit.size());
-  }
-  ModelFile f =
-      make_model_file(hw.linear, std::move(inputs), std::move(outputs), std::move(provenance));
-  f.input_nonlinearity = hw.input;
-  f.output_nonlinearity = hw.output;
-  detail::model_file::validate(f, "make_model_file");
-  return f;
-}
-
-//! A fixed-size StateSpace (x0 = its current state) with names, units and provenance.
+//! A StateSpace of any sizes (x0 = its current state) with names, units and provenance (order
+//! filled in from the model; date today if empty). Throws Error when the signal counts differ
+//! from the model's sizes or a number is not finite.
 template <int Nx, int Nu, int Ny, typename Scalar>
 [[nodiscard]] ModelFile make_model_file(const model::StateSpace<Nx, Nu, Ny, Scalar>& ss,
                                         std::vector<SignalInfo> inputs,
                                         std::vector<SignalInfo> outputs,
                                         ModelProvenance provenance = {}) {
-  identification::SubspaceModel m = identification::to_subspace_model(ss);
-  m.block_rows = provenance.block_rows;
-  return make_model_file(m, std::move(inputs), std::move(outputs), std::move(provenance));
+  ModelFile f{.state_space = model::DynamicStateSpace<>(ss),
+              .inputs = std::move(inputs),
+              .outputs = std::move(outputs),
+              .provenance = std::move(provenance)};
+  f.provenance.order = f.state_space.state_size();
+  if (f.provenance.date.empty()) f.provenance.date = utc_date_today();
+  detail::model_file::validate(f, "make_model_file");
+  return f;
 }
 
 //! A fixed-size HammersteinWiener whose maps are PerChannel Deadzone/Saturation/Identity.
@@ -495,74 +465,45 @@ template <typename Linear, typename InputNL, int Nu, typename OutputNL, int Ny>
   ModelFile f =
       make_model_file(hw.linear(), std::move(inputs), std::move(outputs), std::move(provenance));
   for (int i = 0; i < Nu; ++i) {
-    f.input_nonlinearity.push_back(detail::model_file::map_of(hw.input_nonlinearity().channel(i)));
+    f.input_nonlinearity.push_back(model::to_static_map(hw.input_nonlinearity().channel(i)));
   }
   for (int i = 0; i < Ny; ++i) {
-    f.output_nonlinearity.push_back(
-        detail::model_file::map_of(hw.output_nonlinearity().channel(i)));
+    f.output_nonlinearity.push_back(model::to_static_map(hw.output_nonlinearity().channel(i)));
   }
+  detail::model_file::validate(f, "make_model_file");
   return f;
 }
 
-//! The file's linear block as StateSpace<Nx, Nu, Ny, Scalar> starting from x0. Throws Error
-//! when the file's sizes differ (the message gives both).
-template <int Nx, int Nu, int Ny, typename Scalar = double>
-[[nodiscard]] model::StateSpace<Nx, Nu, Ny, Scalar> to_state_space(
-    const ModelFile& f, const std::string& source = "model") {
-  identification::SubspaceModel m;
-  m.A = f.A;
-  m.B = f.B;
-  m.C = f.C;
-  m.D = f.D;
-  m.x0 = f.x0;
-  m.sample_time = f.sample_time;
-#if defined(__cpp_exceptions)
-  try {
-    return identification::to_state_space<Nx, Nu, Ny, Scalar>(m);
-  } catch (const Error& e) {
-    detail::model_file::fail("model file " + source + ": " + e.what());
-  }
-#else
-  return identification::to_state_space<Nx, Nu, Ny, Scalar>(m);
-#endif
-}
-
 //! Loads a state-space model file into the fixed-size type (a Hammerstein-Wiener file's
-//! linear block). Throws Error as load_model, or when the sizes differ from Nx, Nu, Ny.
+//! linear block), starting from the file's x0: StateSpace's converting constructor on
+//! `load_model(path).state_space`, its message prefixed with the path. Throws Error as
+//! load_model, or when the sizes differ from Nx, Nu, Ny.
 template <int Nx, int Nu, int Ny, typename Scalar = double>
 [[nodiscard]] model::StateSpace<Nx, Nu, Ny, Scalar> load_state_space(
     const std::filesystem::path& path) {
-  return to_state_space<Nx, Nu, Ny, Scalar>(load_model(path), path.string());
+  const ModelFile f = load_model(path);
+  return detail::model_file::with_context("model file " + path.string(), [&] {
+    return model::StateSpace<Nx, Nu, Ny, Scalar>(f.state_space);
+  });
 }
 
 //! Loads a Hammerstein-Wiener model file into HammersteinWiener<StateSpace<Nx, Nu, Ny>,
 //! PerChannel<InputNL, Nu>, PerChannel<OutputNL, Ny>> (default: dead zones in, identity out,
-//! the type of model::YawForceHW2016 for 6, 2, 1). A plain state-space file gets zero-width
-//! dead zones. Throws Error as load_model, on other sizes, or maps the types cannot hold.
+//! the type of model::YawForceHW2016 for 6, 2, 1) with model::to_hammerstein_wiener. A plain
+//! state-space file gets zero-width dead zones. Throws Error as load_model, on other sizes, or
+//! maps the types cannot hold (the message prefixed with the path).
 template <int Nx, int Nu, int Ny, typename Scalar = double,
           typename InputNL = model::Deadzone<Scalar>, typename OutputNL = model::Identity<Scalar>>
 [[nodiscard]] auto load_hammerstein_wiener(const std::filesystem::path& path) {
   const ModelFile f = load_model(path);
-  identification::HammersteinWienerFit hw;
-  hw.linear.A = f.A;
-  hw.linear.B = f.B;
-  hw.linear.C = f.C;
-  hw.linear.D = f.D;
-  hw.linear.x0 = f.x0;
-  hw.linear.sample_time = f.sample_time;
-  hw.input = f.input_nonlinearity;
-  hw.output = f.output_nonlinearity;
-  if (hw.input.empty()) hw.input.assign(f.inputs.size(), {});
-  if (hw.output.empty()) hw.output.assign(f.outputs.size(), {});
-#if defined(__cpp_exceptions)
-  try {
-    return identification::to_hammerstein_wiener<Nx, Nu, Ny, Scalar, InputNL, OutputNL>(hw);
-  } catch (const Error& e) {
-    detail::model_file::fail("model file " + path.string() + ": " + e.what());
-  }
-#else
-  return identification::to_hammerstein_wiener<Nx, Nu, Ny, Scalar, InputNL, OutputNL>(hw);
-#endif
+  std::vector<model::StaticMap> input = f.input_nonlinearity;
+  std::vector<model::StaticMap> output = f.output_nonlinearity;
+  if (input.empty()) input.assign(f.inputs.size(), {});
+  if (output.empty()) output.assign(f.outputs.size(), {});
+  return detail::model_file::with_context("model file " + path.string(), [&] {
+    return model::to_hammerstein_wiener<Nx, Nu, Ny, Scalar, InputNL, OutputNL>(f.state_space, input,
+                                                                               output);
+  });
 }
 
 }  // namespace endohaptics::files

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -24,53 +25,15 @@
 #include "endohaptics/identification/subspace.hpp"
 #include "endohaptics/model/hammerstein_wiener.hpp"
 #include "endohaptics/model/state_space.hpp"
+#include "endohaptics/model/static_map.hpp"
 #include "endohaptics/model/static_nonlinearity.hpp"
 
 namespace endohaptics::identification {
 
-//! A static map on one channel, by breakpoints (model::Deadzone / model::Saturation).
-enum class StaticMapKind : std::uint8_t {
-  none = 0,    //!< y = u
-  deadzone,    //!< 0 on [lower, upper], u - upper above, u - lower below
-  saturation,  //!< clamp(u, lower, upper)
-};
-
-//! Lower-case name ("none", "deadzone", "saturation").
-[[nodiscard]] constexpr std::string_view to_string(StaticMapKind kind) noexcept {
-  switch (kind) {
-    case StaticMapKind::none:
-      return "none";
-    case StaticMapKind::deadzone:
-      return "deadzone";
-    case StaticMapKind::saturation:
-      return "saturation";
-  }
-  return "unknown";
-}
-
-//! One channel's static map; lower <= upper (ignored for `none`).
-struct StaticMap {
-  StaticMapKind kind = StaticMapKind::none;  //!< which map
-  double lower = 0.0;                        //!< lower breakpoint / limit, signal units
-  double upper = 0.0;                        //!< upper breakpoint / limit, signal units
-
-  //! The map applied to one value (NaN stays NaN).
-  [[nodiscard]] double apply(double u) const noexcept {
-    switch (kind) {
-      case StaticMapKind::deadzone:
-        if (u > upper) return u - upper;
-        if (u < lower) return u - lower;
-        return std::isnan(u) ? u : 0.0;
-      case StaticMapKind::saturation:
-        if (u > upper) return upper;
-        if (u < lower) return lower;
-        return u;
-      case StaticMapKind::none:
-        return u;
-    }
-    return u;
-  }
-};
+// The description of a static map lives in the model layer (model/static_map.hpp), where model
+// files and the real-time conversions read it too.
+using model::StaticMap;
+using model::StaticMapKind;
 
 //! Options of `fit_hammerstein_wiener`.
 struct HammersteinWienerFitOptions {
@@ -89,12 +52,13 @@ struct HammersteinWienerFitOptions {
 };
 
 //! Result: the linear block, the input and output maps, and the fit on the estimation data.
+//! Like SubspaceModel, an aggregate built complete (`fit_hammerstein_wiener`).
 struct HammersteinWienerFit {
-  SubspaceModel linear;           //!< G, identified from f(u)
-  std::vector<StaticMap> input;   //!< f, one per input
-  std::vector<StaticMap> output;  //!< g, one per output (kind none when not fitted)
-  Eigen::VectorXd fit;            //!< NRMSE fit per output on the estimation data, %
-  int evaluations = 0;            //!< subspace refits performed
+  SubspaceModel linear;             //!< G, identified from f(u)
+  std::vector<StaticMap> input{};   //!< f, one per input
+  std::vector<StaticMap> output{};  //!< g, one per output (kind none when not fitted)
+  Eigen::VectorXd fit{};            //!< NRMSE fit per output on the estimation data, %
+  int evaluations = 0;              //!< subspace refits performed
 };
 
 //! u (N x nu) with map i applied to column i. Throws Error when the counts differ.
@@ -141,9 +105,10 @@ struct Evaluator {
   const SubspaceOptions& options;
   int evaluations = 0;
 
+  //! The cost (infinite when identification failed) and the model (empty then).
   struct Result {
     double cost;
-    SubspaceModel model;
+    std::optional<SubspaceModel> model;
   };
 
   Result operator()(const std::vector<StaticMap>& maps) {
@@ -151,19 +116,19 @@ struct Evaluator {
     std::vector<DataSet> mapped;
     mapped.reserve(data.size());
     for (const DataSet& d : data) mapped.push_back({apply_maps(maps, d.u), d.y});
-    Result r{std::numeric_limits<double>::infinity(), {}};
+    Result r{std::numeric_limits<double>::infinity(), std::nullopt};
 #if defined(__cpp_exceptions)
     try {
-      r.model = identify(std::span<const DataSet>(mapped), options);
+      r.model.emplace(identify(std::span<const DataSet>(mapped), options));
     } catch (const Error&) {
       return r;  // e.g. a dead zone so wide that an input is all zero: rank deficient
     }
 #else
-    r.model = identify(std::span<const DataSet>(mapped), options);
+    r.model.emplace(identify(std::span<const DataSet>(mapped), options));
 #endif
     std::vector<Matrix> y_hat;
     for (std::size_t e = 0; e < mapped.size(); ++e) {
-      y_hat.push_back(simulate(r.model, mapped[e].u, r.model.initial_states[e]));
+      y_hat.push_back(simulate(*r.model, mapped[e].u, r.model->initial_states[e]));
     }
     r.cost = normalised_error(data, y_hat);
     if (!std::isfinite(r.cost)) r.cost = std::numeric_limits<double>::infinity();
@@ -336,14 +301,13 @@ double minimise_1d(Cost&& cost, double lo, double hi, int grid, int iterations, 
     }
   }
 
-  HammersteinWienerFit result;
   auto final_eval = evaluate(maps);
   if (!std::isfinite(final_eval.cost)) {
     fail("fit_hammerstein_wiener: no candidate gave a finite simulation error");
   }
-  result.linear = std::move(final_eval.model);
-  result.input = maps;
-  result.output.assign(static_cast<std::size_t>(ny), StaticMap{});
+  HammersteinWienerFit result{.linear = std::move(*final_eval.model),
+                              .input = maps,
+                              .output = std::vector<StaticMap>(static_cast<std::size_t>(ny))};
 
   // Mapped inputs and linear outputs of every data set, for the output maps and the fit.
   std::vector<Eigen::MatrixXd> linear_y;
@@ -422,13 +386,14 @@ double minimise_1d(Cost&& cost, double lo, double hi, int grid, int iterations, 
       }
       weights.push_back(std::move(w));
     }
-    auto refit = detail::subspace::regress_b_d_x0(
-        result.linear.A, result.linear.C, std::span<const DataSet>(mapped),
-        options.linear.estimate_d, options.linear.estimate_x0, &weights);
-    result.linear.B = std::move(refit.B);
-    result.linear.D = std::move(refit.D);
+    const model::DynamicStateSpace<>& G = result.linear.state_space;
+    auto refit = detail::subspace::regress_b_d_x0(G.A(), G.C(), std::span<const DataSet>(mapped),
+                                                  options.linear.estimate_d,
+                                                  options.linear.estimate_x0, &weights);
+    model::DynamicStateSpace<> refitted(G.A(), refit.B, G.C(), refit.D, G.sample_time());
+    refitted.reset(refit.x0.front());
+    result.linear.state_space = std::move(refitted);
     result.linear.initial_states = std::move(refit.x0);
-    result.linear.x0 = result.linear.initial_states.front();
     for (std::size_t e = 0; e < data.size(); ++e) {
       linear_y[e] = simulate(result.linear, mapped[e].u, result.linear.initial_states[e]);
     }
@@ -458,59 +423,18 @@ double minimise_1d(Cost&& cost, double lo, double hi, int grid, int iterations, 
   return fit_hammerstein_wiener(std::span<const DataSet>(data), options);
 }
 
-namespace detail::hw {
-
-//! One channel as the fixed-size nonlinearity NL (Deadzone, Saturation or Identity); throws
-//! Error naming `where` when the fitted map cannot be expressed by NL.
-template <typename NL>
-NL to_channel(const StaticMap& map, const std::string& where) {
-  using Scalar = typename NL::ScalarType;
-  const auto lower = static_cast<Scalar>(map.lower);
-  const auto upper = static_cast<Scalar>(map.upper);
-  if constexpr (std::is_same_v<NL, model::Deadzone<Scalar>>) {
-    if (map.kind == StaticMapKind::none) return NL(Scalar(0));
-    if (map.kind == StaticMapKind::deadzone) return NL(lower, upper);
-  } else if constexpr (std::is_same_v<NL, model::Saturation<Scalar>>) {
-    if (map.kind == StaticMapKind::saturation) return NL(lower, upper);
-  } else if constexpr (std::is_same_v<NL, model::Identity<Scalar>>) {
-    if (map.kind == StaticMapKind::none) return NL{};
-  }
-  subspace::fail("to_hammerstein_wiener: " + where + " is a " + std::string(to_string(map.kind)) +
-                 ", which the requested nonlinearity type cannot represent");
-}
-
-template <typename NL, int N>
-model::PerChannel<NL, N> to_channels(const std::vector<StaticMap>& maps, const char* what) {
-  std::array<NL, static_cast<std::size_t>(N)> channels = [&]<std::size_t... I>(
-      std::index_sequence<I...>) {
-    return std::array<NL, sizeof...(I)>{
-        to_channel<NL>(maps[I], std::string(what) + " " + std::to_string(I))...};
-  }
-  (std::make_index_sequence<static_cast<std::size_t>(N)>{});
-  return model::PerChannel<NL, N>(channels);
-}
-
-}  // namespace detail::hw
-
-//! The fitted model as the fixed-size real-time HammersteinWiener with per-channel InputNL
-//! (default model::Deadzone; `none` inputs become a zero-width dead zone) and OutputNL (default
-//! model::Identity). Throws Error when sizes differ or a fitted map does not fit the types.
+//! The fitted model as the fixed-size real-time HammersteinWiener (model::to_hammerstein_wiener
+//! on the fit's linear block and maps): per-channel InputNL (default model::Deadzone; `none`
+//! inputs become a zero-width dead zone) and OutputNL (default model::Identity), starting from
+//! the linear block's state. Throws Error when sizes differ or a fitted map does not fit the types.
 template <int Nx, int Nu, int Ny, typename Scalar = double,
           typename InputNL = model::Deadzone<Scalar>, typename OutputNL = model::Identity<Scalar>>
 [[nodiscard]] model::HammersteinWiener<model::StateSpace<Nx, Nu, Ny, Scalar>,
                                        model::PerChannel<InputNL, Nu>,
                                        model::PerChannel<OutputNL, Ny>>
 to_hammerstein_wiener(const HammersteinWienerFit& hw) {
-  if (hw.input.size() != static_cast<std::size_t>(Nu) ||
-      hw.output.size() != static_cast<std::size_t>(Ny)) {
-    detail::subspace::fail("to_hammerstein_wiener: the fit has " + std::to_string(hw.input.size()) +
-                           " input and " + std::to_string(hw.output.size()) +
-                           " output maps; the target type " + std::to_string(Nu) + " and " +
-                           std::to_string(Ny));
-  }
-  return {to_state_space<Nx, Nu, Ny, Scalar>(hw.linear),
-          detail::hw::to_channels<InputNL, Nu>(hw.input, "input"),
-          detail::hw::to_channels<OutputNL, Ny>(hw.output, "output")};
+  return model::to_hammerstein_wiener<Nx, Nu, Ny, Scalar, InputNL, OutputNL>(hw.linear.state_space,
+                                                                             hw.input, hw.output);
 }
 
 }  // namespace endohaptics::identification

@@ -79,27 +79,23 @@ struct SubspaceOptions {
   double max_projection_gain = 1e3;
 };
 
-//! An identified model with dynamic sizes and what it was identified with.
+//! An identified model and what identification adds to it. The model itself is the library's
+//! one linear-model type, `model::DynamicStateSpace<>` (A, B, C, D, sample time; its state is
+//! the initial state of the first data set): convert it to a fixed size for real time with
+//! StateSpace's converting constructor, `model::StateSpace<Nx, Nu, Ny>(m.state_space)`. An
+//! aggregate without a default constructor (a StateSpace has no empty state): `identify`, or
+//! `SubspaceModel{.state_space = ..., ...}`, builds it complete.
 struct SubspaceModel {
-  Eigen::MatrixXd A;                            //!< n x n
-  Eigen::MatrixXd B;                            //!< n x nu
-  Eigen::MatrixXd C;                            //!< ny x n
-  Eigen::MatrixXd D;                            //!< ny x nu (zero with estimate_d = false)
-  Eigen::VectorXd x0;                           //!< initial state of the first data set
-  std::vector<Eigen::VectorXd> initial_states;  //!< initial state of every data set
+  model::DynamicStateSpace<> state_space;         //!< the model; state() = x0 of data set 0
+  std::vector<Eigen::VectorXd> initial_states{};  //!< initial state of every data set
   //! Singular values of the weighted projection, descending (MATLAB's order plot); for CVA the
   //! canonical correlations.
-  Eigen::VectorXd singular_values;
+  Eigen::VectorXd singular_values{};
   //! Singular values the automatic order rule used: MOESP's (L32), whatever the weighting.
-  Eigen::VectorXd order_singular_values;
+  Eigen::VectorXd order_singular_values{};
   int order = 0;                           //!< n
-  int block_rows = 0;                      //!< horizon s used
+  int block_rows = 0;                      //!< horizon s used (0: not a subspace result)
   Weighting weighting = Weighting::moesp;  //!< weighting used
-  double sample_time = 1.0;                //!< s
-
-  [[nodiscard]] int states() const noexcept { return static_cast<int>(A.rows()); }   //!< n
-  [[nodiscard]] int inputs() const noexcept { return static_cast<int>(B.cols()); }   //!< nu
-  [[nodiscard]] int outputs() const noexcept { return static_cast<int>(C.rows()); }  //!< ny
 };
 
 namespace detail::subspace {
@@ -124,13 +120,13 @@ struct Matrices {
   Matrix A, B, C, D;
 };
 
-inline Matrices matrices_of(const SubspaceModel& m) { return {m.A, m.B, m.C, m.D}; }
-
 template <int Nx, int Nu, int Ny, typename Scalar>
 Matrices matrices_of(const model::StateSpace<Nx, Nu, Ny, Scalar>& m) {
   return {m.A().template cast<double>(), m.B().template cast<double>(),
           m.C().template cast<double>(), m.D().template cast<double>()};
 }
+
+inline Matrices matrices_of(const SubspaceModel& m) { return matrices_of(m.state_space); }
 
 //! Checks u (N x nu) against a model with nu inputs; `where` names the caller.
 inline void check_input(const Matrices& m, const Matrix& u, const char* where) {
@@ -501,20 +497,15 @@ inline Regressed regress_b_d_x0(const Matrix& A, const Matrix& C, std::span<cons
   ds::require_finite(A, "identify: A");
 
   ds::Regressed bd = ds::regress_b_d_x0(A, C, data, options.estimate_d, options.estimate_x0);
-  SubspaceModel model;
-  model.A = A;
-  model.B = std::move(bd.B);
-  model.C = C;
-  model.D = std::move(bd.D);
-  model.initial_states = std::move(bd.x0);
-  model.x0 = model.initial_states.front();
-  model.singular_values = svd.singularValues();
-  model.order_singular_values = moesp_values;
-  model.order = n;
-  model.block_rows = s;
-  model.weighting = options.weighting;
-  model.sample_time = options.sample_time;
-  return model;
+  model::DynamicStateSpace<> state_space(A, bd.B, C, bd.D, options.sample_time);
+  state_space.reset(bd.x0.front());
+  return SubspaceModel{.state_space = std::move(state_space),
+                       .initial_states = std::move(bd.x0),
+                       .singular_values = svd.singularValues(),
+                       .order_singular_values = moesp_values,
+                       .order = n,
+                       .block_rows = s,
+                       .weighting = options.weighting};
 }
 
 //! One experiment: u is N x nu, y is N x ny. Throws Error as the multi-experiment overload.
@@ -524,48 +515,8 @@ inline Regressed regress_b_d_x0(const Matrix& A, const Matrix& C, std::span<cons
   return identify(std::span<const DataSet>(data), options);
 }
 
-//! The identified model as the fixed-size real-time type. Throws Error when the sizes differ
-//! from Nx, Nu, Ny (the message gives both) or an entry is not finite in Scalar.
-template <int Nx, int Nu, int Ny, typename Scalar = double>
-[[nodiscard]] model::StateSpace<Nx, Nu, Ny, Scalar> to_state_space(const SubspaceModel& m) {
-  if (m.states() != Nx || m.inputs() != Nu || m.outputs() != Ny) {
-    detail::subspace::fail("to_state_space: the model has " + std::to_string(m.states()) +
-                           " states, " + std::to_string(m.inputs()) + " inputs, " +
-                           std::to_string(m.outputs()) + " outputs; the target type " +
-                           std::to_string(Nx) + ", " + std::to_string(Nu) + ", " +
-                           std::to_string(Ny));
-  }
-  using SS = model::StateSpace<Nx, Nu, Ny, Scalar>;
-  typename SS::MatrixB B;
-  typename SS::MatrixD D;
-  if constexpr (Nu > 0) {
-    B = m.B.cast<Scalar>();
-    D = m.D.cast<Scalar>();
-  }
-  SS result(m.A.cast<Scalar>(), B, m.C.cast<Scalar>(), D, static_cast<Scalar>(m.sample_time));
-  if (m.x0.size() == Nx) result.reset(m.x0.cast<Scalar>());
-  return result;
-}
-
-//! A fixed-size model as a SubspaceModel (x0 = its current state, order = Nx, no singular
-//! values), e.g. to simulate or compare a preset with the tools here.
-template <int Nx, int Nu, int Ny, typename Scalar>
-[[nodiscard]] SubspaceModel to_subspace_model(const model::StateSpace<Nx, Nu, Ny, Scalar>& ss) {
-  SubspaceModel m;
-  const auto mats = detail::subspace::matrices_of(ss);
-  m.A = mats.A;
-  m.B = mats.B;
-  m.C = mats.C;
-  m.D = mats.D;
-  m.x0 = ss.state().template cast<double>();
-  m.initial_states = {m.x0};
-  m.order = Nx;
-  m.sample_time = static_cast<double>(ss.sample_time());
-  return m;
-}
-
-//! Something `simulate`, `estimate_initial_state` and `compare` accept: a SubspaceModel or a
-//! model::StateSpace.
+//! Something `simulate`, `estimate_initial_state` and `compare` accept: a model::StateSpace of
+//! any sizes (fixed or dynamic) or a SubspaceModel (its state_space).
 template <typename M>
 concept IdentifiableModel = requires(const M& m) {
   { detail::subspace::matrices_of(m) } -> std::same_as<detail::subspace::Matrices>;

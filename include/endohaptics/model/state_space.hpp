@@ -1,7 +1,9 @@
 //! @file
 //! LTI state-space models: continuous eq. 4.1 (x' = A x + B u, y = C x + D u), discrete eq. 4.2
 //! (x(k+1) = A x(k) + B u(k), y(k) = C x(k) + D u(k)), ZOH/Tustin discretisation, parallel and
-//! series composition (4.3). Signal units are the model's; sample times in s.
+//! series composition (4.3). Signal units are the model's; sample times in s. Sizes are fixed
+//! (real time: no allocation) or Eigen::Dynamic (`DynamicStateSpace`: identification, model
+//! files, configuration; see docs/architecture.md, "One linear-model type").
 #pragma once
 
 #include <Eigen/Core>
@@ -81,19 +83,57 @@ enum class StepStatus : std::uint8_t {
   return "unknown status";
 }
 
+namespace detail {
+
+//! True when a size `from` may be converted to a size `to` (equal, or either is dynamic).
+constexpr bool convertible_size(int from, int to) noexcept {
+  return from == to || from == Eigen::Dynamic || to == Eigen::Dynamic;
+}
+
+//! True when a model of sizes (Mx, Mu, My) may convert to (Nx, Nu, Ny), size by size.
+template <int Mx, int Mu, int My, int Nx, int Nu, int Ny>
+inline constexpr bool convertible_sizes = convertible_size(Mx, Nx) && convertible_size(Mu, Nu) &&
+                                          convertible_size(My, Ny);
+
+//! "2" for a fixed size, "Dynamic" for Eigen::Dynamic (error messages).
+inline std::string size_name(int size) {
+  return size == Eigen::Dynamic ? std::string("Dynamic") : std::to_string(size);
+}
+
+//! "r x c" of a matrix (error messages).
+template <typename Derived>
+std::string shape_of(const Eigen::EigenBase<Derived>& m) {
+  return std::to_string(m.rows()) + " x " + std::to_string(m.cols());
+}
+
+}  // namespace detail
+
 //! Discrete-time LTI model (eq. 4.2): x(k+1) = A x(k) + B u(k), y(k) = C x(k) + D u(k).
-//! Nx >= 1 states, Nu >= 0 inputs (Nu == 0: autonomous), Ny >= 1 outputs.
+//! Nx >= 1 states, Nu >= 0 inputs (Nu == 0: autonomous), Ny >= 1 outputs, each fixed or
+//! Eigen::Dynamic (sizes then set by the matrices at construction). Fixed sizes: the tick
+//! (`step`, `update`, `output`) allocates nothing. Any dynamic size: the same arithmetic on
+//! heap-allocated vectors, so every tick allocates; that form is for identification, model
+//! files and configuration, converted to fixed sizes (the converting constructor) for real time.
 template <int Nx, int Nu, int Ny, typename Scalar = double>
 class StateSpace {
-  static_assert(Nx >= 1, "StateSpace needs at least one state (Nx >= 1)");
-  static_assert(Nu >= 0, "StateSpace input count must be >= 0");
-  static_assert(Ny >= 1, "StateSpace needs at least one output (Ny >= 1)");
+  static_assert(Nx >= 1 || Nx == Eigen::Dynamic,
+                "StateSpace needs at least one state (Nx >= 1) or Eigen::Dynamic");
+  static_assert(Nu >= 0 || Nu == Eigen::Dynamic,
+                "StateSpace input count must be >= 0 or Eigen::Dynamic");
+  static_assert(Ny >= 1 || Ny == Eigen::Dynamic,
+                "StateSpace needs at least one output (Ny >= 1) or Eigen::Dynamic");
   static_assert(std::is_floating_point_v<Scalar>, "StateSpace Scalar must be floating point");
 
  public:
-  static constexpr int states = Nx;                                //!< state dimension
-  static constexpr int inputs = Nu;                                //!< input dimension
-  static constexpr int outputs = Ny;                               //!< output dimension
+  //! State dimension, or Eigen::Dynamic (then `state_size()` gives it).
+  static constexpr int states = Nx;
+  //! Input dimension, or Eigen::Dynamic (then `input_size()` gives it).
+  static constexpr int inputs = Nu;
+  //! Output dimension, or Eigen::Dynamic (then `output_size()` gives it).
+  static constexpr int outputs = Ny;
+  //! True when all three sizes are fixed: the allocation-free real-time form.
+  static constexpr bool fixed_size =
+      Nx != Eigen::Dynamic && Nu != Eigen::Dynamic && Ny != Eigen::Dynamic;
   using ScalarType = Scalar;                                       //!< scalar type
   using State = Eigen::Matrix<Scalar, Nx, 1>;                      //!< state vector x
   using Input = Eigen::Matrix<Scalar, Nu, 1>;                      //!< input vector u
@@ -105,53 +145,89 @@ class StateSpace {
   using Eigenvalues = Eigen::Matrix<std::complex<Scalar>, Nx, 1>;  //!< eigenvalues of A
 
   //! Builds the model with zero initial state. Throws Error on a non-finite matrix entry or a
-  //! sample time that is not finite and > 0 (the message names the entry and the value).
+  //! sample time that is not finite and > 0 (the message names the entry and the value), and,
+  //! with a dynamic size, when the sizes disagree: A must be n x n (n >= 1), B n x nu, C ny x n
+  //! (ny >= 1), D ny x nu (the message gives the sizes found and expected).
   StateSpace(const MatrixA& A, const MatrixB& B, const MatrixC& C, const MatrixD& D,
              Scalar sample_time)
-      : A_(A), B_(B), C_(C), D_(D), sample_time_(sample_time) {
-    detail::require_finite(A_, "StateSpace", "A");
-    detail::require_finite(B_, "StateSpace", "B");
-    detail::require_finite(C_, "StateSpace", "C");
-    detail::require_finite(D_, "StateSpace", "D");
-    detail::require_sample_time(sample_time_, "StateSpace");
+      : A_(A), B_(B), C_(C), D_(D), sample_time_(sample_time), x_(State::Zero(A.rows())) {
+    validate();
+  }
+
+  //! The same model in other sizes (e.g. Eigen::Dynamic -> fixed) and/or another Scalar (e.g.
+  //! double -> float), starting from `other`'s current state (cast). Throws Error when `other`'s
+  //! sizes do not fit Nx, Nu, Ny (the message gives both), or as the main constructor (e.g. an
+  //! entry that overflows in Scalar). Two different fixed sizes do not compile.
+  template <int Mx, int Mu, int My, typename OtherScalar>
+  requires detail::convertible_sizes<Mx, Mu, My, Nx, Nu, Ny>
+  explicit StateSpace(const StateSpace<Mx, Mu, My, OtherScalar>& other)
+      : A_((require_sizes_fit(other), other.A().template cast<Scalar>())),
+        B_(other.B().template cast<Scalar>()),
+        C_(other.C().template cast<Scalar>()),
+        D_(other.D().template cast<Scalar>()),
+        sample_time_(static_cast<Scalar>(other.sample_time())),
+        x_(other.state().template cast<Scalar>()) {
+    validate();
   }
 
   [[nodiscard]] const MatrixA& A() const noexcept { return A_; }  //!< state matrix
   [[nodiscard]] const MatrixB& B() const noexcept { return B_; }  //!< input matrix
   [[nodiscard]] const MatrixC& C() const noexcept { return C_; }  //!< output matrix
   [[nodiscard]] const MatrixD& D() const noexcept { return D_; }  //!< feedthrough matrix
+  //! Number of states n (Nx when fixed).
+  [[nodiscard]] int state_size() const noexcept { return static_cast<int>(A_.rows()); }
+  //! Number of inputs nu (Nu when fixed).
+  [[nodiscard]] int input_size() const noexcept { return static_cast<int>(B_.cols()); }
+  //! Number of outputs ny (Ny when fixed).
+  [[nodiscard]] int output_size() const noexcept { return static_cast<int>(C_.rows()); }
   //! Sample time the model was identified or discretised at, s.
   [[nodiscard]] Scalar sample_time() const noexcept { return sample_time_; }
   //! Current state x(k).
   [[nodiscard]] const State& state() const noexcept { return x_; }
 
-  //! Sets the state to `x0` (zero by default).
-  void reset(const State& x0 = State::Zero()) noexcept { x_ = x0; }
+  //! Sets the state to zero.
+  void reset() noexcept { x_.setZero(); }
+
+  //! Sets the state to `x0`. With a dynamic state size, throws Error unless x0 has
+  //! `state_size()` entries (the state is then unchanged).
+  void reset(const State& x0) noexcept(Nx != Eigen::Dynamic) {
+    if constexpr (Nx == Eigen::Dynamic) {
+      if (x0.size() != x_.size()) {
+        ENDOHAPTICS_THROW(Error("StateSpace::reset: x0 has " + std::to_string(x0.size()) +
+                                " entries, the model " + std::to_string(x_.size()) + " states"));
+      }
+    }
+    x_ = x0;
+  }
 
   //! y(k) = C x(k) + D u(k) at the current state; does not advance.
+  //! Precondition: u has `input_size()` entries (checked by the type when fixed).
   [[nodiscard]] Output output(const Input& u) const noexcept {
+    ENDOHAPTICS_ASSERT(u.size() == B_.cols());
     Output y = C_ * x_;
-    if constexpr (Nu > 0) y.noalias() += D_ * u;
+    if constexpr (Nu != 0) y.noalias() += D_ * u;
     return y;
   }
 
   //! One tick: returns y(k) = C x(k) + D u(k), then advances x(k+1) = A x(k) + B u(k).
   //! A NaN/Inf input propagates into the state (no UB); `reset` recovers.
+  //! Precondition: u has `input_size()` entries.
   Output step(const Input& u) noexcept {
     const Output y = output(u);
     State next = A_ * x_;
-    if constexpr (Nu > 0) next.noalias() += B_ * u;
+    if constexpr (Nu != 0) next.noalias() += B_ * u;
     x_ = next;
     return y;
   }
 
   //! Checked tick: like `step`, but refuses a non-finite input or result. Writes y(k) into `y`
   //! and advances only on `ok`; otherwise state and `y` are untouched.
+  //! Precondition: u has `input_size()` entries.
   [[nodiscard]] StepStatus update(const Input& u, Output& y) noexcept {
     if (!detail::all_finite(u)) return StepStatus::non_finite_input;
     const Output y_now = output(u);
     State next = A_ * x_;
-    if constexpr (Nu > 0) next.noalias() += B_ * u;
+    if constexpr (Nu != 0) next.noalias() += B_ * u;
     if (!detail::all_finite(y_now) || !detail::all_finite(next)) {
       return StepStatus::non_finite_result;
     }
@@ -167,6 +243,7 @@ class StateSpace {
       const Eigen::Matrix<Scalar, Nu, N>& inputs_per_sample) noexcept {
     static_assert(N >= 1, "simulate needs a fixed number N >= 1 of samples");
     Eigen::Matrix<Scalar, Ny, N> y;
+    if constexpr (Ny == Eigen::Dynamic) y.resize(C_.rows(), N);
     for (int k = 0; k < N; ++k) y.col(k) = step(inputs_per_sample.col(k));
     return y;
   }
@@ -187,32 +264,88 @@ class StateSpace {
   //! True when every pole lies strictly inside the unit circle.
   [[nodiscard]] bool is_stable() const { return spectral_radius() < Scalar(1); }
 
-  //! Steady-state gain C (I - A)^-1 B + D (Ny x Nu). Throws Error if I - A is singular
+  //! Steady-state gain C (I - A)^-1 B + D (ny x nu). Throws Error if I - A is singular
   //! (a pole at z = 1, e.g. an integrator).
   [[nodiscard]] MatrixD dc_gain() const {
     const Eigen::FullPivLU<detail::DynamicMatrix<Scalar>> lu(
-        detail::DynamicMatrix<Scalar>(MatrixA::Identity() - A_));
+        detail::DynamicMatrix<Scalar>(MatrixA::Identity(A_.rows(), A_.cols()) - A_));
     if (!lu.isInvertible()) {
       ENDOHAPTICS_THROW(Error("StateSpace: DC gain undefined, I - A is singular (rank " +
-                              std::to_string(lu.rank()) + " of " + std::to_string(Nx) +
+                              std::to_string(lu.rank()) + " of " + std::to_string(A_.rows()) +
                               "; A has a pole at z = 1)"));
     }
     if constexpr (Nu == 0) {
       return MatrixD{};
     } else {
+      // A dynamic model without inputs: an empty gain (Eigen's solve has no empty case: with
+      // zero right-hand sides it binds a reference to a null pointer, which UBSan reports).
+      if constexpr (Nu == Eigen::Dynamic) {
+        if (B_.cols() == 0) return MatrixD::Zero(C_.rows(), 0);
+      }
       const MatrixB X = lu.solve(detail::DynamicMatrix<Scalar>(B_));
       return C_ * X + D_;
     }
   }
 
  private:
+  //! Throws Error unless `other`'s sizes fit Nx, Nu, Ny (a dynamic size takes any).
+  template <typename Other>
+  static void require_sizes_fit(const Other& other) {
+    const auto fits = [](int wanted, int size) {
+      return wanted == Eigen::Dynamic || wanted == size;
+    };
+    if (!fits(Nx, other.state_size()) || !fits(Nu, other.input_size()) ||
+        !fits(Ny, other.output_size())) {
+      ENDOHAPTICS_THROW(Error("StateSpace: cannot convert a model with " +
+                              std::to_string(other.state_size()) + " states, " +
+                              std::to_string(other.input_size()) + " inputs, " +
+                              std::to_string(other.output_size()) + " outputs into StateSpace<" +
+                              detail::size_name(Nx) + ", " + detail::size_name(Nu) + ", " +
+                              detail::size_name(Ny) + ">"));
+    }
+  }
+
+  //! The constructors' checks: sizes (dynamic only), finite entries, sample time.
+  void validate() const {
+    if constexpr (!fixed_size) {
+      const Eigen::Index n = A_.rows();
+      if (n < 1 || A_.cols() != n) {
+        ENDOHAPTICS_THROW(Error("StateSpace: A is " + detail::shape_of(A_) +
+                                ", expected n x n with n >= 1 states"));
+      }
+      const std::string n_text = std::to_string(n);
+      if (B_.rows() != n) {
+        ENDOHAPTICS_THROW(Error("StateSpace: B is " + detail::shape_of(B_) + ", expected " +
+                                n_text + " x nu (A has " + n_text + " states)"));
+      }
+      if (C_.rows() < 1 || C_.cols() != n) {
+        ENDOHAPTICS_THROW(Error("StateSpace: C is " + detail::shape_of(C_) + ", expected ny x " +
+                                n_text + " with ny >= 1 outputs (A has " + n_text + " states)"));
+      }
+      if (D_.rows() != C_.rows() || D_.cols() != B_.cols()) {
+        ENDOHAPTICS_THROW(Error("StateSpace: D is " + detail::shape_of(D_) + ", expected " +
+                                std::to_string(C_.rows()) + " x " + std::to_string(B_.cols()) +
+                                " (outputs of C x inputs of B)"));
+      }
+    }
+    detail::require_finite(A_, "StateSpace", "A");
+    detail::require_finite(B_, "StateSpace", "B");
+    detail::require_finite(C_, "StateSpace", "C");
+    detail::require_finite(D_, "StateSpace", "D");
+    detail::require_sample_time(sample_time_, "StateSpace");
+  }
+
   MatrixA A_;
   MatrixB B_;
   MatrixC C_;
   MatrixD D_;
   Scalar sample_time_;
-  State x_ = State::Zero();
+  State x_;
 };
+
+//! The configuration-time form: every size set at run time by the matrices (see StateSpace).
+template <typename Scalar = double>
+using DynamicStateSpace = StateSpace<Eigen::Dynamic, Eigen::Dynamic, Eigen::Dynamic, Scalar>;
 
 //! Continuous-time LTI model (eq. 4.1): x' = A x + B u, y = C x + D u. Only a description to
 //! be discretised with `discretize_zoh` or `discretize_tustin`; it has no state.
@@ -309,12 +442,14 @@ template <int Nx, int Nu, int Ny, typename Scalar>
 }
 
 //! Parallel (block-diagonal) composition, worksheet eq. 4.3: states, inputs and outputs are
-//! stacked [first; second]. The result starts from the stacked current states.
-//! Throws Error when the sample times differ.
+//! stacked [first; second]. The result starts from the stacked current states. Fixed sizes
+//! only. Throws Error when the sample times differ.
 template <int Nx1, int Nu1, int Ny1, int Nx2, int Nu2, int Ny2, typename Scalar>
-[[nodiscard]] StateSpace<Nx1 + Nx2, Nu1 + Nu2, Ny1 + Ny2, Scalar> parallel(
-    const StateSpace<Nx1, Nu1, Ny1, Scalar>& first,
-    const StateSpace<Nx2, Nu2, Ny2, Scalar>& second) {
+requires(
+    StateSpace<Nx1, Nu1, Ny1, Scalar>::fixed_size&& StateSpace<Nx2, Nu2, Ny2, Scalar>::fixed_size)
+    [[nodiscard]] StateSpace<Nx1 + Nx2, Nu1 + Nu2, Ny1 + Ny2, Scalar> parallel(
+        const StateSpace<Nx1, Nu1, Ny1, Scalar>& first,
+        const StateSpace<Nx2, Nu2, Ny2, Scalar>& second) {
   if (!detail::same_sample_time(first.sample_time(), second.sample_time())) {
     ENDOHAPTICS_THROW(Error("parallel: sample times differ (" +
                             detail::format_number(first.sample_time()) + " s and " +
@@ -346,12 +481,14 @@ template <int Nx1, int Nu1, int Ny1, int Nx2, int Nu2, int Ny2, typename Scalar>
 
 //! Series composition: the output of `first` feeds the input of `second` (y = G2 G1 u). State
 //! [x1; x2]; A = [[A1, 0], [B2 C1, A2]], B = [B1; B2 D1], C = [D2 C1, C2], D = D2 D1.
-//! Requires Ny1 == Nu2. The result starts from the stacked current states. Throws Error when
-//! the sample times differ.
+//! Requires Ny1 == Nu2 and fixed sizes. The result starts from the stacked current states.
+//! Throws Error when the sample times differ.
 template <int Nx1, int Nu1, int Ny1, int Nx2, int Nu2, int Ny2, typename Scalar>
-requires(Ny1 == Nu2) [[nodiscard]] StateSpace<Nx1 + Nx2, Nu1, Ny2, Scalar> series(
-    const StateSpace<Nx1, Nu1, Ny1, Scalar>& first,
-    const StateSpace<Nx2, Nu2, Ny2, Scalar>& second) {
+requires(Ny1 == Nu2 && StateSpace<Nx1, Nu1, Ny1, Scalar>::fixed_size &&
+         StateSpace<Nx2, Nu2, Ny2, Scalar>::fixed_size)
+    [[nodiscard]] StateSpace<Nx1 + Nx2, Nu1, Ny2, Scalar> series(
+        const StateSpace<Nx1, Nu1, Ny1, Scalar>& first,
+        const StateSpace<Nx2, Nu2, Ny2, Scalar>& second) {
   if (!detail::same_sample_time(first.sample_time(), second.sample_time())) {
     ENDOHAPTICS_THROW(Error("series: sample times differ (" +
                             detail::format_number(first.sample_time()) + " s and " +

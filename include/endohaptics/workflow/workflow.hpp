@@ -8,7 +8,6 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -22,6 +21,7 @@
 #include <vector>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/files/identified_model_file.hpp"
 #include "endohaptics/files/log_reader.hpp"
 #include "endohaptics/files/model_file.hpp"
 #include "endohaptics/identification/fit_metrics.hpp"
@@ -388,20 +388,6 @@ struct PreparedLog {
 // ---------------------------------------------------------------------------------------------
 // Models and comparison
 
-//! The linear block of a model file as a SubspaceModel.
-[[nodiscard]] inline SubspaceModel linear_block(const files::ModelFile& m) {
-  SubspaceModel s;
-  s.A = m.A;
-  s.B = m.B;
-  s.C = m.C;
-  s.D = m.D;
-  s.x0 = m.x0;
-  s.initial_states = {m.x0};
-  s.order = static_cast<int>(m.A.rows());
-  s.sample_time = m.sample_time;
-  return s;
-}
-
 //! Presets by name: "yaw2016" (appendix C yaw, inputs current A, velocity rad/s, output force N)
 //! and "pitch2016" (appendix C pitch, output in gram-force, see docs/models/presets_2016.md).
 //! Throws Error for another name.
@@ -460,7 +446,7 @@ struct FileComparison {
     const files::ModelFile& model, const PreparedLog& log,
     InitialStateMode mode = InitialStateMode::estimate) {
   namespace wf = detail;
-  const SubspaceModel linear = linear_block(model);
+  const auto& linear = model.state_space;  // the linear block, x0 = its state
   const auto nu = static_cast<Eigen::Index>(model.inputs.size());
   const auto ny = static_cast<Eigen::Index>(model.outputs.size());
   if (log.segments.empty()) wf::fail(log.source + ": no segments to compare");
@@ -483,11 +469,11 @@ struct FileComparison {
   Eigen::Index row = 0;
   for (const DataSet& d : log.segments) {
     const Eigen::MatrixXd u = apply_maps(in_maps, d.u);
-    Eigen::VectorXd x0 = Eigen::VectorXd::Zero(linear.A.rows());
+    Eigen::VectorXd x0 = Eigen::VectorXd::Zero(linear.state_size());
     if (mode == InitialStateMode::estimate) {
       x0 = wf::with_context(log.source, [&] { return estimate_initial_state(linear, u, d.y); });
     } else if (mode == InitialStateMode::stored) {
-      x0 = model.x0;
+      x0 = linear.state();
     }
     const Eigen::MatrixXd y_hat = apply_maps(out_maps, simulate(linear, u, x0));
     y_all.middleRows(row, d.y.rows()) = d.y;
@@ -568,12 +554,12 @@ struct WorkflowOptions {
 
 //! One candidate model and its per-file fits on the identification logs.
 struct CandidateModel {
-  std::string method;                 //!< "moesp", "n4sid", "cva" or "static"
-  files::ModelFile model;             //!< with names, units, provenance (notes empty)
-  SubspaceModel linear;               //!< the identified linear block (singular values, ...)
-  std::vector<FileComparison> files;  //!< per identification log
-  double mean_fit = 0.0;              //!< mean over files and outputs, %
-  double spectral_radius = 0.0;       //!< max |eig(A)|
+  std::string method;                   //!< "moesp", "n4sid", "cva" or "static"
+  files::ModelFile model;               //!< with names, units, provenance (notes empty)
+  SubspaceModel linear;                 //!< the identified linear block (singular values, ...)
+  std::vector<FileComparison> files{};  //!< per identification log
+  double mean_fit = 0.0;                //!< mean over files and outputs, %
+  double spectral_radius = 0.0;         //!< max |eig(A)|
 };
 
 //! All candidates tried and the index of the best.
@@ -625,16 +611,13 @@ struct WorkflowResult {
                  std::to_string(qr.rank()) + " of " + std::to_string(X.cols()) + ")");
   }
   const Eigen::MatrixXd theta = qr.solve(Y);  // (nu + 1) x ny
-  SubspaceModel m;
-  m.A = Eigen::MatrixXd::Identity(ny, ny);
-  m.B = Eigen::MatrixXd::Zero(ny, nu);
-  m.C = Eigen::MatrixXd::Identity(ny, ny);
-  m.D = theta.topRows(nu).transpose();
-  m.x0 = theta.row(nu).transpose();
-  m.initial_states = {m.x0};
-  m.order = static_cast<int>(ny);
-  m.sample_time = sample_time;
-  return m;
+  model::DynamicStateSpace<> gain(Eigen::MatrixXd::Identity(ny, ny), Eigen::MatrixXd::Zero(ny, nu),
+                                  Eigen::MatrixXd::Identity(ny, ny), theta.topRows(nu).transpose(),
+                                  sample_time);
+  const Eigen::VectorXd offset = theta.row(nu).transpose();
+  gain.reset(offset);
+  return SubspaceModel{
+      .state_space = std::move(gain), .initial_states = {offset}, .order = static_cast<int>(ny)};
 }
 
 //! Identifies one model per candidate from all segments of all logs (one x0 per segment),
@@ -686,12 +669,13 @@ struct WorkflowResult {
   so.sample_time = ts;
 
   WorkflowResult result;
-  auto finish = [&](CandidateModel c, const std::vector<StaticMap>& maps) {
+  auto finish = [&](std::string method, SubspaceModel linear, const std::vector<StaticMap>& maps) {
     files::ModelProvenance p;
-    p.method = c.method;
+    p.method = method;
     p.files = files;
-    c.model = files::make_model_file(c.linear, inputs, outputs, p);
-    c.model.provenance.method = c.method;
+    CandidateModel c{.method = std::move(method),
+                     .model = files::make_model_file(linear, inputs, outputs, p),
+                     .linear = std::move(linear)};
     if (any_map) {
       c.model.input_nonlinearity = maps;
       c.model.output_nonlinearity.assign(outputs.size(), StaticMap{});
@@ -709,23 +693,18 @@ struct WorkflowResult {
       }
     }
     c.model.provenance.fit_percent = per_output;
-    c.spectral_radius =
-        Eigen::EigenSolver<Eigen::MatrixXd>(c.linear.A, false).eigenvalues().cwiseAbs().maxCoeff();
+    c.spectral_radius = c.linear.state_space.spectral_radius();
     result.candidates.push_back(std::move(c));
   };
 
   if (options.static_gain) {
     if (any_fit) wf::fail("identify: --deadzone auto needs a subspace method, not static");
-    CandidateModel c;
-    c.method = "static";
-    c.linear = fit_static_gain(std::span<const DataSet>(mapped), ts);
-    finish(std::move(c), fixed);
+    finish("static", fit_static_gain(std::span<const DataSet>(mapped), ts), fixed);
   } else {
     if (options.candidates.empty()) wf::fail("identify: no subspace method to try");
     for (const Weighting w : options.candidates) {
       so.weighting = w;
-      CandidateModel c;
-      c.method = std::string(to_string(w));
+      std::string method(to_string(w));
       std::vector<StaticMap> maps = fixed;
       // One of several weightings may fail (e.g. a model so unstable that the B, D, x0
       // regression overflows): record it and go on with the others.
@@ -740,17 +719,14 @@ struct WorkflowResult {
                                         ? StaticMapKind::deadzone
                                         : StaticMapKind::none);
           }
-          const HammersteinWienerFit hw =
-              fit_hammerstein_wiener(std::span<const DataSet>(mapped), ho);
-          c.linear = hw.linear;
+          HammersteinWienerFit hw = fit_hammerstein_wiener(std::span<const DataSet>(mapped), ho);
           for (std::size_t j = 0; j < nu; ++j) {
             if (dz[j].mode == DeadzoneSetting::Mode::fit) maps[j] = hw.input[j];
           }
-          c.method += " + dead zone";
+          finish(method + " + dead zone", std::move(hw.linear), maps);
         } else {
-          c.linear = identify(std::span<const DataSet>(mapped), so);
+          finish(method, identify(std::span<const DataSet>(mapped), so), maps);
         }
-        finish(std::move(c), maps);
       };
 #if defined(__cpp_exceptions)
       if (options.candidates.size() > 1) {
