@@ -1,7 +1,7 @@
 //! @file
 //! Umbrella header: everything endohaptics offers. Include single component headers instead
 //! to keep compile times down. The JSON headers (files/model_file.hpp,
-//! files/identified_model_file.hpp, files/bridge_config.hpp, workflow/workflow.hpp) are not
+//! files/identified_model_file.hpp, files/bridge_config.hpp, the workflow/ headers) are not
 //! included: they need nlohmann-json, which the target endohaptics::model_files brings
 //! (find_package(endohaptics COMPONENTS model_files)).
 #pragma once
@@ -18,7 +18,13 @@
 #include "endohaptics/estimation/rate_policy.hpp"
 #include "endohaptics/estimation/steady_state_kalman.hpp"
 #include "endohaptics/estimation/zoh_resampling.hpp"
+#include "endohaptics/files/csv_log.hpp"
+#include "endohaptics/files/endowrist_2016_log.hpp"
+#include "endohaptics/files/log.hpp"
 #include "endohaptics/files/log_reader.hpp"
+#include "endohaptics/files/log_report.hpp"
+#include "endohaptics/files/log_rows.hpp"
+#include "endohaptics/files/log_text.hpp"
 #include "endohaptics/files/tick_log.hpp"
 #include "endohaptics/identification/fit_metrics.hpp"
 #include "endohaptics/identification/friction_fit.hpp"

@@ -1,0 +1,216 @@
+//! @file
+//! One log on the uniform grid k Ts (worksheet 4.2.1): the named inputs and outputs of a log
+//! file (files/log_reader.hpp), resampled to Ts (s) and split at gaps, low-passed and with
+//! offsets removed as a Preprocessing says, with what the reader and the grid dropped. Signals
+//! keep their log units. Configuration time: allocates, throws endohaptics::Error naming the file.
+#pragma once
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "endohaptics/files/csv_log.hpp"
+#include "endohaptics/files/endowrist_2016_log.hpp"
+#include "endohaptics/files/log.hpp"
+#include "endohaptics/files/log_reader.hpp"
+#include "endohaptics/files/log_report.hpp"
+#include "endohaptics/files/log_rows.hpp"
+#include "endohaptics/identification/signal.hpp"
+#include "endohaptics/identification/subspace.hpp"
+#include "endohaptics/workflow/error_context.hpp"
+#include "endohaptics/workflow/preprocessing.hpp"
+
+namespace endohaptics::workflow {
+
+using namespace endohaptics::identification;  // the workflow composes the identification area
+
+//! Which file format and which named signals to read.
+struct LogSelection {
+  files::LogFormat format = files::LogFormat::endowrist_2016;  //!< reader
+  std::vector<std::string> inputs;                             //!< signal names, >= 1
+  std::vector<std::string> outputs;                            //!< signal names, >= 1
+  double csv_row_time = 1.0;     //!< s per row of a CSV without a "time" column
+  bool drop_non_finite = false;  //!< false: a NaN/Inf field fails; true: its row is dropped
+};
+
+//! One log on the grid k Ts: gap-free segments of inputs and outputs, and what was done.
+struct PreparedLog {
+  std::string source;                //!< file
+  files::LogReport report;           //!< what the reader dropped or repaired
+  std::vector<DataSet> segments;     //!< u: N x nu, y: N x ny per gap-free stretch
+  std::vector<double> start_time;    //!< s, time of row 0 of each segment (rebased log time)
+  double sample_time = 0.0;          //!< s
+  std::size_t gaps = 0;              //!< time steps > max_gap that split the log
+  std::size_t dropped_segments = 0;  //!< stretches shorter than min_segment
+  Eigen::VectorXd input_offsets;     //!< removed from each input, input units
+  Eigen::VectorXd output_offsets;    //!< removed from each output, output units
+
+  //! Grid samples over all segments.
+  [[nodiscard]] Eigen::Index samples() const noexcept {
+    Eigen::Index n = 0;
+    for (const auto& s : segments) n += s.u.rows();
+    return n;
+  }
+};
+
+//! Reads `path` as `sel` says (no checks beyond the reader's).
+[[nodiscard]] inline files::Log read_selected_format(const std::string& path,
+                                                     const LogSelection& sel) {
+  const files::LogReadOptions read;  // bad rows dropped and reported; non-finite checked by callers
+  if (sel.format == files::LogFormat::csv) {
+    files::CsvOptions o;
+    o.read = read;
+    o.sample_time = sel.csv_row_time;
+    return files::read_csv(path, o);
+  }
+  files::Endowrist2016Options o;
+  o.read = read;
+  return files::read_endowrist_2016(path, o);
+}
+
+//! The default resampling period: the median time step of the log at `path` (s), rounded to six
+//! significant digits; for a CSV without time column sel.csv_row_time. Throws Error as the reader.
+[[nodiscard]] inline double default_sample_time(const std::string& path, const LogSelection& sel) {
+  const double step = read_selected_format(path, sel).report.median_step;
+  if (!(step > 0.0)) return step;
+  // Six significant digits: 0.009999999999999787 (a sum of decimal stamps) becomes 0.01.
+  const double scale = std::pow(10.0, 5.0 - std::floor(std::log10(step)));
+  return std::round(step * scale) / scale;
+}
+
+//! Reads `path`, selects the named signals, resamples to `ts` (split at gaps), filters and
+//! removes offsets as `pre` says. Throws Error naming the file: unreadable, unknown signal
+//! (listing the known ones), non-finite values (unless drop_non_finite), fewer than
+//! `min_samples` grid samples, bad options.
+[[nodiscard]] inline PreparedLog prepare_log(const std::string& path, const LogSelection& sel,
+                                             double ts, const Preprocessing& pre,
+                                             Eigen::Index min_samples = 20) {
+  namespace wf = detail;
+  if (sel.inputs.empty()) wf::fail(path + ": no input signal named");
+  if (sel.outputs.empty()) wf::fail(path + ": no output signal named");
+  if (!std::isfinite(ts) || !(ts > 0.0))
+    wf::fail(path + ": sample time must be finite and > 0 s, got " + wf::format_number(ts));
+  const files::Log log = read_selected_format(path, sel);
+  if (!sel.drop_non_finite && log.report.non_finite > 0) {
+    std::string where;
+    for (const files::LogIssue& issue : log.report.issues) {
+      if (issue.kind == files::LogIssueKind::non_finite) {
+        where = " (first at line " + std::to_string(issue.line) + ": " + issue.detail + ")";
+        break;
+      }
+    }
+    wf::fail(path + ": " + std::to_string(log.report.non_finite) +
+             " row(s) hold non-finite values" + where + "; pass --drop-non-finite to drop them");
+  }
+  std::vector<std::string> names = sel.inputs;
+  names.insert(names.end(), sel.outputs.begin(), sel.outputs.end());
+  for (const std::string& name : names) {
+    if (name == "time" || !log.has(name)) {
+      wf::fail(path + ": no signal named '" + name + "' (signals: " + wf::join(log.names) + ")");
+    }
+  }
+  const Eigen::MatrixXd signals = log.select(names);
+  const double span = log.time[log.rows() - 1] - log.time[0];
+  if (std::floor(span / ts + 1e-9) + 1.0 < static_cast<double>(min_samples)) {
+    wf::fail(path + ": too few samples: " + std::to_string(log.rows()) + " rows spanning " +
+             wf::format_number(span) + " s give at most " +
+             std::to_string(static_cast<long long>(std::floor(span / ts + 1e-9)) + 1) +
+             " samples at ts = " + wf::format_number(ts) + " s, at least " +
+             std::to_string(min_samples) + " needed");
+  }
+  const auto nu = static_cast<Eigen::Index>(sel.inputs.size());
+  const auto ny = static_cast<Eigen::Index>(sel.outputs.size());
+
+  PreprocessOptions po;
+  po.sample_time = ts;
+  po.max_gap = pre.max_gap;
+  po.cutoff = pre.cutoff;
+  po.filter_order = pre.filter_order;
+  po.offset_duration = pre.offset_duration;
+  po.offset_estimator = OffsetEstimator::median;
+  for (Eigen::Index c = 0; c < nu + ny; ++c) {
+    if ((c < nu ? pre.input_offset : pre.output_offset) == OffsetMode::start) {
+      po.offset_columns.push_back(c);
+    }
+  }
+  Segments segs = wf::with_context(path, [&] { return preprocess(log.time, signals, po); });
+
+  PreparedLog out;
+  out.source = path;
+  out.report = log.report;
+  out.sample_time = ts;
+  out.gaps = segs.gaps;
+  out.dropped_segments = segs.dropped_segments;
+  Eigen::VectorXd offsets = segs.offsets;
+  // Whole-file offsets (median / mean over every kept segment).
+  Eigen::Index total = 0;
+  for (const auto& s : segs.segments) total += s.rows();
+  Eigen::MatrixXd all(total, nu + ny);
+  Eigen::Index row = 0;
+  for (const auto& s : segs.segments) {
+    all.middleRows(row, s.rows()) = s.data;
+    row += s.rows();
+  }
+  for (Eigen::Index c = 0; c < nu + ny; ++c) {
+    const OffsetMode mode = c < nu ? pre.input_offset : pre.output_offset;
+    if (mode != OffsetMode::median && mode != OffsetMode::mean) continue;
+    const double offset = estimate_offset(
+        all.col(c),
+        OffsetWindow{0, -1,
+                     mode == OffsetMode::mean ? OffsetEstimator::mean : OffsetEstimator::median});
+    offsets[c] = offset;
+    for (auto& s : segs.segments) s.data.col(c).array() -= offset;
+  }
+  out.input_offsets = offsets.head(nu);
+  out.output_offsets = offsets.tail(ny);
+  for (auto& s : segs.segments) {
+    if (s.rows() < std::max<Eigen::Index>(pre.min_segment, 2)) {
+      ++out.dropped_segments;
+      continue;
+    }
+    DataSet d{s.data.leftCols(nu), s.data.rightCols(ny)};
+    if (pre.detrend) {
+      for (Eigen::Index c = 0; c < ny; ++c) d.y.col(c) = identification::detrend(d.y.col(c));
+    }
+    out.segments.push_back(std::move(d));
+    out.start_time.push_back(s.start_time);
+  }
+  if (out.samples() < min_samples) {
+    wf::fail(path + ": too few samples: " + std::to_string(out.samples()) +
+             " on the grid at ts = " + wf::format_number(ts) + " s in segments of >= " +
+             std::to_string(pre.min_segment) + " (from " + std::to_string(log.rows()) +
+             " rows), at least " + std::to_string(min_samples) + " needed");
+  }
+  return out;
+}
+
+//! One-paragraph summary: reader report counts, grid, segments, offsets.
+[[nodiscard]] inline std::string summary(const PreparedLog& log) {
+  const files::LogReport& r = log.report;
+  std::ostringstream out;
+  out.precision(4);
+  out << log.source << ": " << r.rows << " rows kept of " << r.lines << " lines; dropped "
+      << r.dropped() << " (empty field " << r.empty_fields << ", short line " << r.short_lines
+      << ", non-numeric " << r.non_numeric << ", non-finite " << r.non_finite << ", repeated time "
+      << r.repeated_time << ", backward time " << r.backward_time << "); CRLF " << r.crlf_lines
+      << "; header " << (r.header ? "yes" : "no") << "; median step " << r.median_step
+      << " s, largest " << r.largest_step << " s\n"
+      << "  grid ts = " << log.sample_time << " s: " << log.samples() << " samples in "
+      << log.segments.size() << " segment(s); " << log.gaps << " gap(s) split, "
+      << log.dropped_segments << " short stretch(es) dropped";
+  if (log.input_offsets.size() > 0 && log.input_offsets.cwiseAbs().maxCoeff() > 0) {
+    out << "; input offsets removed [" << log.input_offsets.transpose() << "]";
+  }
+  if (log.output_offsets.size() > 0 && log.output_offsets.cwiseAbs().maxCoeff() > 0) {
+    out << "; output offsets removed [" << log.output_offsets.transpose() << "]";
+  }
+  out << '\n';
+  return out.str();
+}
+
+}  // namespace endohaptics::workflow
