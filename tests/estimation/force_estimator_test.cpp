@@ -18,8 +18,11 @@
 #include "endohaptics/kinematics/cylindrical_mapper.hpp"
 #include "endohaptics/teleop/teleop_loop.hpp"
 #include "shared_data.hpp"
+#include "test_support.hpp"
 
 namespace estimation_force_estimator_test {
+
+using endohaptics::test::message_of;
 
 namespace {
 
@@ -100,15 +103,6 @@ struct Sizes {
   static constexpr int Nu = Nu_;
   static constexpr int Ny = Ny_;
 };
-
-std::string message_of(auto&& construct) {
-  try {
-    construct();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no exception)";
-}
 
 }  // namespace
 

@@ -9,45 +9,19 @@
 
 #include "endohaptics/files/model_file.hpp"
 #include "endohaptics/model/presets_2016.hpp"
+#include "test_support.hpp"
 
 namespace files_bridge_config_test {
+
+using endohaptics::test::message_of;
+using endohaptics::test::TempDir;
+using endohaptics::test::write_text;
 
 namespace {
 
 namespace files = endohaptics::files;
 namespace tp = endohaptics::teleop;
 using endohaptics::Error;
-
-// A folder in the temp directory, removed at scope exit; one name per test case (CTest may run
-// the cases in parallel).
-struct TempDir {
-  explicit TempDir(const std::string& name)
-      : path(std::filesystem::temp_directory_path() / ("endohaptics_bridge_config_" + name)) {
-    std::filesystem::remove_all(path);
-    std::filesystem::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  std::filesystem::path path;
-};
-
-void write_text(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-}
-
-std::string message_of(const auto& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "no exception";
-}
 
 // The message parse_bridge_config gives for `text` (source "bridge.json").
 std::string error_of(const std::string& text) {
@@ -131,8 +105,8 @@ TEST_CASE("a changed value of every kind round-trips through the JSON text") {
 
 TEST_CASE("the docs/rig.md example loads from a file, comments allowed") {
   TempDir dir("rig_example");
-  write_text(dir.path / "bridge.json", "// the lab's settings\n" + rig_example);
-  const files::BridgeConfig c = files::load_bridge_config(dir.path / "bridge.json");
+  write_text(dir.path() / "bridge.json", "// the lab's settings\n" + rig_example);
+  const files::BridgeConfig c = files::load_bridge_config(dir.path() / "bridge.json");
   CHECK(c.mapping.a_pitch == 3.93);
   CHECK(c.loop.safety.max_setpoint_rate == 4.0);
   CHECK(c.estimator.friction[3].static_level == 0.20);
@@ -146,21 +120,21 @@ TEST_CASE("the docs/rig.md example loads from a file, comments allowed") {
 
 TEST_CASE("file errors name the file") {
   TempDir dir("file_errors");
-  const auto missing = dir.path / "missing.json";
+  const auto missing = dir.path() / "missing.json";
   CHECK(message_of([&] { (void)files::load_bridge_config(missing); }) ==
         missing.string() + ": cannot read the configuration file");
 
-  const auto bad = dir.path / "bad.json";
+  const auto bad = dir.path() / "bad.json";
   write_text(bad, "{\n  \"safety\": { \"policy\": \"zero_force\", }\n}");
   const std::string m = message_of([&] { (void)files::load_bridge_config(bad); });
   CHECK(m.rfind(bad.string() + ": not valid JSON: parse error at line 2, column ", 0) == 0);
 
-  const auto range = dir.path / "range.json";
+  const auto range = dir.path() / "range.json";
   write_text(range, R"({"loop": {"receive_timeout": 2}})");
   CHECK(message_of([&] { (void)files::load_bridge_config(range); }) ==
         range.string() + ": loop.receive_timeout: must be a number in [0, 1] s, got 2");
 
-  const auto big = dir.path / "big.json";
+  const auto big = dir.path() / "big.json";
   write_text(big, "{}" + std::string(files::bridge_config_max_bytes, ' '));
   CHECK(message_of([&] { (void)files::load_bridge_config(big); }) ==
         big.string() + ": larger than 1048576 bytes; not a bridge configuration");
@@ -343,11 +317,11 @@ TEST_CASE("estimator.clamp_model loads an identified model file, relative to the
   // The appendix C yaw model with a 0.3 A dead zone, as endohaptics-identify would save it.
   const auto yaw = endohaptics::model::yaw_force_2016_hw(0.3);
   files::save_model(
-      dir.path / "clamp.json",
+      dir.path() / "clamp.json",
       files::make_model_file(yaw, {{"current", "A"}, {"velocity", "rad/s"}}, {{"force", "N"}}));
-  write_text(dir.path / "bridge.json", R"({"estimator": {"clamp_model": "clamp.json"}})");
-  const files::BridgeConfig c = files::load_bridge_config(dir.path / "bridge.json");
-  CHECK(c.clamp_model == dir.path / "clamp.json");
+  write_text(dir.path() / "bridge.json", R"({"estimator": {"clamp_model": "clamp.json"}})");
+  const files::BridgeConfig c = files::load_bridge_config(dir.path() / "bridge.json");
+  CHECK(c.clamp_model == dir.path() / "clamp.json");
   const auto models = files::bridge_force_models(c);
   CHECK(models.clamp1.model().input_nonlinearity().channel(0).upper() == 0.3);
   CHECK(models.clamp2.model().input_nonlinearity().channel(0).upper() == 0.3);
@@ -359,17 +333,18 @@ TEST_CASE("estimator.clamp_model loads an identified model file, relative to the
 
   // An absolute path stays as it is; the key round-trips.
   const auto absolute = files::parse_bridge_config(R"({"estimator": {"clamp_model": ")" +
-                                                   (dir.path / "clamp.json").string() + "\"}}");
-  CHECK(absolute.clamp_model == dir.path / "clamp.json");
+                                                   (dir.path() / "clamp.json").string() + "\"}}");
+  CHECK(absolute.clamp_model == dir.path() / "clamp.json");
   CHECK(files::parse_bridge_config(files::bridge_config_json(absolute)).clamp_model ==
         absolute.clamp_model);
 
   // A missing or unusable model file is an error of the configuration file, naming both.
-  write_text(dir.path / "missing.json", R"({"estimator": {"clamp_model": "nope.json"}})");
+  write_text(dir.path() / "missing.json", R"({"estimator": {"clamp_model": "nope.json"}})");
   const std::string missing =
-      message_of([&] { (void)files::load_bridge_config(dir.path / "missing.json"); });
-  CHECK(missing.rfind((dir.path / "missing.json").string() + ": estimator.clamp_model: ", 0) == 0);
-  CHECK(missing.find((dir.path / "nope.json").string()) != std::string::npos);
+      message_of([&] { (void)files::load_bridge_config(dir.path() / "missing.json"); });
+  CHECK(missing.rfind((dir.path() / "missing.json").string() + ": estimator.clamp_model: ", 0) ==
+        0);
+  CHECK(missing.find((dir.path() / "nope.json").string()) != std::string::npos);
   CHECK(error_of(R"({"estimator": {"clamp_model": 3}})") ==
         "bridge.json: estimator.clamp_model: must be the name of a model file (a non-empty "
         "string), got 3");

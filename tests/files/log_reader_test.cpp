@@ -11,8 +11,11 @@
 
 #include "endohaptics/identification/signal.hpp"
 #include "shared_data.hpp"
+#include "test_support.hpp"
 
 namespace files_log_reader_test {
+
+using endohaptics::test::TempDir;
 
 namespace {
 
@@ -20,34 +23,6 @@ namespace files = endohaptics::files;
 namespace id = endohaptics::identification;
 namespace fs = std::filesystem;
 using endohaptics::Error;
-
-//! A fresh folder under the system temp dir, removed with everything in it at the end.
-class TempDir {
- public:
-  TempDir() {
-    std::random_device rd;
-    path_ = fs::temp_directory_path() /
-            ("endohaptics-log-reader-" + std::to_string(rd()) + "-" + std::to_string(rd()));
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-
-  //! Writes `content` byte for byte and returns the file's path.
-  [[nodiscard]] std::string write(const std::string& name, const std::string& content) const {
-    const fs::path p = path_ / name;
-    std::ofstream(p, std::ios::binary) << content;
-    return p.string();
-  }
-  [[nodiscard]] const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
 
 // Every defect of the README once, CRLF line ends, no newline after the last line. Positions
 // follow 0.05 rad/s, with a 1 rad jump across the 0.98 s hole (which velocity must not see).

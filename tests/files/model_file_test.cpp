@@ -14,8 +14,13 @@
 #include "endohaptics/identification/fit_metrics.hpp"
 #include "endohaptics/identification/subspace.hpp"
 #include "endohaptics/model/presets_2016.hpp"
+#include "test_support.hpp"
 
 namespace files_model_file_test {
+
+using endohaptics::test::message_of;
+using endohaptics::test::TempFile;
+using endohaptics::test::write_text;
 
 namespace {
 
@@ -27,35 +32,6 @@ using Eigen::MatrixXd;
 using Eigen::VectorXd;
 using endohaptics::Error;
 using nlohmann::json;
-
-// A file in the temp directory, removed at scope exit; one name per test case (CTest may run
-// the cases in parallel).
-struct TempFile {
-  explicit TempFile(const std::string& name)
-      : path(std::filesystem::temp_directory_path() /
-             ("endohaptics_model_file_" + name + ".json")) {}
-  ~TempFile() {
-    std::error_code ec;
-    std::filesystem::remove(path, ec);
-  }
-  TempFile(const TempFile&) = delete;
-  TempFile& operator=(const TempFile&) = delete;
-  std::filesystem::path path;
-};
-
-void write_text(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-}
-
-std::string message_of(const auto& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "no exception";
-}
 
 const std::vector<files::SignalInfo> yaw_inputs{{"current", "A"}, {"velocity", "rad/s"}};
 const std::vector<files::SignalInfo> yaw_outputs{{"force", "N"}};
@@ -98,7 +74,7 @@ TEST_CASE("an identified model round-trips through a file bit for bit, with prov
   CHECK(file.provenance.block_rows == 15);
   CHECK(file.provenance.date.size() == 10);  // YYYY-MM-DD, today (UTC)
 
-  TempFile tmp("roundtrip");
+  TempFile tmp("roundtrip.json");
   files::save_model(tmp.path, file);
   const files::ModelFile back = files::load_model(tmp.path);
   CHECK(file.state_space.A() == m.state_space.A());  // the identified model, unchanged
@@ -139,7 +115,7 @@ TEST_CASE("a loaded yaw Hammerstein-Wiener model drives OpenLoop and the ForceEs
   files::ModelProvenance provenance;
   provenance.method = "worksheet appendix C (MATLAB n4sid + idDeadZone)";
   provenance.date = "2016-06-01";
-  TempFile tmp("yaw_hw");
+  TempFile tmp("yaw_hw.json");
   files::save_model(tmp.path, files::make_model_file(preset, yaw_inputs, yaw_outputs, provenance));
   const files::ModelFile file = files::load_model(tmp.path);
   REQUIRE(file.is_hammerstein_wiener());
@@ -232,7 +208,7 @@ TEST_CASE("load errors name the file, the field and the value") {
   // Files: unreadable, not JSON (a bare NaN literal is not JSON), a type the loader cannot hold.
   CHECK(message_of([] { (void)files::load_model("/nonexistent/model.json"); }) ==
         "model file /nonexistent/model.json: cannot be opened");
-  TempFile tmp("errors");
+  TempFile tmp("errors.json");
   std::string text = valid_json().dump();
   text.replace(text.find("0.9"), 3, "NaN");
   write_text(tmp.path, text);
@@ -263,7 +239,7 @@ TEST_CASE("saving refuses a NaN state and mismatched signal or map counts, namin
   CHECK(message_of([&] { (void)files::to_json(f); }) ==
         "to_json: field \"output_nonlinearity\" has 2 entries, expected 1 (outputs)");
   f = files::model_from_json(valid_json());
-  TempFile tmp("save_errors");
+  TempFile tmp("save_errors.json");
   CHECK(message_of([&] { files::save_model("/nonexistent/dir/model.json", f); }) ==
         "save_model: cannot open /nonexistent/dir/model.json for writing");
   // make_model_file refuses signal counts that differ from the model's sizes.

@@ -8,23 +8,17 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include "test_support.hpp"
 
 namespace files_tick_log_test {
+
+using endohaptics::test::message_of;
 
 namespace {
 
 namespace files = endohaptics::files;
 namespace tp = endohaptics::teleop;
 using endohaptics::Error;
-
-std::string message_of(const auto& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "no exception";
-}
 
 files::TickLog parse(const std::string& text, const files::TickLogOptions& options = {}) {
   std::istringstream in(text);

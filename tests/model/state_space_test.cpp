@@ -10,8 +10,11 @@
 #include <string>
 #include <type_traits>
 #include <utility>
+#include "test_support.hpp"
 
 namespace model_state_space_test {
+
+using endohaptics::test::message_of;
 
 namespace {
 
@@ -56,16 +59,6 @@ SS random_model(std::mt19937_64& rng) {
   return SS(random_matrix<typename SS::MatrixA>(rng, 0.9 / SS::states),
             random_matrix<typename SS::MatrixB>(rng), random_matrix<typename SS::MatrixC>(rng),
             random_matrix<typename SS::MatrixD>(rng), typename SS::ScalarType(0.01));
-}
-
-template <typename E>
-std::string message_of(E&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no exception)";
 }
 
 // Mass-spring-damper x'' = -4 x - 0.4 x' + u, y = x.

@@ -9,24 +9,17 @@
 #include <vector>
 
 #include "endohaptics/model/presets_2016.hpp"
+#include "test_support.hpp"
 
 namespace model_static_map_test {
+
+using endohaptics::test::message_of;
 
 namespace {
 
 namespace m = endohaptics::model;
 using Eigen::MatrixXd;
 using endohaptics::Error;
-
-template <typename F>
-std::string message_of(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no exception)";
-}
 
 }  // namespace
 

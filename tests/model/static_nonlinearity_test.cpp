@@ -9,8 +9,11 @@
 #include <string>
 #include <utility>
 #include <vector>
+#include "test_support.hpp"
 
 namespace model_static_nonlinearity_test {
+
+using endohaptics::test::message_of;
 
 namespace {
 
@@ -22,16 +25,6 @@ using endohaptics::model::PerChannel;
 using endohaptics::model::PiecewiseLinear;
 using endohaptics::model::Saturation;
 using endohaptics::model::StaticNonlinearity;
-
-template <typename F>
-std::string message_of(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no exception)";
-}
 
 bool contains(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;

@@ -10,8 +10,12 @@
 #include <vector>
 
 #include "shared_data.hpp"
+#include "test_support.hpp"
 
 namespace workflow_workflow_test {
+
+using endohaptics::test::message_of;
+using endohaptics::test::TempFile;
 
 namespace {
 
@@ -22,21 +26,6 @@ namespace model = endohaptics::model;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 using endohaptics::Error;
-
-// A file in the temp directory, removed at scope exit.
-struct TempFile {
-  std::filesystem::path path;
-  explicit TempFile(const std::string& name, const std::string& content)
-      : path(std::filesystem::temp_directory_path() / ("endohaptics_workflow_" + name)) {
-    std::ofstream(path) << content;
-  }
-  ~TempFile() {
-    std::error_code ec;
-    std::filesystem::remove(path, ec);
-  }
-  TempFile(const TempFile&) = delete;
-  TempFile& operator=(const TempFile&) = delete;
-};
 
 // x(k+1) = A x + B u, y = C x + D u with A = [1.5 -0.7; 1 0] (poles 0.75 +- 0.37i),
 // B = [1 0.5; 0 -0.3], C = [0.5 0.3], D = [0.2 0]; u random levels held 1..8 samples.
@@ -90,17 +79,6 @@ wf::LogSelection csv_selection(std::vector<std::string> inputs, std::vector<std:
   sel.inputs = std::move(inputs);
   sel.outputs = std::move(outputs);
   return sel;
-}
-
-// The error message of f(), or "" when it does not throw.
-template <typename F>
-std::string message_of(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
 }
 
 }  // namespace

@@ -40,6 +40,22 @@ namespace detail {
   std::abort();
 }
 
+//! Runs f() and returns its result; an Error it throws is rethrown with `prefix` and ": " in
+//! front of its message (e.g. the file or option it concerns). Configuration time only.
+template <typename F>
+auto with_context(const std::string& prefix, F&& f) -> decltype(f()) {
+#if defined(__cpp_exceptions)
+  try {
+    return f();
+  } catch (const Error& e) {
+    throw Error(prefix + ": " + e.what());
+  }
+#else
+  (void)prefix;
+  return f();
+#endif
+}
+
 //! An integer or floating-point type other than bool: what `format_number` accepts.
 template <typename T>
 concept RealOrInteger = std::is_arithmetic_v<T> && !std::is_same_v<T, bool>;

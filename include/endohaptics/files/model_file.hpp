@@ -128,20 +128,7 @@ inline void validate(const ModelFile& m, const std::string& where) {
   }
 }
 
-//! Runs f(), rethrowing an Error with `prefix` in front of its message.
-template <typename F>
-auto with_context(const std::string& prefix, F&& f) -> decltype(f()) {
-#if defined(__cpp_exceptions)
-  try {
-    return f();
-  } catch (const Error& e) {
-    fail(prefix + ": " + e.what());
-  }
-#else
-  (void)prefix;
-  return f();
-#endif
-}
+using endohaptics::detail::with_context;
 
 inline json matrix_to_json(const Eigen::MatrixXd& M) {
   json rows = json::array();

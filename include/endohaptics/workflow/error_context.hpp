@@ -23,20 +23,7 @@ inline std::string join(const std::vector<std::string>& names) {
   return out;
 }
 
-//! Rethrows an Error with `prefix` in front of its message.
-template <typename F>
-auto with_context(const std::string& prefix, F&& f) -> decltype(f()) {
-#if defined(__cpp_exceptions)
-  try {
-    return f();
-  } catch (const Error& e) {
-    fail(prefix + ": " + e.what());
-  }
-#else
-  (void)prefix;
-  return f();
-#endif
-}
+using endohaptics::detail::with_context;
 
 }  // namespace detail
 
