@@ -40,6 +40,9 @@ namespace detail {
   std::abort();
 }
 
+//! Throws Error(message) (configuration time; aborts with the message without exceptions).
+[[noreturn]] inline void fail(const std::string& message) { ENDOHAPTICS_THROW(Error(message)); }
+
 //! Runs f() and returns its result; an Error it throws is rethrown with `prefix` and ": " in
 //! front of its message (e.g. the file or option it concerns). Configuration time only.
 template <typename F>
@@ -48,7 +51,7 @@ auto with_context(const std::string& prefix, F&& f) -> decltype(f()) {
   try {
     return f();
   } catch (const Error& e) {
-    throw Error(prefix + ": " + e.what());
+    fail(prefix + ": " + e.what());
   }
 #else
   (void)prefix;

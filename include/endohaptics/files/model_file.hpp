@@ -74,7 +74,7 @@ using model::StaticMap;
 using model::StaticMapKind;
 using nlohmann::json;
 
-[[noreturn]] inline void fail(const std::string& message) { ENDOHAPTICS_THROW(Error(message)); }
+using endohaptics::detail::fail;
 
 using endohaptics::detail::format_number;
 

@@ -104,7 +104,7 @@ using Matrix = Eigen::MatrixXd;
 using Vector = Eigen::VectorXd;
 using Index = Eigen::Index;
 
-[[noreturn]] inline void fail(const std::string& message) { ENDOHAPTICS_THROW(Error(message)); }
+using endohaptics::detail::fail;
 
 using endohaptics::detail::format_number;
 

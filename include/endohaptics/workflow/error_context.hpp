@@ -13,7 +13,7 @@ namespace endohaptics::workflow {
 
 namespace detail {
 
-[[noreturn]] inline void fail(const std::string& message) { ENDOHAPTICS_THROW(Error(message)); }
+using endohaptics::detail::fail;
 
 using endohaptics::detail::format_number;
 
