@@ -153,10 +153,12 @@ int main(int argc, char** argv) {
     }
     const auto& c = emulator.counters();
     fmt::print(
-        "sbrio-emulator: done after {:.1f} s: {} setpoint packets, {} answered, {} rejected, "
-        "{} stale dropped, {} transport errors, {} watchdog trips\n",
+        "sbrio-emulator: done after {:.1f} s: {} setpoint packets, {} answered, {} rejected "
+        "(wrong size {}, non-finite {}, bad mask {}), {} stale dropped, {} transport errors, {} "
+        "watchdog trips\n",
         std::chrono::duration<double>(clock.now() - start).count(), c.received, c.answered,
-        c.rejected, c.stale_dropped, c.transport_errors, c.watchdog_trips);
+        c.rejected, c.rejected_size, c.rejected_non_finite, c.rejected_mask, c.stale_dropped,
+        c.transport_errors, c.watchdog_trips);
     return 0;
   } catch (const std::exception& e) {
     fmt::print(stderr, "error: {}\n", e.what());

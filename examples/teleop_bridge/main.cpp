@@ -138,11 +138,11 @@ int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& o
       previous = w.stats;
       fmt::print(
           "bridge: t {:5.1f} s  rate {:7.1f} Hz  period err mean {:6.1f} us  deadline misses {}"
-          "  round trip {:6.1f} us  loss {:6.3f} %  decode errors {}  link {}  (lost {}, "
-          "recovered {})  clamp1 {:+.2f} N\n",
+          "  round trip {:6.1f} us  loss {:6.3f} %  decode errors {}  state faults {}  rejected {}"
+          "  link {}  (lost {}, recovered {})  clamp1 {:+.2f} N\n",
           w.t, s.rate, s.period_error_mean * 1e6, s.deadline_misses, s.round_trip_mean * 1e6,
-          s.loss_percent, s.decode_errors, to_string(w.link), w.link_losses, w.recoveries,
-          w.clamp_force);
+          s.loss_percent, s.decode_errors, s.state_faults, s.rejected, to_string(w.link),
+          w.link_losses, w.recoveries, w.clamp_force);
     };
     for (;;) {
       const bool last = done.load();
@@ -209,10 +209,10 @@ int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& o
   const double complete =
       s.ticks() ? 100.0 * static_cast<double>(s.received()) / static_cast<double>(s.ticks()) : 0.0;
   fmt::print(
-      "bridge: summary ticks={} received={} complete={:.2f}% decode_errors={} "
-      "link_losses={} recoveries={}\n",
-      s.ticks(), s.received(), complete, s.decode_errors(), loop.watchdog().link_losses(),
-      loop.watchdog().recoveries());
+      "bridge: summary ticks={} received={} complete={:.2f}% decode_errors={} state_faults={} "
+      "rejected={} stale_dropped={} link_losses={} recoveries={}\n",
+      s.ticks(), s.received(), complete, s.decode_errors(), s.state_faults(), s.rejected().total(),
+      s.stale_dropped(), loop.watchdog().link_losses(), loop.watchdog().recoveries());
   return 0;
 }
 

@@ -142,12 +142,14 @@ TEST_CASE("file errors name the file") {
 
 TEST_CASE("unknown keys are errors that list the allowed keys") {
   CHECK(error_of(R"({"safty": {}})") ==
-        "bridge.json: unknown key 'safty' (allowed: estimator, loop, mapping, operator, safety)");
+        "bridge.json: unknown key 'safty' (allowed: estimator, loop, mapping, operator, "
+        "plausibility, safety)");
   CHECK(error_of(R"({"loop": {"recieve_timeout": 0.002}})") ==
         "bridge.json: unknown key 'loop.recieve_timeout' (allowed in 'loop': receive_timeout)");
   CHECK(error_of(R"({"safety": {"polcy": "zero_force"}})") ==
         "bridge.json: unknown key 'safety.polcy' (allowed in 'safety': max_consecutive_misses, "
-        "policy, force_ramp_time, max_setpoint_rate, max_stylus_force, enable_mask)");
+        "policy, force_ramp_time, max_setpoint_rate, max_stylus_force, enable_mask, joint_lower, "
+        "joint_upper)");
   // loop_period and motor_order are the program's, not the file's.
   CHECK(error_of(R"({"estimator": {"loop_period": 0.002}})")
             .rfind("bridge.json: unknown key 'estimator.loop_period' (allowed in 'estimator': "
@@ -172,10 +174,10 @@ TEST_CASE("wrong types name the key and what it must be") {
   CHECK(error_of(R"({"mapping": {"a_roll": "0.7"}})") ==
         "bridge.json: mapping.a_roll: must be a finite number rad/rad, got \"0.7\"");
   CHECK(error_of(R"({"mapping": {"lower": [0, 0, 0]}})") ==
-        "bridge.json: mapping.lower: must be an array of 4 numbers, each a finite number rad, "
-        "got [0,0,0]");
+        "bridge.json: mapping.lower: must be an array of 4 numbers, each a number in [-pi, pi] "
+        "rad, got [0,0,0]");
   CHECK(error_of(R"({"mapping": {"force_scale": [1, null, 1]}})") ==
-        "bridge.json: mapping.force_scale[1]: must be a finite number N per unit, got null");
+        "bridge.json: mapping.force_scale[1]: must be a number in [0, 100] N per unit, got null");
   CHECK(error_of(R"({"safety": {"policy": "freeze"}})") ==
         "bridge.json: safety.policy: must be \"hold_position\", \"disable_motors\" or "
         "\"zero_force\", got \"freeze\"");
@@ -187,7 +189,7 @@ TEST_CASE("wrong types name the key and what it must be") {
 TEST_CASE("integer fields: integral and in range, never an undefined conversion") {
   const std::string misses =
       "bridge.json: safety.max_consecutive_misses: must be an integer in "
-      "[0, 1000000], got ";
+      "[0, 1000], got ";
   auto misses_of = [](const std::string& value) {
     return error_of(R"({"safety": {"max_consecutive_misses": )" + value + "}}");
   };
@@ -217,7 +219,7 @@ TEST_CASE("integer fields: integral and in range, never an undefined conversion"
 
 TEST_CASE("out-of-range numbers name the key and the allowed range") {
   CHECK(error_of(R"({"mapping": {"force_limit": 0}})") ==
-        "bridge.json: mapping.force_limit: must be a finite number > 0 N, got 0");
+        "bridge.json: mapping.force_limit: must be a number in (0, 3.3] N, got 0");
   CHECK(error_of(R"({"mapping": {"min_radius": -0.001}})") ==
         "bridge.json: mapping.min_radius: must be a finite number >= 0 m, got -0.001");
   CHECK(error_of(R"({"mapping": {"theta_neutral": 4}})") ==
@@ -225,9 +227,9 @@ TEST_CASE("out-of-range numbers name the key and the allowed range") {
   CHECK(error_of(R"({"mapping": {"a_roll": 1e999}})") ==
         "bridge.json: not valid JSON: number overflow parsing '1e999'");
   CHECK(error_of(R"({"safety": {"max_setpoint_rate": 0}})") ==
-        "bridge.json: safety.max_setpoint_rate: must be a finite number > 0 rad/s, got 0");
+        "bridge.json: safety.max_setpoint_rate: must be a number in (0, 40] rad/s, got 0");
   CHECK(error_of(R"({"safety": {"force_ramp_time": -0.5}})") ==
-        "bridge.json: safety.force_ramp_time: must be a finite number >= 0 s, got -0.5");
+        "bridge.json: safety.force_ramp_time: must be a number in [0, 10] s, got -0.5");
   CHECK(error_of(R"({"estimator": {"current_sign": [-1, -1, 0.5, -1]}})") ==
         "bridge.json: estimator.current_sign[2]: must be -1 or +1, got 0.5");
   CHECK(error_of(R"({"estimator": {"friction_level": [0.7, -0.17, 0.21, 0.2]}})") ==
@@ -277,7 +279,7 @@ TEST_CASE("echoed values and keys are cut to 60 characters") {
   const std::string key = error_of(R"({"safety": {")" + long_text + "\": 1}}");
   CHECK(key == "bridge.json: unknown key 'safety." + std::string(53, 'x') +
                    "...' (allowed in 'safety': max_consecutive_misses, policy, force_ramp_time, "
-                   "max_setpoint_rate, max_stylus_force, enable_mask)");
+                   "max_setpoint_rate, max_stylus_force, enable_mask, joint_lower, joint_upper)");
   const std::string array =
       error_of(R"({"mapping": {"lower": [)" + std::string(50000, '1') + ", 2, 3]}}");
   CHECK(array ==
@@ -351,6 +353,52 @@ TEST_CASE("estimator.clamp_model loads an identified model file, relative to the
   CHECK(error_of(R"({"estimator": {"clamp_model": ""}})") ==
         "bridge.json: estimator.clamp_model: must be the name of a model file (a non-empty "
         "string), got \"\"");
+}
+
+TEST_CASE("safety-relevant values have physical bounds (issue 14's field cases)") {
+  // Before: each of these was accepted and switched a safety function off.
+  CHECK(error_of(R"({"safety": {"max_consecutive_misses": 2147483647}})") ==
+        "bridge.json: safety.max_consecutive_misses: must be an integer in [0, 1000], got "
+        "2147483647");
+  CHECK(error_of(R"({"safety": {"max_stylus_force": 1e308}})") ==
+        "bridge.json: safety.max_stylus_force: must be a number in [0, 3.3] N, got 1e+308");
+  CHECK(error_of(R"({"mapping": {"force_limit": 1e308}})") ==
+        "bridge.json: mapping.force_limit: must be a number in (0, 3.3] N, got 1e+308");
+  CHECK(error_of(R"({"mapping": {"force_scale": [1, -1, 1]}})") ==
+        "bridge.json: mapping.force_scale[1]: must be a number in [0, 100] N per unit, got -1");
+  CHECK(error_of(R"({"safety": {"force_ramp_time": -0.9}})") ==
+        "bridge.json: safety.force_ramp_time: must be a number in [0, 10] s, got -0.9");
+  // 300 misses at the default 1 ms are 0.3 s: accepted; 1000 are 1 s: refused by the loop.
+  CHECK(files::parse_bridge_config(R"({"safety": {"max_consecutive_misses": 300}})")
+            .loop.safety.max_consecutive_misses == 300);
+  CHECK(error_of(R"({"safety": {"max_consecutive_misses": 1000}})")
+            .starts_with("bridge.json: safety: TeleopLoopConfig: (safety.max_consecutive_misses "
+                         "+ 1) x max(period, receive_timeout) = 1001 x 1000000 ns"));
+}
+
+TEST_CASE("the joint range and the plausibility bounds are keys, checked and round-tripped") {
+  const auto c = files::parse_bridge_config(R"({
+    "safety": {"joint_lower": [-1, -0.5, -1, -1], "joint_upper": [1, 0.5, 1, 1]},
+    "plausibility": {"position_margin": 0.1, "max_velocity": 20, "max_current": 5,
+                     "jump_tolerance": 0.02}})");
+  CHECK(c.loop.safety.joint_lower[1] == -0.5);
+  CHECK(c.loop.safety.joint_upper[1] == 0.5);
+  CHECK(c.loop.safety.plausibility.position_margin == 0.1);
+  CHECK(c.loop.safety.plausibility.max_velocity == 20.0);
+  CHECK(c.loop.safety.plausibility.max_current == 5.0);
+  CHECK(c.loop.safety.plausibility.jump_tolerance == 0.02);
+  const auto back = files::parse_bridge_config(files::bridge_config_json(c));
+  CHECK(back.loop.safety.joint_upper == c.loop.safety.joint_upper);
+  CHECK(back.loop.safety.plausibility.max_current == 5.0);
+
+  CHECK(error_of(R"({"plausibility": {"max_current": 100}})") ==
+        "bridge.json: plausibility.max_current: must be a number in (0, 15] A, got 100");
+  CHECK(error_of(R"({"plausibility": {"max_velocity": 0}})") ==
+        "bridge.json: plausibility.max_velocity: must be a number in (0, 40] rad/s, got 0");
+  CHECK(error_of(R"({"safety": {"joint_upper": [1, 1, 1, 4]}})") ==
+        "bridge.json: safety.joint_upper[3]: must be a number in [-pi, pi] rad, got 4");
+  CHECK(error_of(R"({"safety": {"joint_lower": [0, 0, 0, 2]}})")
+            .starts_with("bridge.json: safety: SafetyConfig: joint range of motor 3 must satisfy"));
 }
 
 }  // namespace files_bridge_config_test

@@ -113,10 +113,41 @@ TEST_CASE("garbled, short and long datagrams are rejected, counted and not answe
   REQUIRE(f.link.a().send(mask) == transport::TransportStatus::ok);
   CHECK(f.emulator.poll(0ns) == sim::PollEvent::rejected);
   CHECK(f.emulator.counters().rejected == 6);
+  CHECK(f.emulator.counters().rejected_size == 4);  // 0, 16 (decoder), 18, 49 (too long)
+  CHECK(f.emulator.counters().rejected_non_finite == 1);
+  CHECK(f.emulator.counters().rejected_mask == 1);
   CHECK(f.emulator.counters().answered == 0);
   CHECK(f.rig.commands == 1);  // only the constructor's "everything disabled"
   Codec::State state;
   CHECK(!f.receive_state(state));
+}
+
+TEST_CASE("junk arriving after a valid setpoint cannot displace it (newest valid packet wins)") {
+  // Before: the emulator kept the newest datagram, so 0-byte datagrams from another local sender
+  // made it drop the bridge's setpoint (60 % loss, 17 link losses at the bridge in the field test).
+  Fixture f;
+  f.send_setpoint(Eigen::Vector4d(0.1, 0.2, 0.3, 0.4), 0x0F);
+  for (int i = 0; i < 10; ++i) REQUIRE(f.link.a().send({}) == transport::TransportStatus::ok);
+  std::array<std::byte, Codec::setpoint_packet_size> nan{};
+  nan[0] = std::byte{0x7f};
+  nan[1] = std::byte{0xc0};
+  REQUIRE(f.link.a().send(nan) == transport::TransportStatus::ok);
+  CHECK(f.emulator.poll(0ns) == sim::PollEvent::answered);
+  CHECK(f.rig.commanded.position[2] == doctest::Approx(0.3));
+  CHECK(f.emulator.counters().received == 1);
+  CHECK(f.emulator.counters().rejected == 11);
+  CHECK(f.emulator.counters().rejected_size == 10);
+  CHECK(f.emulator.counters().rejected_non_finite == 1);
+  Codec::State state;
+  CHECK(f.receive_state(state));
+
+  // Two valid setpoints: the older is drained unanswered, counted as stale.
+  f.send_setpoint(Eigen::Vector4d(0.0, 0.0, 0.1, 0.0), 0x0F);
+  f.send_setpoint(Eigen::Vector4d(0.0, 0.0, 0.2, 0.0), 0x0F);
+  REQUIRE(f.link.a().send({}) == transport::TransportStatus::ok);
+  CHECK(f.emulator.poll(0ns) == sim::PollEvent::answered);
+  CHECK(f.rig.commanded.position[2] == doctest::Approx(0.2));
+  CHECK(f.emulator.counters().stale_dropped == 1);
 }
 
 TEST_CASE("the watchdog disables every motor 100 ms after the last valid packet, not later") {

@@ -185,7 +185,9 @@ TEST_CASE("every fault kind: never a non-finite or over-limit output, counters c
     const auto& s = rig.loop.stats();
     const auto& f = rig.faulty.counters();
     CHECK(s.exchanges() == 5000);
-    CHECK(s.received() + s.timeouts() + s.decode_errors() + s.transport_errors() == 5000);
+    CHECK(s.received() + s.timeouts() + s.decode_errors() + s.transport_errors() +
+              s.state_faults() ==
+          5000);
     CHECK_FALSE(rig.device.non_finite_force);
     if (c.rates.drop_receive > 0 && c.rates.drop_send == 0 && c.rates.delay == 0) {
       CHECK(s.timeouts() == f.dropped_receive);
@@ -198,8 +200,13 @@ TEST_CASE("every fault kind: never a non-finite or over-limit output, counters c
       CHECK(s.decode_errors() == f.truncated);  // every truncated packet has the wrong size
     }
     if (c.rates.corrupt > 0 && c.rates.truncate == 0) {
-      CHECK(s.decode_errors() <= f.corrupted);  // some flips still give finite floats
+      // A flip gives NaN/Inf or a bad mask (decode error), an impossible value (state fault), or
+      // a plausible one (undetectable without a checksum: protocol v2).
+      CHECK(s.decode_errors() + s.state_faults() <= f.corrupted);
       CHECK(s.decode_errors() > 0);
+      CHECK(s.state_faults() > 0);
+    } else if (c.rates.corrupt == 0) {
+      CHECK(s.state_faults() == 0);  // the fake sbRIO itself reports only plausible states
     }
     if (c.rates.duplicate > 0) {
       CHECK(s.stale_dropped() == f.duplicated);  // duplicates are drained, newest kept

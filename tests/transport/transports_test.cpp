@@ -54,8 +54,9 @@ TEST_CASE("in-memory link: delivery, newest-only draining, truncation, closing")
   std::array<std::byte, 8> small{};
   (void)link.a().send(p1);
   r = link.b().receive(small, 1ms);
-  CHECK(r.status == TransportStatus::truncated);
-  CHECK(r.size == 8);
+  CHECK(r.status == TransportStatus::rejected);  // too long for the buffer: refused, counted
+  CHECK(r.oversized == 1);
+  CHECK(r.size == 0);
 
   for (int i = 0; i < 10; ++i) (void)link.a().send(p1);  // capacity 8
   CHECK(link.a_to_b().overflowed() == 2);
@@ -207,7 +208,8 @@ TEST_CASE("UDP transport on loopback: send, timed receive, drain to newest, trun
   REQUIRE(a2.send(pattern<49>(0)) == TransportStatus::ok);
   std::array<std::byte, 17> small{};
   r = b2.receive(small, 100ms);
-  CHECK(r.status == TransportStatus::truncated);
+  CHECK(r.status == TransportStatus::rejected);
+  CHECK(r.oversized == 1);
 }
 
 TEST_CASE("UDP transport: a peer that is not listening is reported, not hidden") {
@@ -354,6 +356,105 @@ TEST_CASE("UDP receive drains at most max_drain datagrams, the rest wait for the
                        endohaptics::Error);
   CHECK_THROWS_WITH_AS(transport::UdpServerTransport({.bind_address = "127.0.0.1", .max_drain = 0}),
                        doctest::Contains("UdpServerTransport: max_drain"), endohaptics::Error);
+}
+
+namespace {
+
+// Accepts datagrams of exactly `size` bytes whose first byte is not 0xFF; counts refusals.
+struct SizeFilter {
+  std::size_t size;
+  int refused = 0;
+  bool operator()(std::span<const std::byte> d) noexcept {
+    const bool ok = d.size() == size && d[0] != std::byte{0xFF};
+    if (!ok) ++refused;
+    return ok;
+  }
+};
+
+}  // namespace
+
+static_assert(transport::FilteringTransport<transport::InMemoryTransport<>>);
+static_assert(transport::FilteringTransport<transport::UdpTransport>);
+static_assert(transport::FilteringTransport<transport::UdpServerTransport>);
+static_assert(transport::FilteringTransport<
+              transport::FaultInjectingTransport<transport::InMemoryTransport<>>>);
+
+TEST_CASE("filtered drain (in memory): junk after a valid datagram cannot displace it") {
+  transport::InMemoryLink<64, 16> link;
+  std::array<std::byte, 17> buffer{};
+  SizeFilter filter{17};
+  (void)link.a().send(pattern<17>(1));
+  (void)link.a().send(pattern<17>(2));                // the newest valid one
+  (void)link.a().send(std::span<const std::byte>());  // empty
+  (void)link.a().send(pattern<5>(3));                 // short
+  auto bad = pattern<17>(4);
+  bad[0] = std::byte{0xFF};
+  (void)link.a().send(bad);             // right size, refused by the filter
+  (void)link.a().send(pattern<40>(5));  // longer than the buffer
+  auto r = link.b().receive(buffer, 1ms, filter);
+  REQUIRE(r.status == TransportStatus::ok);
+  CHECK(r.size == 17);
+  CHECK(buffer[0] == std::byte{2});
+  CHECK(r.dropped == 1);    // the older valid one
+  CHECK(r.rejected == 3);   // empty, short, 0xFF
+  CHECK(r.oversized == 1);  // 40 bytes > 17
+  CHECK(filter.refused == 3);
+
+  // Only junk: rejected, nothing in the buffer, counts kept.
+  (void)link.a().send(pattern<5>(6));
+  r = link.b().receive(buffer, 1ms, filter);
+  CHECK(r.status == TransportStatus::rejected);
+  CHECK(r.size == 0);
+  CHECK(r.rejected == 1);
+  CHECK(buffer[0] == std::byte{2});  // the caller's buffer untouched
+
+  // The unfiltered receive still returns the newest datagram, whatever it is.
+  (void)link.a().send(pattern<17>(7));
+  (void)link.a().send(pattern<5>(8));
+  r = link.b().receive(buffer, 1ms);
+  CHECK(r.status == TransportStatus::ok);
+  CHECK(r.size == 5);
+}
+
+TEST_CASE("filtered drain (UDP): a junk flood after the valid datagram, and the server's peer") {
+  transport::UdpServerTransport server({.bind_address = "127.0.0.1", .port = 0});
+  const auto port = server.local_endpoint().port();
+  transport::UdpTransport bridge(
+      {.local_address = "127.0.0.1", .remote_address = "127.0.0.1", .remote_port = port});
+  transport::UdpTransport attacker(
+      {.local_address = "127.0.0.1", .remote_address = "127.0.0.1", .remote_port = port});
+  std::array<std::byte, 17> buffer{};
+  SizeFilter filter{17};
+  REQUIRE(bridge.send(pattern<17>(1)) == TransportStatus::ok);
+  std::this_thread::sleep_for(2ms);
+  for (int i = 0; i < 20; ++i) {
+    REQUIRE(attacker.send(std::span<const std::byte>()) == TransportStatus::ok);
+    REQUIRE(attacker.send(pattern<3000>(9)) == TransportStatus::ok);  // > max_datagram_bytes
+  }
+  std::this_thread::sleep_for(5ms);
+  auto r = server.receive(buffer, 100ms, filter);
+  REQUIRE(r.status == TransportStatus::ok);
+  CHECK(buffer[0] == std::byte{1});
+  CHECK(r.rejected == 20);
+  CHECK(r.oversized == 20);
+  // The answer goes to the sender of the accepted datagram, not to the junk's sender.
+  REQUIRE(server.send(pattern<49>(10)) == TransportStatus::ok);
+  std::array<std::byte, 64> reply{};
+  CHECK(bridge.receive(reply, 100ms).status == TransportStatus::ok);
+  CHECK(attacker.receive(reply, 2ms).status == TransportStatus::timeout);
+}
+
+TEST_CASE("filtered drain through fault injection: damage is shown to the filter again") {
+  transport::InMemoryLink<64, 16> link;
+  transport::FaultInjectingTransport<transport::InMemoryTransport<64, 16>> faulty(
+      link.b(), {.truncate = 1.0}, 7);
+  std::array<std::byte, 17> buffer{};
+  SizeFilter filter{17};
+  (void)link.a().send(pattern<17>(1));
+  const auto r = faulty.receive(buffer, 1ms, filter);
+  CHECK(r.status == TransportStatus::rejected);  // truncated on the way: refused
+  CHECK(r.rejected == 1);
+  CHECK(faulty.counters().truncated == 1);
 }
 
 }  // namespace transport_transports_test

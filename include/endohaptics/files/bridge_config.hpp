@@ -167,21 +167,48 @@ void visit_schema(Config& c, Visitor& v) {
   v.number("mapping", "b_pitch", m.b_pitch, Range::any("rad"));
   v.number("mapping", "a_clamp", m.a_clamp, Range::any("rad/m"));
   v.number("mapping", "b_clamp", m.b_clamp, Range::any("rad"));
-  v.vector("mapping", "lower", m.lower, Range::any("rad"));
-  v.vector("mapping", "upper", m.upper, Range::any("rad"));
+  v.vector("mapping", "lower", m.lower, Range::described(-pi, pi, "a number in [-pi, pi] rad"));
+  v.vector("mapping", "upper", m.upper, Range::described(-pi, pi, "a number in [-pi, pi] rad"));
   v.number("mapping", "min_radius", m.min_radius, Range::at_least(0.0, "m"));
   v.number("mapping", "theta_neutral", m.theta_neutral,
            Range::described(-pi, pi, "a number in [-pi, pi] rad"));
-  v.vector("mapping", "force_scale", m.force_scale, Range::any("N per unit"));
-  v.number("mapping", "force_limit", m.force_limit, Range::above(0.0, "N"));
+  // >= 0: a negative scale would push along the operator's motion
+  // (docs/models/cylindrical_mapper.md)
+  v.vector("mapping", "force_scale", m.force_scale, Range::between(0.0, 100.0, "N per unit"));
+  Range force_limit = Range::between(0.0, teleop::SafetyBounds::max_stylus_force, "N");
+  force_limit.lo_open = true;
+  v.number("mapping", "force_limit", m.force_limit, force_limit);
 
   auto& s = c.loop.safety;
-  v.integer("safety", "max_consecutive_misses", s.max_consecutive_misses, 0, 1000000);
+  using SB = teleop::SafetyBounds;
+  v.integer("safety", "max_consecutive_misses", s.max_consecutive_misses, 0,
+            SB::max_consecutive_misses);
   v.policy("safety", "policy", s.policy);
-  v.number("safety", "force_ramp_time", s.force_ramp_time, Range::at_least(0.0, "s"));
-  v.number("safety", "max_setpoint_rate", s.max_setpoint_rate, Range::above(0.0, "rad/s"));
-  v.number("safety", "max_stylus_force", s.max_stylus_force, Range::at_least(0.0, "N"));
+  v.number("safety", "force_ramp_time", s.force_ramp_time,
+           Range::between(0.0, SB::max_force_ramp_time, "s"));
+  Range rate = Range::between(0.0, SB::max_setpoint_rate, "rad/s");
+  rate.lo_open = true;
+  v.number("safety", "max_setpoint_rate", s.max_setpoint_rate, rate);
+  v.number("safety", "max_stylus_force", s.max_stylus_force,
+           Range::between(0.0, SB::max_stylus_force, "N"));
   v.integer("safety", "enable_mask", s.enable_mask, 0, 15);
+  v.vector("safety", "joint_lower", s.joint_lower,
+           Range::described(-pi, pi, "a number in [-pi, pi] rad"));
+  v.vector("safety", "joint_upper", s.joint_upper,
+           Range::described(-pi, pi, "a number in [-pi, pi] rad"));
+
+  using PB = teleop::PlausibilityBounds;
+  auto& p = s.plausibility;
+  v.number("plausibility", "position_margin", p.position_margin,
+           Range::between(0.0, PB::max_margin, "rad"));
+  Range velocity = Range::between(0.0, PB::max_velocity, "rad/s");
+  velocity.lo_open = true;
+  v.number("plausibility", "max_velocity", p.max_velocity, velocity);
+  Range current = Range::between(0.0, PB::max_current, "A");
+  current.lo_open = true;
+  v.number("plausibility", "max_current", p.max_current, current);
+  v.number("plausibility", "jump_tolerance", p.jump_tolerance,
+           Range::between(0.0, PB::max_margin, "rad"));
 
   auto& e = c.estimator;
   v.vector("estimator", "current_sign", e.current_sign, Range::plus_minus_one());

@@ -77,10 +77,13 @@ enum class PollEvent : std::uint8_t {
 
 //! Running totals (monotonic).
 struct EmulatorCounters {
-  std::uint64_t received = 0;          //!< valid setpoint packets
-  std::uint64_t answered = 0;          //!< state packets sent
-  std::uint64_t rejected = 0;          //!< invalid datagrams (wrong size, non-finite, bad mask)
-  std::uint64_t stale_dropped = 0;     //!< older datagrams drained unanswered (queue of one)
+  std::uint64_t received = 0;             //!< valid setpoint packets
+  std::uint64_t answered = 0;             //!< state packets sent
+  std::uint64_t rejected = 0;             //!< invalid datagrams (the three causes below)
+  std::uint64_t rejected_size = 0;        //!< empty, short, long or oversized datagrams
+  std::uint64_t rejected_non_finite = 0;  //!< NaN or Inf in a setpoint
+  std::uint64_t rejected_mask = 0;        //!< enable bit at or above the motor count
+  std::uint64_t stale_dropped = 0;     //!< older valid setpoints drained unanswered (queue of one)
   std::uint64_t transport_errors = 0;  //!< receive or send failures
   std::uint64_t watchdog_trips = 0;    //!< times the 100 ms watchdog disabled the motors
 };
@@ -108,21 +111,26 @@ class SbrioEmulator {
   //! Waits up to `timeout` for a setpoint packet, runs the rig up to the clock's now (tripping the
   //! watchdog on the way if due), applies the packet and answers it with the rig's state.
   [[nodiscard]] PollEvent poll(std::chrono::nanoseconds timeout) noexcept {
-    const transport::ReceiveResult rx = transport_->receive(rx_buffer_, timeout);
+    // The newest datagram that decodes wins: junk arriving after a valid setpoint cannot
+    // displace it. Every refused datagram is counted by cause.
+    Decoder decoder{&counters_};
+    const transport::ReceiveResult rx = transport::receive_filtered(
+        *transport_, std::span<std::byte>(rx_buffer_), timeout, decoder);
     advance_to(clock_->now());
     counters_.stale_dropped += rx.dropped;
+    counters_.rejected_size += rx.oversized;
+    counters_.rejected += rx.oversized;
     if (rx.status == transport::TransportStatus::timeout) return PollEvent::idle;
     if (rx.status == transport::TransportStatus::error) {
       ++counters_.transport_errors;
       return PollEvent::transport_error;
     }
+    // the real sbRIO ignores what it cannot parse: no answer, no watchdog feed
+    if (rx.status == transport::TransportStatus::rejected) return PollEvent::rejected;
     typename Codec::Setpoint received;
-    const auto decoded = rx.status == transport::TransportStatus::ok
-                             ? Codec::decode_setpoint(
-                                   std::span<const std::byte>(rx_buffer_.data(), rx.size), received)
-                             : protocol::CodecStatus::wrong_size;
-    if (decoded != protocol::CodecStatus::ok) {
-      ++counters_.rejected;  // the real sbRIO ignores what it cannot parse: no answer, no feed
+    if (Codec::decode_setpoint(std::span<const std::byte>(rx_buffer_.data(), rx.size), received) !=
+        protocol::CodecStatus::ok) {
+      count_rejection(counters_, protocol::CodecStatus::wrong_size);  // a plain Transport's damage
       return PollEvent::rejected;
     }
     ++counters_.received;
@@ -167,6 +175,29 @@ class SbrioEmulator {
   [[nodiscard]] std::chrono::nanoseconds time() const noexcept { return last_time_; }
 
  private:
+  static void count_rejection(EmulatorCounters& c, protocol::CodecStatus status) noexcept {
+    ++c.rejected;
+    if (status == protocol::CodecStatus::mask_out_of_range) {
+      ++c.rejected_mask;
+    } else if (status == protocol::CodecStatus::wrong_size) {
+      ++c.rejected_size;
+    } else {
+      ++c.rejected_non_finite;
+    }
+  }
+
+  // The receive filter: a candidate only if it decodes as a setpoint packet.
+  struct Decoder {
+    EmulatorCounters* counters;
+    bool operator()(std::span<const std::byte> datagram) noexcept {
+      typename Codec::Setpoint scratch;
+      const auto status = Codec::decode_setpoint(datagram, scratch);
+      if (status == protocol::CodecStatus::ok) return true;
+      count_rejection(*counters, status);
+      return false;
+    }
+  };
+
   void run_until(std::chrono::nanoseconds t) noexcept {
     while (t > last_time_) {
       const auto step = std::min(t - last_time_, config_.max_advance);
@@ -184,7 +215,7 @@ class SbrioEmulator {
   std::chrono::nanoseconds last_packet_;
   bool tripped_ = false;
   EmulatorCounters counters_{};
-  std::array<std::byte, 2 * Codec::setpoint_packet_size> rx_buffer_{};  // room to see long ones
+  std::array<std::byte, Codec::setpoint_packet_size> rx_buffer_{};
 };
 
 }  // namespace endohaptics::sim

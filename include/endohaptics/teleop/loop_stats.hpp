@@ -13,6 +13,8 @@
 #include <limits>
 #include <string>
 
+#include "endohaptics/teleop/state_plausibility.hpp"
+
 namespace endohaptics::teleop {
 
 //! Online summary of one duration signal (a period or a round trip), in seconds.
@@ -93,10 +95,11 @@ class DurationStats {
 
 //! What happened in one tick, as reported by the loop.
 enum class TickOutcome : std::uint8_t {
-  received,        //!< a valid state packet arrived before the deadline
-  timeout,         //!< nothing arrived before the deadline (a miss)
-  decode_error,    //!< a datagram arrived but the codec rejected it (also a miss)
-  transport_error  //!< send or receive failed at the OS level (also a miss)
+  received,         //!< a valid state packet arrived before the deadline
+  timeout,          //!< nothing arrived before the deadline (a miss)
+  decode_error,     //!< a datagram arrived but the codec rejected it (also a miss)
+  transport_error,  //!< send or receive failed at the OS level (also a miss)
+  state_fault,      //!< a state decoded but is implausible (StateFault): never used (a miss)
 };
 
 //! Figures of the ticks between two LoopSnapshots (a window, e.g. one second), as a LoopStats
@@ -116,7 +119,18 @@ struct LoopWindow {
   std::uint64_t decode_errors = 0;     //!< a datagram the codec refused
   std::uint64_t transport_errors = 0;  //!< send or receive failed
   std::uint64_t stale_dropped = 0;     //!< older datagrams drained
+  std::uint64_t state_faults = 0;      //!< implausible states refused
+  std::uint64_t rejected = 0;          //!< datagrams the drain refused (any cause)
   double loss_percent = 0.0;           //!< exchanges without a valid state packet, %
+};
+
+//! Datagrams a receive's drain refused, by cause (the loop's decoder decides).
+struct RejectedDatagrams {
+  std::uint64_t wrong_size = 0;  //!< empty, short, long or oversized
+  std::uint64_t non_finite = 0;  //!< NaN or Inf in a value
+  std::uint64_t bad_mask = 0;    //!< active bit at or above the motor count
+  //! All causes.
+  [[nodiscard]] std::uint64_t total() const noexcept { return wrong_size + non_finite + bad_mask; }
 };
 
 //! A LoopStats' cumulative counters at one instant: fixed size, about 100 bytes (no histograms),
@@ -131,6 +145,8 @@ struct LoopSnapshot {
   std::uint64_t decode_errors = 0;               //!< datagrams the codec refused
   std::uint64_t transport_errors = 0;            //!< sends or receives that failed
   std::uint64_t stale_dropped = 0;               //!< older datagrams drained
+  std::uint64_t state_faults = 0;                //!< implausible states refused
+  std::uint64_t rejected = 0;                    //!< datagrams the drain refused
   std::uint64_t deadline_misses = 0;             //!< periods more than 10 % over nominal
   std::uint64_t period_errors = 0;               //!< periods summed in period_error_sum
   std::chrono::nanoseconds period_error_sum{0};  //!< sum of |period - nominal|
@@ -163,7 +179,9 @@ struct LoopSnapshot {
     w.decode_errors = decode_errors - earlier.decode_errors;
     w.transport_errors = transport_errors - earlier.transport_errors;
     w.stale_dropped = stale_dropped - earlier.stale_dropped;
-    w.exchanges = w.received + w.timeouts + w.decode_errors + w.transport_errors;
+    w.state_faults = state_faults - earlier.state_faults;
+    w.rejected = rejected - earlier.rejected;
+    w.exchanges = w.received + w.timeouts + w.decode_errors + w.transport_errors + w.state_faults;
     w.loss_percent = ratio(100.0 * static_cast<double>(w.exchanges - w.received), w.exchanges);
     return w;
   }
@@ -215,7 +233,24 @@ class LoopStats {
       case TickOutcome::transport_error:
         ++transport_errors_;
         break;
+      case TickOutcome::state_fault:
+        ++state_faults_total_;
+        break;
     }
+  }
+
+  //! An implausible state refused this tick (its cause; TickOutcome::state_fault is recorded
+  //! by record_exchange).
+  void record_state_fault(StateFault fault) noexcept {
+    const auto i = static_cast<std::size_t>(fault);
+    if (i < state_faults_.size()) ++state_faults_[i];
+  }
+
+  //! Datagrams the tick's drain refused, by cause.
+  void record_rejected(const RejectedDatagrams& r) noexcept {
+    rejected_.wrong_size += r.wrong_size;
+    rejected_.non_finite += r.non_finite;
+    rejected_.bad_mask += r.bad_mask;
   }
 
   //! Time spent computing in the tick (everything except waiting), for the compute budget.
@@ -231,13 +266,23 @@ class LoopStats {
   [[nodiscard]] std::uint64_t decode_errors() const noexcept { return decode_errors_; }
   //! Exchanges the operating system refused (send or receive error).
   [[nodiscard]] std::uint64_t transport_errors() const noexcept { return transport_errors_; }
+  //! Exchanges whose state decoded but was implausible (never used).
+  [[nodiscard]] std::uint64_t state_faults() const noexcept { return state_faults_total_; }
+  //! Implausible states of one cause (StateFault::none: always 0).
+  [[nodiscard]] std::uint64_t state_faults(StateFault fault) const noexcept {
+    const auto i = static_cast<std::size_t>(fault);
+    return i < state_faults_.size() ? state_faults_[i] : 0;
+  }
+  //! Datagrams the drains refused, by cause (a refused datagram need not cost an exchange: a
+  //! valid one in the same drain still counts as received).
+  [[nodiscard]] const RejectedDatagrams& rejected() const noexcept { return rejected_; }
   //! Older datagrams discarded by the transports' drains.
   [[nodiscard]] std::uint64_t stale_dropped() const noexcept { return stale_dropped_; }
   //! Ticks that started later than one nominal period after the previous one.
   [[nodiscard]] std::uint64_t deadline_misses() const noexcept { return deadline_misses_; }
-  //! All exchanges: received + timeouts + decode errors + transport errors.
+  //! All exchanges: received + timeouts + decode errors + transport errors + state faults.
   [[nodiscard]] std::uint64_t exchanges() const noexcept {
-    return received_ + timeouts_ + decode_errors_ + transport_errors_;
+    return received_ + timeouts_ + decode_errors_ + transport_errors_ + state_faults_total_;
   }
   //! Percentage of exchanges without a valid state packet (table 3.1's "packet loss").
   [[nodiscard]] double loss_percent() const noexcept {
@@ -276,6 +321,8 @@ class LoopStats {
     s.decode_errors = decode_errors_;
     s.transport_errors = transport_errors_;
     s.stale_dropped = stale_dropped_;
+    s.state_faults = state_faults_total_;
+    s.rejected = rejected_.total();
     s.deadline_misses = deadline_misses_;
     s.period_errors = period_error_.count();
     s.period_error_sum = period_error_sum_;
@@ -299,7 +346,8 @@ class LoopStats {
         "round trip  mean %8.1f us  std %7.2f us  p99 %7.1f us  max %8.1f us\n"
         "compute     mean %8.2f us  p99 %7.1f us  max %8.1f us\n"
         "packets     %llu ticks, %llu received, loss %.3f %% (timeouts %llu, decode errors "
-        "%llu, transport errors %llu), stale dropped %llu\n",
+        "%llu, transport errors %llu, state faults %llu), stale dropped %llu\n"
+        "rejected    %llu datagrams (wrong size %llu, non-finite %llu, bad mask %llu)\n",
         rate(), nominal.c_str(), us(period_.mean()), us(period_.stddev()),
         us(period_.quantile(0.99)), us(period_.max()), us(period_error_.mean()),
         us(period_error_.quantile(0.99)), us(period_error_.max()),
@@ -310,7 +358,12 @@ class LoopStats {
         loss_percent(), static_cast<unsigned long long>(timeouts_),
         static_cast<unsigned long long>(decode_errors_),
         static_cast<unsigned long long>(transport_errors_),
-        static_cast<unsigned long long>(stale_dropped_));
+        static_cast<unsigned long long>(state_faults_total_),
+        static_cast<unsigned long long>(stale_dropped_),
+        static_cast<unsigned long long>(rejected_.total()),
+        static_cast<unsigned long long>(rejected_.wrong_size),
+        static_cast<unsigned long long>(rejected_.non_finite),
+        static_cast<unsigned long long>(rejected_.bad_mask));
     return std::string(buf, n > 0 ? static_cast<std::size_t>(std::min<int>(n, sizeof buf - 1)) : 0);
   }
 
@@ -324,6 +377,9 @@ class LoopStats {
   std::uint64_t decode_errors_ = 0;
   std::uint64_t transport_errors_ = 0;
   std::uint64_t stale_dropped_ = 0;
+  std::uint64_t state_faults_total_ = 0;
+  std::array<std::uint64_t, state_fault_count> state_faults_{};
+  RejectedDatagrams rejected_{};
   std::uint64_t deadline_misses_ = 0;
   std::chrono::nanoseconds period_error_sum_{0};
   std::chrono::nanoseconds round_trip_sum_{0};

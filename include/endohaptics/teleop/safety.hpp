@@ -14,6 +14,7 @@
 
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/protocol/motor_order.hpp"
+#include "endohaptics/teleop/state_plausibility.hpp"
 
 namespace endohaptics::teleop {
 
@@ -63,7 +64,22 @@ enum class LinkState : std::uint8_t {
   return "unknown";
 }
 
-//! Safety limits and link-loss behaviour of a TeleopLoop. Units: s, rad/s, N.
+//! The physical bounds SafetyConfig::validate enforces (the largest values it accepts).
+struct SafetyBounds {
+  static constexpr int max_consecutive_misses = 1000;  //!< see also TeleopLoopConfig's 0.5 s
+  static constexpr double max_force_ramp_time = 10.0;  //!< s
+  //! rad/s at the gear output: what the motor can do at all (PlausibilityBounds::max_velocity).
+  static constexpr double max_setpoint_rate = PlausibilityBounds::max_velocity;
+  static constexpr double max_stylus_force = 3.3;  //!< N, the Geomagic Touch's peak force
+  //! rad: a joint range lies inside [-joint_limit, joint_limit] (the EndoWrist's is +-1.028).
+  static constexpr double joint_limit = 3.14159265358979323846;
+};
+
+//! One value per motor (motor order, as on the wire).
+using JointVector = Eigen::Matrix<double, protocol::endowrist_motors, 1>;
+
+//! Safety limits and link-loss behaviour of a TeleopLoop: the envelope every command stays in.
+//! Units: s, rad, rad/s, N. Every field has a physical range (SafetyBounds, StatePlausibility).
 struct SafetyConfig {
   int max_consecutive_misses = 10;  //!< link lost when misses exceed this (2016: "superior to 10")
   SafeStatePolicy policy = SafeStatePolicy::hold_position;  //!< robot behaviour while lost
@@ -71,9 +87,15 @@ struct SafetyConfig {
   double max_setpoint_rate = 4.0;   //!< rad/s per joint (motor side); the tool cannot go faster
   double max_stylus_force = 3.0;    //!< N, last guard before the device (Touch peak: 3.3 N)
   std::uint8_t enable_mask = 0x0F;  //!< motors to enable while the link is usable
+  //! rad, motor order: every setpoint the loop sends lies in [joint_lower, joint_upper],
+  //! whatever the stylus, the mapper or the robot's reported state say. Default: the +-1.028 rad
+  //! of the 2016 tuning logs (CylindricalMapperConfig's range).
+  JointVector joint_lower = JointVector::Constant(-1.028);
+  JointVector joint_upper = JointVector::Constant(1.028);  //!< rad, motor order
+  StatePlausibility plausibility{};  //!< what a reported state may say (else: a fault)
 
-  //! Throws Error naming the field and value. `motors` (1..8): how many the link carries; the
-  //! enable mask may only name those (bits 0..motors-1), anything above cannot be encoded.
+  //! Throws Error naming the field, the value and the allowed range. `motors` (1..8): how many
+  //! the link carries; the enable mask may only name those (bits 0..motors-1).
   void validate(int motors = protocol::endowrist_motors) const {
     auto fail = [](const std::string& what) { ENDOHAPTICS_THROW(Error("SafetyConfig: " + what)); };
     auto hex = [](unsigned value) {
@@ -81,6 +103,7 @@ struct SafetyConfig {
       std::snprintf(text, sizeof text, "0x%02X", value);
       return std::string(text);
     };
+    using endohaptics::detail::format_number;
     if (motors < 1 || motors > 8) {
       fail("motors must be 1..8 (one mask byte), got " + std::to_string(motors));
     }
@@ -89,18 +112,34 @@ struct SafetyConfig {
       fail("enable_mask must be <= " + hex(allowed) + " (bits 0.." + std::to_string(motors - 1) +
            ": " + std::to_string(motors) + " motors), got " + hex(enable_mask));
     }
-    if (max_consecutive_misses < 0) {
-      fail("max_consecutive_misses must be >= 0, got " + std::to_string(max_consecutive_misses));
+    if (max_consecutive_misses < 0 ||
+        max_consecutive_misses > SafetyBounds::max_consecutive_misses) {
+      fail("max_consecutive_misses must be in [0, " +
+           std::to_string(SafetyBounds::max_consecutive_misses) + "], got " +
+           std::to_string(max_consecutive_misses));
     }
-    if (!(force_ramp_time >= 0.0 && std::isfinite(force_ramp_time))) {
-      fail("force_ramp_time must be finite and >= 0 s, got " + std::to_string(force_ramp_time));
+    if (!(force_ramp_time >= 0.0 && force_ramp_time <= SafetyBounds::max_force_ramp_time)) {
+      fail("force_ramp_time must be in [0, " + format_number(SafetyBounds::max_force_ramp_time) +
+           "] s, got " + format_number(force_ramp_time));
     }
-    if (!(max_setpoint_rate > 0.0)) {  // +inf allowed: no rate limit
-      fail("max_setpoint_rate must be > 0 rad/s, got " + std::to_string(max_setpoint_rate));
+    if (!(max_setpoint_rate > 0.0 && max_setpoint_rate <= SafetyBounds::max_setpoint_rate)) {
+      fail("max_setpoint_rate must be in (0, " + format_number(SafetyBounds::max_setpoint_rate) +
+           "] rad/s, got " + format_number(max_setpoint_rate));
     }
-    if (!(max_stylus_force >= 0.0 && std::isfinite(max_stylus_force))) {
-      fail("max_stylus_force must be finite and >= 0 N, got " + std::to_string(max_stylus_force));
+    if (!(max_stylus_force >= 0.0 && max_stylus_force <= SafetyBounds::max_stylus_force)) {
+      fail("max_stylus_force must be in [0, " + format_number(SafetyBounds::max_stylus_force) +
+           "] N (the Touch's peak), got " + format_number(max_stylus_force));
     }
+    for (int m = 0; m < protocol::endowrist_motors; ++m) {
+      const double lo = joint_lower[m];
+      const double hi = joint_upper[m];
+      if (!(lo >= -SafetyBounds::joint_limit && hi <= SafetyBounds::joint_limit && lo < hi)) {
+        fail("joint range of motor " + std::to_string(m) +
+             " must satisfy -pi <= lower < upper <= pi rad, got [" + format_number(lo) + ", " +
+             format_number(hi) + "]");
+      }
+    }
+    plausibility.validate();
   }
 };
 
@@ -134,6 +173,18 @@ class Watchdog {
       ++losses_;
     } else if (state_ == LinkState::up) {
       state_ = LinkState::degraded;
+    }
+    return state_;
+  }
+
+  //! An implausible state arrived (StateFault): a miss, and the link is lost at once unless it
+  //! is still waiting for its first valid state (then nothing was ever enabled).
+  LinkState fault() noexcept {
+    ++misses_;
+    ++total_misses_;
+    if (state_ != LinkState::waiting && state_ != LinkState::lost) {
+      state_ = LinkState::lost;
+      ++losses_;
     }
     return state_;
   }

@@ -19,6 +19,7 @@
 #include "endohaptics/teleop/haptic_device.hpp"
 #include "endohaptics/teleop/loop_stats.hpp"
 #include "endohaptics/teleop/safety.hpp"
+#include "endohaptics/teleop/state_plausibility.hpp"
 #include "endohaptics/transport/transport.hpp"
 
 namespace endohaptics::teleop {
@@ -51,6 +52,7 @@ enum class TickStatus : std::uint8_t {
   link_lost,     //!< safe state: zero force, robot per SafeStatePolicy
   waiting,       //!< no valid state yet: motors disabled, zero force
   device_error,  //!< the haptic device failed: zero force commanded, robot held
+  state_fault,   //!< an implausible state arrived (TickResult::state_fault): refused, safe state
 };
 
 //! The status's name for logs ("ok", "degraded", "link lost", ...).
@@ -66,6 +68,8 @@ enum class TickStatus : std::uint8_t {
       return "waiting";
     case TickStatus::device_error:
       return "device error";
+    case TickStatus::state_fault:
+      return "state fault";
   }
   return "unknown";
 }
@@ -76,6 +80,7 @@ struct [[nodiscard]] TickResult {
   LinkState link = LinkState::waiting;                       //!< watchdog state after this tick
   TickOutcome exchange = TickOutcome::timeout;               //!< how the send/receive ended
   protocol::CodecStatus decode = protocol::CodecStatus::ok;  //!< decoding of the state packet
+  StateFault state_fault = StateFault::none;  //!< why the decoded state was refused, if it was
   //! Status of the send, or of the receive when the send succeeded.
   transport::TransportStatus transport = transport::TransportStatus::ok;
   //! Stylus read status; error also when commanding the force failed.
@@ -87,13 +92,14 @@ struct [[nodiscard]] TickResult {
   bool force_limited = false;       //!< stylus force scaled down to a limit
   //! The watchdog's count of misses in a row after this tick.
   int consecutive_misses = 0;
-  double force_scale = 0.0;                       //!< ramp factor applied to the force, 0..1
-  MotorVector setpoint = MotorVector::Zero();     //!< rad, what was sent (motor order)
-  std::uint8_t enable_mask = 0;                   //!< what was sent
-  MotorState4 measured{};                         //!< newest valid state (held on a miss)
-  MotorVector motor_force = MotorVector::Zero();  //!< estimate, motor order
+  double force_scale = 0.0;                    //!< ramp factor applied to the force, 0..1
+  MotorVector setpoint = MotorVector::Zero();  //!< rad, what was sent (motor order)
+  std::uint8_t enable_mask = 0;                //!< what was sent
+  MotorState4 measured{};  //!< newest valid, plausible state (held on a miss or a fault)
+  MotorVector motor_force = MotorVector::Zero();           //!< estimate, motor order
   Eigen::Vector3d stylus_force = Eigen::Vector3d::Zero();  //!< N, what the device was told
   std::chrono::nanoseconds round_trip{0};  //!< ns from send to receive return; 0 if not sent
+  RejectedDatagrams rejected{};            //!< datagrams this tick's drain refused, by cause
 
   //! True when `status` is TickStatus::ok.
   [[nodiscard]] bool ok() const noexcept { return status == TickStatus::ok; }
@@ -105,6 +111,9 @@ struct TeleopLoopConfig {
   std::chrono::nanoseconds period = std::chrono::milliseconds(1);
   std::chrono::nanoseconds receive_timeout = std::chrono::milliseconds(1);  //!< 2016: 1 ms
   SafetyConfig safety{};  //!< watchdog, safe state, ramp and limits
+
+  //! Longest silence before the safe state: (misses + 1) x the longest tick (validate()).
+  static constexpr std::chrono::nanoseconds max_watchdog_time = std::chrono::milliseconds(500);
 
   //! Largest dt a tick gives the setpoint rate limit and the force ramp: the period, or with
   //! period 0 the receive timeout (a tick's longest wait) but at least 1 ms.
@@ -121,9 +130,24 @@ struct TeleopLoopConfig {
                 "allows), got " +
                 std::to_string(period.count())));
     }
-    if (receive_timeout.count() < 0)
-      ENDOHAPTICS_THROW(Error("TeleopLoopConfig: receive_timeout must be >= 0"));
+    if (receive_timeout.count() < 0 || receive_timeout > max_watchdog_time) {
+      ENDOHAPTICS_THROW(Error("TeleopLoopConfig: receive_timeout must be in [0, " +
+                              std::to_string(max_watchdog_time.count()) + "] ns, got " +
+                              std::to_string(receive_timeout.count())));
+    }
     safety.validate(protocol::endowrist_motors);
+    // The watchdog declares the link lost after max_consecutive_misses + 1 missed ticks of at
+    // most max(period, receive_timeout) each: that must stay within max_watchdog_time.
+    const auto tick = std::max(period, receive_timeout);
+    const auto silence = tick * (safety.max_consecutive_misses + 1);
+    if (silence > max_watchdog_time) {
+      ENDOHAPTICS_THROW(Error(
+          "TeleopLoopConfig: (safety.max_consecutive_misses + 1) x max(period, receive_timeout) "
+          "= " +
+          std::to_string(safety.max_consecutive_misses + 1) + " x " + std::to_string(tick.count()) +
+          " ns must be <= " + std::to_string(max_watchdog_time.count()) +
+          " ns: a lost link must reach the safe state within 0.5 s"));
+    }
   }
 };
 
@@ -179,7 +203,8 @@ class TeleopLoop {
       }
     }
 
-    // 2. Setpoint to send: safe state, rate limit, enable mask.
+    // 2. Setpoint to send: safe state, rate limit, enable mask, and last the joint range: no
+    //    stylus, mapper or reported state can put a setpoint outside it.
     const LinkState link_before = watchdog_.state();
     const bool device_ok = r.device != DeviceStatus::error;
     Codec::Setpoint out;
@@ -198,10 +223,13 @@ class TeleopLoop {
     } else {
       r.rate_limited = limiter_.shape(desired_, dt, out.position);
     }
+    out.position =
+        out.position.cwiseMax(config_.safety.joint_lower).cwiseMin(config_.safety.joint_upper);
     r.setpoint = out.position;
     r.enable_mask = out.enable_mask;
 
-    // 3. Exchange: send, then wait for the newest state until the deadline.
+    // 3. Exchange: send, then wait for the newest state that decodes until the deadline; check
+    //    that it is plausible before anything uses it.
     typename Codec::SetpointBytes tx{};
     bool received = false;
     std::size_t stale_dropped = 0;
@@ -212,18 +240,39 @@ class TeleopLoop {
       const auto sent_at = clock_->now();
       r.transport = transport_->send(tx);
       if (r.transport == transport::TransportStatus::ok) {
-        const transport::ReceiveResult rx =
-            transport_->receive(rx_buffer_, config_.receive_timeout);
+        decoder_.reset();
+        const transport::ReceiveResult rx = transport::receive_filtered(
+            *transport_, std::span<std::byte>(rx_buffer_), config_.receive_timeout, decoder_);
+        const auto received_at = clock_->now();
         stale_dropped = rx.dropped;
-        r.round_trip = clock_->now() - sent_at;
+        r.round_trip = received_at - sent_at;
         r.transport = rx.status;
+        r.rejected = decoder_.rejected;
+        r.rejected.wrong_size += rx.oversized;
         if (rx.status == transport::TransportStatus::ok) {
-          r.decode =
-              Codec::decode_state(std::span<const std::byte>(rx_buffer_.data(), rx.size), state_);
-          received = r.decode == protocol::CodecStatus::ok;
-          r.exchange = received ? TickOutcome::received : TickOutcome::decode_error;
-        } else if (rx.status == transport::TransportStatus::truncated) {
-          r.decode = protocol::CodecStatus::wrong_size;
+          MotorState4 candidate = state_;
+          r.decode = Codec::decode_state(std::span<const std::byte>(rx_buffer_.data(), rx.size),
+                                         candidate);
+          if (r.decode == protocol::CodecStatus::ok) {
+            const double elapsed =
+                std::chrono::duration<double>(received_at - last_valid_at_).count();
+            r.state_fault = config_.safety.plausibility.check(
+                candidate, config_.safety.joint_lower, config_.safety.joint_upper,
+                have_valid_ ? &state_ : nullptr, elapsed);
+            received = r.state_fault == StateFault::none;
+            if (received) {
+              state_ = candidate;
+              have_valid_ = true;
+              last_valid_at_ = received_at;
+            }
+            r.exchange = received ? TickOutcome::received : TickOutcome::state_fault;
+          } else {
+            r.exchange = TickOutcome::decode_error;
+          }
+        } else if (rx.status == transport::TransportStatus::rejected) {
+          r.decode = rx.oversized > 0 && decoder_.rejected.total() == 0
+                         ? protocol::CodecStatus::wrong_size
+                         : decoder_.last;
           r.exchange = TickOutcome::decode_error;
         } else {
           r.exchange = rx.status == transport::TransportStatus::timeout
@@ -235,12 +284,20 @@ class TeleopLoop {
       }
     }
     stats_.record_exchange(r.exchange, r.round_trip, stale_dropped);
+    stats_.record_rejected(r.rejected);
+    if (r.state_fault != StateFault::none) stats_.record_state_fault(r.state_fault);
 
-    // 4. Watchdog, first contact, recovery.
-    const LinkState link = watchdog_.update(received, ramp_.done());
+    // 4. Watchdog, first contact, recovery. An implausible state is a fault: the safe state at
+    //    once (or, before first contact, nothing enabled), never followed.
+    const LinkState link = r.state_fault != StateFault::none
+                               ? watchdog_.fault()
+                               : watchdog_.update(received, ramp_.done());
     if (received && (link_before == LinkState::waiting || link_before == LinkState::lost)) {
       ramp_.restart();
-      if (link_before == LinkState::waiting) limiter_.initialize(state_.position);
+      if (link_before == LinkState::waiting) {
+        limiter_.initialize(state_.position.cwiseMax(config_.safety.joint_lower)
+                                .cwiseMin(config_.safety.joint_upper));
+      }
       estimator_->reset();
     }
     r.link = link;
@@ -286,6 +343,8 @@ class TeleopLoop {
     // 7. Status.
     if (r.device == DeviceStatus::error) {
       r.status = TickStatus::device_error;
+    } else if (r.state_fault != StateFault::none) {
+      r.status = TickStatus::state_fault;
     } else if (link == LinkState::waiting) {
       r.status = TickStatus::waiting;
     } else if (link == LinkState::lost) {
@@ -357,9 +416,38 @@ class TeleopLoop {
   LoopStats stats_;
   MotorVector desired_ = MotorVector::Zero();
   bool have_desired_ = false;
+  // The receive filter: a datagram is a candidate only if it decodes; refusals counted by cause.
+  struct StateDecoder {
+    RejectedDatagrams rejected{};
+    protocol::CodecStatus last = protocol::CodecStatus::ok;
+    void reset() noexcept { *this = StateDecoder{}; }
+    bool operator()(std::span<const std::byte> datagram) noexcept {
+      typename Codec::State scratch;
+      last = Codec::decode_state(datagram, scratch);
+      switch (last) {
+        case protocol::CodecStatus::ok:
+          return true;
+        case protocol::CodecStatus::non_finite:
+        case protocol::CodecStatus::out_of_range:
+          ++rejected.non_finite;
+          break;
+        case protocol::CodecStatus::mask_out_of_range:
+          ++rejected.bad_mask;
+          break;
+        case protocol::CodecStatus::wrong_size:
+          ++rejected.wrong_size;
+          break;
+      }
+      return false;
+    }
+  };
+
   MotorState4 state_{};
+  bool have_valid_ = false;  // state_ holds a plausible state received at last_valid_at_
+  std::chrono::nanoseconds last_valid_at_{0};
+  StateDecoder decoder_;
   MotorVector motor_force_ = MotorVector::Zero();
-  std::array<std::byte, 2 * Codec::state_packet_size> rx_buffer_{};  // room to detect long ones
+  std::array<std::byte, Codec::state_packet_size> rx_buffer_{};
   std::chrono::nanoseconds max_dt_;
   std::chrono::nanoseconds last_start_{0};
 };

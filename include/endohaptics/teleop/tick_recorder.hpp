@@ -24,19 +24,21 @@ namespace endohaptics::teleop {
 
 //! The tick log's columns in the order `TickRecorder::drain` writes them: the one definition of
 //! the header line (`TickRecorder::write_header`) and of the names readers look columns up by.
-//! status and link are the numeric values of TickStatus and LinkState.
-inline constexpr std::array<std::string_view, 7 + 5 * loop_motors + 3> tick_log_columns = {
-    "time",         "status",       "link",         "enable_mask", "active_mask", "round_trip",
-    "force_scale",  "setpoint0",    "setpoint1",    "setpoint2",   "setpoint3",   "position0",
-    "position1",    "position2",    "position3",    "velocity0",   "velocity1",   "velocity2",
-    "velocity3",    "current0",     "current1",     "current2",    "current3",    "motor_force0",
-    "motor_force1", "motor_force2", "motor_force3", "stylus_fx",   "stylus_fy",   "stylus_fz"};
+//! status, link and state_fault are the numeric values of TickStatus, LinkState and StateFault.
+inline constexpr std::array<std::string_view, 8 + 5 * loop_motors + 3> tick_log_columns = {
+    "time",         "status",       "link",         "state_fault",  "enable_mask", "active_mask",
+    "round_trip",   "force_scale",  "setpoint0",    "setpoint1",    "setpoint2",   "setpoint3",
+    "position0",    "position1",    "position2",    "position3",    "velocity0",   "velocity1",
+    "velocity2",    "velocity3",    "current0",     "current1",     "current2",    "current3",
+    "motor_force0", "motor_force1", "motor_force2", "motor_force3", "stylus_fx",   "stylus_fy",
+    "stylus_fz"};
 
 //! One CSV row: what a tick sent, received, estimated and rendered.
 struct TickRecord {
   double time = 0.0;                              //!< s, the clock's time when the tick ended
   TickStatus status = TickStatus::waiting;        //!< the tick's overall status
   LinkState link = LinkState::waiting;            //!< the watchdog's link state
+  StateFault state_fault = StateFault::none;      //!< why a received state was refused
   std::uint8_t enable_mask = 0;                   //!< motors enabled in the packet sent
   std::uint8_t active_mask = 0;                   //!< motors the sbRIO reported active
   double round_trip = 0.0;                        //!< s
@@ -54,6 +56,7 @@ struct TickRecord {
     rec.time = std::chrono::duration<double>(now).count();
     rec.status = r.status;
     rec.link = r.link;
+    rec.state_fault = r.state_fault;
     rec.enable_mask = r.enable_mask;
     rec.active_mask = r.measured.active_mask;
     rec.round_trip = std::chrono::duration<double>(r.round_trip).count();
@@ -103,10 +106,10 @@ class TickRecorder {
     std::size_t n = 0;
     TickRecord r;
     while (queue_.pop(r)) {
-      int written =
-          std::fprintf(out, "%.9f,%d,%d,%u,%u,%.9g,%.4g", r.time, static_cast<int>(r.status),
-                       static_cast<int>(r.link), unsigned{r.enable_mask}, unsigned{r.active_mask},
-                       r.round_trip, r.force_scale);
+      int written = std::fprintf(out, "%.9f,%d,%d,%d,%u,%u,%.9g,%.4g", r.time,
+                                 static_cast<int>(r.status), static_cast<int>(r.link),
+                                 static_cast<int>(r.state_fault), unsigned{r.enable_mask},
+                                 unsigned{r.active_mask}, r.round_trip, r.force_scale);
       for (const MotorVector* v :
            {&r.setpoint, &r.position, &r.velocity, &r.current, &r.motor_force}) {
         for (int i = 0; i < loop_motors; ++i) written = std::fprintf(out, ",%.7g", (*v)[i]);

@@ -77,17 +77,28 @@ class FaultInjectingTransport {
   //! Receives through the inner transport, then may drop, delay, reorder, corrupt or truncate
   //! the datagram; a held-back datagram is delivered when nothing usable arrives.
   ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds timeout) noexcept {
-    ReceiveResult result = inner_->receive(buffer, timeout);
-    if (result.status != TransportStatus::ok) return deliver_held(buffer, result);
+    AcceptAny any;
+    return receive(buffer, timeout, any);
+  }
+
+  //! As receive(buffer, timeout) with the inner transport's filtered drain; what the faults
+  //! changed (a late, reordered, corrupted or truncated datagram) is shown to `filter` again, so
+  //! damage is refused as it would be at the receiver.
+  template <DatagramFilter F>
+  ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds timeout,
+                        F& filter) noexcept {
+    ReceiveResult result = receive_filtered(*inner_, buffer, timeout, filter);
+    if (result.status != TransportStatus::ok)
+      return refilter(buffer, deliver_held(buffer, result), filter);
 
     if (happens(rates_.drop_receive)) {
       ++counters_.dropped_receive;
-      return deliver_held(buffer, {TransportStatus::timeout, 0, result.dropped});
+      return refilter(buffer, deliver_held(buffer, nothing(result)), filter);
     }
     if (!held_ && happens(rates_.delay)) {  // hold this one back for a later receive
       ++counters_.delayed;
       hold(buffer.first(result.size));
-      return {TransportStatus::timeout, 0, result.dropped};
+      return nothing(result);
     }
     if (held_ && happens(rates_.reorder)) {  // an older datagram overtakes the newer one
       ++counters_.reordered;
@@ -96,9 +107,12 @@ class FaultInjectingTransport {
       std::memcpy(newer.data(), buffer.data(), n);
       result = deliver_held(buffer, result);
       hold(std::span<const std::byte>(newer.data(), n));
-      return damage(buffer, result);
+      return refilter(buffer, damage(buffer, result), filter);
     }
-    return damage(buffer, result);
+    const std::uint64_t before = counters_.corrupted + counters_.truncated;
+    result = damage(buffer, result);
+    if (counters_.corrupted + counters_.truncated == before) return result;  // untouched
+    return refilter(buffer, result, filter);
   }
 
   //! Faults injected since construction.
@@ -118,14 +132,40 @@ class FaultInjectingTransport {
     held_ = true;
   }
 
-  // When nothing usable arrived but a datagram is held back, the late one arrives now.
+  // `r` with nothing delivered (a timeout, its counts kept).
+  static ReceiveResult nothing(ReceiveResult r) noexcept {
+    r.status = TransportStatus::timeout;
+    r.size = 0;
+    return r;
+  }
+
+  // When nothing usable arrived but a datagram is held back, the late one arrives now (a copy
+  // too long for `buffer` is refused as oversized).
   ReceiveResult deliver_held(std::span<std::byte> buffer, ReceiveResult fallback) noexcept {
     if (!held_ || fallback.status == TransportStatus::error) return fallback;
     held_ = false;
-    const std::size_t n = std::min(held_size_, buffer.size());
-    std::memcpy(buffer.data(), held_data_.data(), n);
-    return {held_size_ > buffer.size() ? TransportStatus::truncated : TransportStatus::ok, n,
-            fallback.dropped};
+    if (held_size_ > buffer.size()) {
+      ++fallback.oversized;
+      fallback.status = TransportStatus::rejected;
+      fallback.size = 0;
+      return fallback;
+    }
+    std::memcpy(buffer.data(), held_data_.data(), held_size_);
+    fallback.status = TransportStatus::ok;
+    fallback.size = held_size_;
+    return fallback;
+  }
+
+  // Shows a delivered datagram to the filter once more: refused means status rejected.
+  template <typename F>
+  static ReceiveResult refilter(std::span<std::byte> buffer, ReceiveResult r, F& filter) noexcept {
+    if (r.status == TransportStatus::ok &&
+        !filter(std::span<const std::byte>(buffer.data(), r.size))) {
+      r.status = TransportStatus::rejected;
+      r.size = 0;
+      ++r.rejected;
+    }
+    return r;
   }
 
   ReceiveResult damage(std::span<std::byte> buffer, ReceiveResult result) noexcept {

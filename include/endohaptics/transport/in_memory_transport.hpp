@@ -91,23 +91,28 @@ class InMemoryTransport {
   //! Returns the newest queued datagram, discarding older ones, after reading at most max_drain
   //! of them (the rest stay queued). Never waits: an empty queue is a timeout at once (simulated
   //! time is the caller's business).
-  ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds) noexcept {
-    ReceiveResult result;
+  ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds timeout) noexcept {
+    AcceptAny any;
+    return receive(buffer, timeout, any);
+  }
+
+  //! As receive(buffer, timeout), returning the newest datagram `filter` accepts; refused and
+  //! oversized ones (truncated by the queue, or longer than `buffer`) are counted.
+  template <DatagramFilter F>
+  ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds, F& filter) noexcept {
     if (closed_) {
+      ReceiveResult result;
       result.status = TransportStatus::error;
       return result;
     }
+    std::array<std::byte, MaxDatagram> scratch;  // NOLINT: written by pop before it is read
+    detail::NewestAccepted<F> drain(buffer, filter);
     std::size_t size = 0;
     bool truncated = false;
-    bool any = false;
-    for (std::size_t reads = 0; reads < max_drain_ && rx_->pop(buffer, size, truncated); ++reads) {
-      if (any) ++result.dropped;
-      any = true;
+    for (std::size_t reads = 0; reads < max_drain_ && rx_->pop(scratch, size, truncated); ++reads) {
+      drain.offer(std::span<const std::byte>(scratch.data(), size), truncated ? size + 1 : size);
     }
-    if (!any) return result;  // timeout
-    result.size = size;
-    result.status = truncated ? TransportStatus::truncated : TransportStatus::ok;
-    return result;
+    return drain.finish(TransportStatus::timeout);
   }
 
   //! Simulates a dead socket: every call fails until reopened.
@@ -180,9 +185,17 @@ class RespondingTransport {
   //! Returns the newest queued reply like InMemoryTransport::receive (never waits; reads at most
   //! default_max_drain replies); error when closed.
   ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds timeout) noexcept {
+    AcceptAny any;
+    return receive(buffer, timeout, any);
+  }
+
+  //! As receive(buffer, timeout), returning the newest reply `filter` accepts.
+  template <DatagramFilter F>
+  ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds timeout,
+                        F& filter) noexcept {
     InMemoryTransport<MaxDatagram, Capacity> view(unused_, replies_);
     if (closed_) view.close();
-    return view.receive(buffer, timeout);
+    return view.receive(buffer, timeout, filter);
   }
 
   //! The owned responder (e.g. to inspect or reconfigure an emulated sbRIO).

@@ -6,6 +6,7 @@
 
 #include <sys/socket.h>
 
+#include <array>
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/address.hpp>
 #include <boost/asio/ip/udp.hpp>
@@ -79,10 +80,19 @@ class UdpServerTransport {
   //! Waits up to `timeout`, drains the socket (at most max_drain datagrams), returns the newest
   //! one read and remembers its sender as the peer `send` answers.
   ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds timeout) noexcept {
+    AcceptAny any;
+    return receive(buffer, timeout, any);
+  }
+
+  //! As receive(buffer, timeout), returning the newest datagram `filter` accepts; only its sender
+  //! becomes the peer (a refused datagram never redirects the answers).
+  template <DatagramFilter F>
+  ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds timeout,
+                        F& filter) noexcept {
     sockaddr_storage from{};
-    const ReceiveResult r =
-        detail::receive_newest(socket_.native_handle(), buffer, timeout, &from, max_drain_);
-    if (r.status == TransportStatus::ok || r.status == TransportStatus::truncated) {
+    const ReceiveResult r = detail::receive_newest(socket_.native_handle(), buffer, timeout, &from,
+                                                   max_drain_, scratch_, filter);
+    if (r.status == TransportStatus::ok) {
       peer_ = from;
       peer_size_ = from.ss_family == AF_INET6 ? sizeof(sockaddr_in6) : sizeof(sockaddr_in);
     }
@@ -104,10 +114,11 @@ class UdpServerTransport {
   boost::asio::io_context io_;
   boost::asio::ip::udp::socket socket_;
   std::size_t max_drain_;
+  std::array<std::byte, detail::max_datagram_bytes> scratch_{};
   sockaddr_storage peer_{};
   socklen_t peer_size_ = 0;
 };
 
-static_assert(Transport<UdpServerTransport>);
+static_assert(FilteringTransport<UdpServerTransport>);
 
 }  // namespace endohaptics::transport

@@ -8,6 +8,7 @@
 #include <sys/socket.h>
 
 #include <algorithm>
+#include <array>
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/address.hpp>
 #include <boost/asio/ip/udp.hpp>
@@ -42,39 +43,43 @@ inline TransportStatus wait_readable(int fd, std::chrono::nanoseconds timeout) n
   }
 }
 
-//! Waits up to `timeout`, then drains `fd`, reading at most `max_drain` (>= 1) datagrams, and
-//! keeps the newest one read in `buffer`; the rest stay queued. With `from` != nullptr, that
-//! datagram's sender is written there (unconnected sockets).
-inline ReceiveResult receive_newest(int fd, std::span<std::byte> buffer,
-                                    std::chrono::nanoseconds timeout, sockaddr_storage* from,
-                                    std::size_t max_drain) noexcept {
-  ReceiveResult result;
-  result.status = wait_readable(fd, timeout);
-  if (result.status != TransportStatus::ok) return result;
-  result.status = TransportStatus::timeout;  // readable but nothing to read (e.g. bad checksum)
-  bool any = false;
+//! Largest datagram a UDP transport reads whole; longer ones are refused as oversized (every
+//! packet of the protocol is < 100 bytes).
+inline constexpr std::size_t max_datagram_bytes = 2048;
+
+//! Waits up to `timeout`, then drains `fd`, reading at most `max_drain` (>= 1) datagrams into
+//! `scratch`, and keeps in `buffer` the newest one `filter` accepts; the rest stay queued. With
+//! `from` != nullptr, that datagram's sender is written there (unconnected sockets).
+template <typename F>
+ReceiveResult receive_newest(int fd, std::span<std::byte> buffer, std::chrono::nanoseconds timeout,
+                             sockaddr_storage* from, std::size_t max_drain,
+                             std::span<std::byte, max_datagram_bytes> scratch, F& filter) noexcept {
+  const TransportStatus waited = wait_readable(fd, timeout);
+  if (waited != TransportStatus::ok) {
+    ReceiveResult r;
+    r.status = waited;
+    return r;
+  }
+  NewestAccepted<F> drain(buffer, filter);
+  TransportStatus none = TransportStatus::timeout;  // readable but nothing (e.g. bad checksum)
   for (std::size_t reads = 0; reads < max_drain;) {
     sockaddr_storage sender{};
     socklen_t sender_size = sizeof(sender);
     const ssize_t n =
-        ::recvfrom(fd, buffer.data(), buffer.size(), MSG_DONTWAIT | MSG_TRUNC,
+        ::recvfrom(fd, scratch.data(), scratch.size(), MSG_DONTWAIT | MSG_TRUNC,
                    from != nullptr ? reinterpret_cast<sockaddr*>(&sender) : nullptr,  // NOLINT
                    from != nullptr ? &sender_size : nullptr);
     if (n < 0) {
       if (errno == EINTR) continue;
       if (errno == EAGAIN || errno == EWOULDBLOCK) break;
-      if (!any) result.status = TransportStatus::error;
-      return result;
+      if (!drain.any()) none = TransportStatus::error;
+      break;
     }
     ++reads;
-    if (any) ++result.dropped;
-    any = true;
-    if (from != nullptr) *from = sender;
-    const auto size = static_cast<std::size_t>(n);  // MSG_TRUNC: the real datagram length
-    result.status = size > buffer.size() ? TransportStatus::truncated : TransportStatus::ok;
-    result.size = std::min(size, buffer.size());
+    // MSG_TRUNC: n is the real length, also of a datagram longer than the scratch.
+    if (drain.offer(scratch, static_cast<std::size_t>(n)) && from != nullptr) *from = sender;
   }
-  return result;
+  return drain.finish(none);
 }
 
 }  // namespace detail
@@ -153,7 +158,17 @@ class UdpTransport {
   //! Waits up to `timeout` for a datagram, then drains the socket (at most max_drain datagrams)
   //! and returns the newest one read.
   ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds timeout) noexcept {
-    return detail::receive_newest(socket_.native_handle(), buffer, timeout, nullptr, max_drain_);
+    AcceptAny any;
+    return receive(buffer, timeout, any);
+  }
+
+  //! As receive(buffer, timeout), returning the newest datagram `filter` accepts (junk arriving
+  //! after a valid packet cannot displace it); refused and oversized ones are counted.
+  template <DatagramFilter F>
+  ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds timeout,
+                        F& filter) noexcept {
+    return detail::receive_newest(socket_.native_handle(), buffer, timeout, nullptr, max_drain_,
+                                  scratch_, filter);
   }
 
   //! Datagrams one receive reads at most.
@@ -168,8 +183,9 @@ class UdpTransport {
   boost::asio::io_context io_;
   boost::asio::ip::udp::socket socket_;
   std::size_t max_drain_;
+  std::array<std::byte, detail::max_datagram_bytes> scratch_{};
 };
 
-static_assert(Transport<UdpTransport>);
+static_assert(FilteringTransport<UdpTransport>);
 
 }  // namespace endohaptics::transport
