@@ -12,19 +12,24 @@
 #include <charconv>
 #include <cstdint>
 #include <endohaptics/core/error.hpp>
+#include <endohaptics/kinematics/denavit_hartenberg.hpp>
 #include <endohaptics/teleop/haptic_device.hpp>
 #include <string>
 
-// Frames and units. The HD API reports HD_CURRENT_POSITION in mm and takes HD_CURRENT_FORCE in N,
-// both in the Touch's frame: x right, y up, z towards the user (right-handed; origin where the
-// driver puts it, as far as we know in the workspace, not at the device base). The library's base
-// frame (StylusSample, the CylindricalMapper) is x right, y away from the user, z up, in m and N:
-//     position_base = (x, -z, y)_Touch / 1000        force_Touch = (Fx, Fz, -Fy)_base
-// a proper rotation (det +1) about x, the same one for position and force, so the force the
-// operator feels does the same work along a stylus motion in both frames. No origin shift is
-// applied: docs/models/cylindrical_mapper.md expects the origin at the device base (its 2016
-// coefficients put the clamp and pitch zero crossings about 0.13 m from it); that disagreement is
-// open, see docs/rig.md.
+// Frames and units. The HD API reports HD_CURRENT_POSITION (the gimbal centre) in mm and takes
+// HD_CURRENT_FORCE in N, both in the Touch's frame: x to the operator's right, y up, z towards the
+// operator (right-handed). The library takes positions and forces in CylindricalMapper's mapping
+// frame (include/endohaptics/kinematics/cylindrical_mapper.hpp): origin on the waist axis at the
+// desk, x towards the operator (the neutral direction), y to the operator's right, z up; m, N:
+//     position = (z, x, y)_Touch / 1000 + hd_origin        force_Touch = (Fy, Fz, Fx)
+// a proper rotation (det +1; a cyclic permutation of the axes), the same one for position and
+// force, so the force does the same work along a stylus motion in both frames. hd_origin is where
+// the HD origin lies in the mapping frame. Default (assumed, not measured): the gimbal centre with
+// the upper arm horizontal and the forearm vertical, which is where the published HD-frame
+// kinematics of the Phantom (x = -sin q1 (l1 cos q2 + l2 sin q3), y = l1 sin q2 - l2 cos q3 + l2,
+// z = -l1 + cos q1 (l1 cos q2 + l2 sin q3), q3 absolute; Ubitrack's FWKinematicPhantom with no
+// origin correction) puts it: (a3, 0, d1 - d4) of kinematics::TouchGeometry = (0.133, 0, -0.008)
+// m. Measure it on the rig (docs/models/cylindrical_mapper.md, "Mapping frame") and pass it in.
 //
 // Threads. The HD servo loop (hdScheduleAsynchronous, highest priority, ~1 kHz, the SDK's thread)
 // reads the stylus and writes the force inside hdBeginFrame/hdEndFrame. It exchanges them with the
@@ -41,16 +46,25 @@
 
 namespace bridge {
 
-//! Touch frame (x right, y up, z towards the user; mm) to the base frame (x right, y away from
-//! the user, z up; m).
-[[nodiscard]] inline Eigen::Vector3d touch_to_base_position(const HDdouble (&p_mm)[3]) noexcept {
-  return {p_mm[0] * 1e-3, -p_mm[2] * 1e-3, p_mm[1] * 1e-3};
+//! Where the HD origin lies in the mapping frame (m), assumed: the gimbal centre at the Touch's
+//! zero pose, (a3, 0, d1 - d4) of the default kinematics::TouchGeometry (see the file comment).
+[[nodiscard]] inline Eigen::Vector3d default_hd_origin() noexcept {
+  const endohaptics::kinematics::TouchGeometry<double> g;
+  return {g.a3, 0.0, g.d1 - g.d4};
 }
 
-//! Base-frame force (N) to the Touch frame (N): the inverse rotation of touch_to_base_position.
-[[nodiscard]] inline std::array<HDdouble, 3> base_to_touch_force(
+//! Touch frame (x right, y up, z towards the operator; mm) to the mapping frame (x towards the
+//! operator, y right, z up, origin on the waist axis at the desk; m).
+[[nodiscard]] inline Eigen::Vector3d touch_to_mapping_position(
+    const HDdouble (&p_mm)[3], const Eigen::Vector3d& hd_origin = default_hd_origin()) noexcept {
+  return Eigen::Vector3d(p_mm[2], p_mm[0], p_mm[1]) * 1e-3 + hd_origin;
+}
+
+//! Mapping-frame force (N) to the Touch frame (N): the inverse rotation of
+//! touch_to_mapping_position (forces are free vectors: no origin).
+[[nodiscard]] inline std::array<HDdouble, 3> mapping_to_touch_force(
     const Eigen::Vector3d& f) noexcept {
-  return {f.x(), f.z(), -f.y()};
+  return {f.y(), f.z(), f.x()};
 }
 
 //! Hands the newest value from one producer thread to one consumer thread (a triple buffer):
@@ -93,9 +107,17 @@ class LatestValue {
 class OpenHapticsDevice {
  public:
   //! Opens the default device, enables force output with ramping, schedules the servo callback
-  //! and starts the scheduler. Throws endohaptics::Error with the HD error text on failure, after
-  //! undoing what was already done.
-  OpenHapticsDevice() {
+  //! and starts the scheduler. `hd_origin`: the HD origin in the mapping frame (m). Throws
+  //! endohaptics::Error naming a non-finite `hd_origin`, or with the HD error text on failure
+  //! (after undoing what was already done).
+  explicit OpenHapticsDevice(const Eigen::Vector3d& hd_origin = default_hd_origin())
+      : hd_origin_(hd_origin) {
+    if (!hd_origin_.allFinite()) {
+      throw endohaptics::Error("OpenHapticsDevice: hd_origin must be finite, got (" +
+                               endohaptics::detail::format_number(hd_origin_.x()) + ", " +
+                               endohaptics::detail::format_number(hd_origin_.y()) + ", " +
+                               endohaptics::detail::format_number(hd_origin_.z()) + ") m");
+    }
     device_ = hdInitDevice(HD_DEFAULT_DEVICE);
     check("hdInitDevice");
     try {
@@ -134,7 +156,7 @@ class OpenHapticsDevice {
   OpenHapticsDevice(OpenHapticsDevice&&) = delete;
   OpenHapticsDevice& operator=(OpenHapticsDevice&&) = delete;
 
-  //! The newest stylus sample (base frame, m). not_ready before the first servo frame and while
+  //! The newest stylus sample (mapping frame, m). not_ready before the first servo frame and while
   //! the Touch needs calibration; error after an HD error. Wait-free, no allocation.
   endohaptics::teleop::DeviceStatus read(endohaptics::teleop::StylusSample& sample) noexcept {
     using endohaptics::teleop::DeviceStatus;
@@ -145,12 +167,12 @@ class OpenHapticsDevice {
     return samples_.take(sample) ? DeviceStatus::ok : DeviceStatus::not_ready;
   }
 
-  //! Sets the force (base frame, N) the servo loop sends from its next frame on; a non-finite
+  //! Sets the force (mapping frame, N) the servo loop sends from its next frame on; a non-finite
   //! force is sent as zero. error after an HD error. Wait-free, no allocation.
   endohaptics::teleop::DeviceStatus command_force(const Eigen::Vector3d& force) noexcept {
     using endohaptics::teleop::DeviceStatus;
     if (failed_.load(std::memory_order_acquire)) return DeviceStatus::error;
-    forces_.publish(force.allFinite() ? base_to_touch_force(force) : std::array<HDdouble, 3>{});
+    forces_.publish(force.allFinite() ? mapping_to_touch_force(force) : std::array<HDdouble, 3>{});
     return DeviceStatus::ok;
   }
 
@@ -193,7 +215,7 @@ class OpenHapticsDevice {
     }
     if (calibration == HD_CALIBRATION_OK) {
       endohaptics::teleop::StylusSample sample;
-      sample.position = touch_to_base_position(position);
+      sample.position = touch_to_mapping_position(position, self->hd_origin_);
       sample.buttons = static_cast<std::uint8_t>(buttons & 0xff);
       self->samples_.publish(sample);
     }
@@ -242,6 +264,7 @@ class OpenHapticsDevice {
     return std::string(digits.size() < 4 ? 4 - digits.size() : 0, '0') + digits;
   }
 
+  Eigen::Vector3d hd_origin_;  // the HD origin in the mapping frame, m
   HHD device_ = HD_INVALID_HANDLE;
   HDSchedulerHandle servo_ = 0;
   bool scheduled_ = false;        // hdUnschedule(servo_) on the way out

@@ -235,8 +235,8 @@ TEST_CASE("eq. 5.8: clamp force is radial and roll force tangential and pitch fo
     CHECK(force.isApprox(Vector3(0, -1, 0), 1e-15));
   }
   SUBCASE("pitch maps to z at any theta") {
-    REQUIRE(mapper.map_force(joint_forces(0, -1.5, 0, 0), 1.234, force).ok());
-    CHECK(force == Vector3(0, 0, -1.5));
+    REQUIRE(mapper.map_force(joint_forces(0, -1.25, 0, 0), 1.234, force).ok());
+    CHECK(force == Vector3(0, 0, -1.25));
   }
   SUBCASE("one jaw alone gives half its force (the mean of the two jaws)") {
     REQUIRE(mapper.map_force(joint_forces(0, 0, 0, 1.2), 0.0, force).ok());
@@ -305,7 +305,9 @@ TEST_CASE("the force mapping does the same work as the joint forces axis by axis
 }
 
 TEST_CASE("magnitude limit scales the force and keeps its direction") {
-  Mapper mapper;  // 2.5 N
+  Config shared_only;  // the shared 2.5 N limit alone: channel limits out of the way
+  shared_only.channel_limit.setConstant(1e9);
+  Mapper mapper(shared_only);
   Vector3 force = Vector3::Zero();
   // theta = 0: clamp 3 N along +y, roll 4 N along +x: (4, 3, 0), |F| = 5 -> (2, 1.5, 0).
   auto result = mapper.map_force(joint_forces(4, 0, -3, 3), 0.0, force);
@@ -324,7 +326,7 @@ TEST_CASE("magnitude limit scales the force and keeps its direction") {
   for (int trial = 0; trial < 1000; ++trial) {
     const Motors f(value(rng), value(rng), value(rng), value(rng));
     const double theta = value(rng) / 10;
-    Config unlimited;
+    Config unlimited = shared_only;
     unlimited.force_limit = 1e9;
     Vector3 raw = Vector3::Zero();
     REQUIRE(Mapper(unlimited).map_force(f, theta, raw).ok());
@@ -337,16 +339,107 @@ TEST_CASE("magnitude limit scales the force and keeps its direction") {
   // Huge but finite forces do not overflow the norm.
   REQUIRE(mapper.map_force(joint_forces(1e300, 0, 0, 0), 0.0, force).ok());
   CHECK(force.isApprox(Vector3(2.5, 0, 0), 1e-15));
+  // (f2 - f1) / 2 overflowing to inf is limited like any large channel, never NaN.
+  result = Mapper().map_force(joint_forces(0, 0, -1.7e308, 1.7e308), 0.0, force);
+  REQUIRE(result.ok());
+  CHECK(result.channel_limited_mask == 0b001);
+  CHECK(force.isApprox(Vector3(0, 1.4, 0), 1e-15));
+}
+
+TEST_CASE("per-channel limits: one wrong joint estimate cannot crowd out the others") {
+  // Issue 14: the worksheet saw a spurious ~10 N pitch estimate. With only the shared 2.5 N cap,
+  // (clamp 1, pitch 10) N scales to 2.5 / sqrt(101) = 0.249 of itself: the clamp feedback the
+  // operator needs drops to 0.25 N. Limited per channel first (1.4 N), nothing is shared-scaled.
+  Mapper mapper;
+  CHECK(mapper.config().channel_limit == Vector3::Constant(1.4));
+  Vector3 force = Vector3::Zero();
+  // theta = pi/2: e_r = +x, e_theta = -y. Clamp 1 N: f_clamp2 - f_clamp1 = 2.
+  auto result = mapper.map_force(joint_forces(0, 10, -1, 1), pi / 2, force);
+  REQUIRE(result.ok());
+  const Vector3 cyl = Mapper::cylindrical_force(force, pi / 2);
+  CHECK(cyl.x() >= 0.9);  // clamp component (before the fix: 0.2488 N)
+  CHECK(cyl.x() == exact(1.0));
+  CHECK(cyl.z() == exact(1.4));  // pitch limited to its channel limit, sign kept
+  CHECK(result.channel_limited_mask == 0b100);
+  CHECK_FALSE(result.limited);
+
+  // Signs survive the channel limit: -8 N pitch -> -1.4 N, -5 N roll -> -1.4 N along e_theta.
+  result = mapper.map_force(joint_forces(-5, -8, 0.25, -0.25), 0.0, force);
+  REQUIRE(result.ok());
+  CHECK(result.channel_limited_mask == 0b110);
+  CHECK(force.isApprox(Vector3(-1.4, -0.25, -1.4), 1e-15));
+
+  // All three channels saturated: 1.4 sqrt(3) = 2.425 N < 2.5 N, the shared cap stays idle.
+  result = mapper.map_force(joint_forces(30, 30, -30, 30), 0.3, force);
+  REQUIRE(result.ok());
+  CHECK(result.channel_limited_mask == 0b111);
+  CHECK_FALSE(result.limited);
+  CHECK(force.norm() == exact(1.4 * std::sqrt(3.0)));
+
+  // The shared cap still acts after the channel limits when configured tighter.
+  Config tight;
+  tight.force_limit = 1.0;
+  result = Mapper(tight).map_force(joint_forces(0, 10, -1, 1), pi / 2, force);
+  REQUIRE(result.ok());
+  CHECK(result.limited);
+  CHECK(force.norm() == exact(1.0));
+  CHECK(Mapper::cylindrical_force(force, pi / 2).x() == exact(1.0 / std::hypot(1.0, 1.4)));
+}
+
+TEST_CASE("the rendered force opposes every stylus motion its joint force resists") {
+  // A joint force f_j resists the joint motion dP_j when f_j dP_j < 0. The stylus motion dx that
+  // causes dP (eq. 5.9) must then feel F . dx < 0, and F . dx > 0 when the tool is pushed along:
+  // sign(F . dx) = sign(sum_j f_j dP_j), per cylindrical axis, for either sign of each a_i, any
+  // scale >= 0 and with the channel and shared limits active.
+  std::mt19937_64 rng(14);
+  std::uniform_real_distribution<double> value(-1.0, 1.0);
+  std::uniform_real_distribution<double> scale(0.0, 3.0);
+  int resisted = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    Config config;
+    config.a_roll *= value(rng) < 0 ? -1.0 : 1.0;
+    config.a_clamp *= value(rng) < 0 ? -1.0 : 1.0;
+    config.a_pitch *= value(rng) < 0 ? -1.0 : 1.0;
+    config.b_roll = config.b_pitch = config.b_clamp = 0.0;
+    config.lower.setConstant(-100.0);
+    config.upper.setConstant(100.0);
+    config.force_scale << scale(rng), scale(rng), scale(rng);
+    Mapper mapper(config);
+    const double theta = pi / 2 + 1.4 * value(rng);  // away from the cut at -pi/2
+    const Vector3 p(0.12 * std::sin(theta), 0.12 * std::cos(theta), 0.1);
+    const Vector3 e_r(std::sin(theta), std::cos(theta), 0);
+    const Vector3 e_t(std::cos(theta), -std::sin(theta), 0);
+    const Motors f = 3.0 * Motors(value(rng), value(rng), value(rng), value(rng));
+    Motors p0 = Motors::Zero();
+    REQUIRE(mapper.map_position(p, p0).ok());
+    Vector3 force = Vector3::Zero();
+    REQUIRE(mapper.map_force(f, force).ok());
+    int axis = 0;
+    for (const Vector3& dir : {e_r, e_t, Vector3(Vector3::UnitZ())}) {
+      const double channel_scale = config.force_scale[axis++];
+      for (const double step : {1e-6, -1e-6}) {
+        Motors p1 = Motors::Zero();
+        REQUIRE(mapper.map_position(p + step * dir, p1).ok());
+        const double joint_work = f.dot(p1 - p0);
+        const double stylus_work = force.dot(step * dir);
+        CAPTURE(trial);
+        if (std::abs(joint_work) < 1e-9 || channel_scale < 1e-3) continue;
+        CHECK((joint_work > 0) == (stylus_work > 0));
+        if (joint_work < 0) ++resisted;
+      }
+    }
+  }
+  CHECK(resisted > 2000);  // both signs were exercised many times
 }
 
 TEST_CASE("force scale per cylindrical axis and the sign of the position scales") {
   Config config;
-  config.force_scale << 0.5, 2.0, -1.0;  // clamp, roll, pitch
+  config.force_scale << 0.5, 2.0, 0.0;  // clamp, roll, pitch (0: no pitch feedback)
   Mapper mapper(config);
   Vector3 force = Vector3::Zero();
-  // theta = 0: clamp (1 - -1)/2 * 0.5 = 0.5 along +y, roll 0.5 * 2 = 1 along +x, pitch -1.
+  // theta = 0: clamp (1 - -1)/2 * 0.5 = 0.5 along +y, roll 0.5 * 2 = 1 along +x, pitch 0.
   REQUIRE(mapper.map_force(joint_forces(0.5, 1.0, -1.0, 1.0), 0.0, force).ok());
-  CHECK(force.isApprox(Vector3(1.0, 0.5, -1.0), 1e-15));
+  CHECK(force.isApprox(Vector3(1.0, 0.5, 0.0), 1e-15));
 
   Config mirrored;
   mirrored.a_roll = -0.7096;  // roll runs the other way round: so does its feedback
@@ -380,6 +473,49 @@ TEST_CASE("round trip: the projection inverts eq. 5.8 and a radial force is clam
     CHECK(std::abs(cyl.y()) < 1e-15);
     CHECK(cyl.z() == 0.0);
   }
+}
+
+TEST_CASE("the rest pose straight ahead maps to mid-range setpoints") {
+  // Mapping frame: neutral direction +x (theta = pi/2), z up, origin on the waist axis at the
+  // desk. rest_position: r = b_clamp / a_clamp = 0.7 / 5.384 = 0.130015 m,
+  // z = -b_pitch / a_pitch = 0.54 / 3.93 = 0.137405 m (python3: 0.7/5.384, 0.54/3.93).
+  const Vector3 rest = endohaptics::kinematics::rest_position<double>();
+  CHECK(rest.x() == exact(0.7 / 5.384));
+  CHECK(rest.y() == 0.0);
+  CHECK(rest.z() == exact(0.54 / 3.93));
+  Mapper mapper;
+  Motors out = Motors::Zero();
+  const auto result = mapper.map_position(rest, out);
+  REQUIRE(result.ok());
+  CHECK(result.coordinates.theta == exact(pi / 2));
+  CHECK(std::abs(out[0]) < 0.01);   // roll 0.0066 rad of +-1.028
+  CHECK(std::abs(out[1]) < 1e-12);  // pitch
+  CHECK(std::abs(out[2]) < 1e-12);  // clamps
+  CHECK(std::abs(out[3]) < 1e-12);
+  CHECK(result.clamped_mask == 0);
+
+  // Straight ahead at any radius or height keeps roll mid-range; sideways does not (roll is the
+  // azimuth): 0.1 m to the operator's right (+y) at the rest radius turns theta down.
+  REQUIRE(mapper.map_position(Vector3(0.2, 0.0, 0.1), out).ok());
+  CHECK(std::abs(out[0]) < 0.01);
+  REQUIRE(mapper.map_position(Vector3(rest.x(), 0.1, rest.z()), out).ok());
+  CHECK(out[0] == exact(0.7096 * std::atan2(rest.x(), 0.1) - 1.108));
+
+  // Other ranges and coefficients: the middle of each range.
+  Config config;
+  config.lower << -0.5, -0.2, -1.0, -1.0;
+  config.upper << 0.5, 0.6, 0.4, 0.4;  // pitch mid 0.2, clamp1 mid -0.3
+  config.a_pitch = -2.0;
+  const Vector3 other = endohaptics::kinematics::rest_position(config);
+  Mapper custom(config);
+  REQUIRE(custom.map_position(other, out).ok());
+  CHECK(out[1] == exact(0.2));
+  CHECK(out[2] == exact(-0.3));
+  config.a_clamp = 0.0;
+  CHECK_THROWS_WITH_AS((void)endohaptics::kinematics::rest_position(config),
+                       "rest_position: a_clamp and a_pitch must be non-zero, got a_clamp 0, "
+                       "a_pitch -2",
+                       endohaptics::Error);
 }
 
 TEST_CASE("non-finite input is refused and leaves outputs and theta untouched") {
@@ -477,13 +613,30 @@ TEST_CASE("invalid configurations throw endohaptics::Error naming field and valu
   c = Config{};
   c.force_scale[1] = -inf;
   CHECK(message(c) == "CylindricalMapper: force_scale[1] is not finite (-inf)");
+  c = Config{};
+  c.force_scale[0] = -1.0;  // would render the clamp force along the operator's motion
+  CHECK(message(c) == "CylindricalMapper: force_scale[0] must be >= 0, got -1");
+  c = Config{};
+  c.force_scale[2] = -1e-9;
+  CHECK(message(c) == "CylindricalMapper: force_scale[2] must be >= 0, got -1e-09");
+  c = Config{};
+  c.channel_limit[2] = 0.0;
+  CHECK(message(c) == "CylindricalMapper: channel_limit[2] must be > 0 N, got 0");
+  c = Config{};
+  c.channel_limit[1] = not_a_number;
+  CHECK(message(c) == "CylindricalMapper: channel_limit[1] is not finite (nan)");
+  c = Config{};
+  c.force_scale[1] = 0.0;  // zero is allowed: that channel renders nothing
+  CHECK(message(c) == "no error");
 }
 
 TEST_CASE_TEMPLATE("float and double give the hand-computed values", Scalar, double, float) {
   using M = CylindricalMapper<Scalar>;
   using V3 = typename M::Vector3;
   const double tol = std::is_same_v<Scalar, float> ? 1e-6 : 1e-12;
-  M mapper;
+  typename M::Config config;
+  config.channel_limit.setConstant(Scalar(100));  // the shared limit alone, as in the test above
+  M mapper(config);
   typename M::MotorVector out = M::MotorVector::Zero();
   const auto result = mapper.map_position(V3(Scalar(0.1), Scalar(0), Scalar(0.2)), out);
   REQUIRE(result.ok());

@@ -2,6 +2,8 @@
 
 #include "endohaptics/kinematics/denavit_hartenberg.hpp"
 
+#include "endohaptics/kinematics/cylindrical_mapper.hpp"
+
 #include <doctest/doctest.h>
 
 #include <Eigen/Geometry>
@@ -32,6 +34,11 @@ constexpr double L = 0.13335;  // Phantom Omni upper arm and forearm, m (literat
 
 using Touch = DhChain<6>;
 using Hand = DhChain<3>;
+
+// Frame 0 at the shoulder (d1 = 0): the frame the hand computations below are written in.
+Touch shoulder_chain(double theta1 = 0.0) {
+  return geomagic_touch_chain<double>({.d1 = 0.0, .theta1 = theta1});
+}
 
 // The four factors of eq. D.1 multiplied one by one with Eigen (independent of the closed form).
 template <typename Scalar>
@@ -123,7 +130,7 @@ TEST_CASE("Geomagic Touch preset: zero configuration worked out by hand") {
   // horizontal, forearm down). Rotation: Rot_x(pi) Rot_x(-pi/2) = Rot_x(pi/2), then
   // Rot_x(pi/2) Rot_z(-pi/2) = [0 1 0; 0 0 -1; -1 0 0], times Rot_x(-pi/2) = [0 0 1; 0 1 0;
   // -1 0 0], times Rot_z(pi/2) = [0 0 1; 1 0 0; 0 1 0].
-  const Touch touch = geomagic_touch_chain();
+  const Touch touch = shoulder_chain();
   Eigen::Matrix4d expected;
   expected << 0, 0, 1, L,  //
       1, 0, 0, 0,          //
@@ -131,14 +138,15 @@ TEST_CASE("Geomagic Touch preset: zero configuration worked out by hand") {
       0, 0, 0, 1;
   CHECK(near(touch.forward(Touch::JointVector::Zero()).matrix(), expected));
 
-  // d1 only lifts everything: wrist centre (L, 0, d1 - L).
+  // d1 only lifts everything: wrist centre (L, 0, d1 - L). The default d1 is 0.125 m.
   const Touch lifted = geomagic_touch_chain<double>({.d1 = 0.125});
   expected(2, 3) = 0.125 - L;
   CHECK(near(lifted.forward(Touch::JointVector::Zero()).matrix(), expected));
+  CHECK(near(geomagic_touch_chain().forward(Touch::JointVector::Zero()).matrix(), expected));
 }
 
 TEST_CASE("Geomagic Touch preset: single joints at 90 degrees worked out by hand") {
-  const Touch touch = geomagic_touch_chain();
+  const Touch touch = shoulder_chain();
   Touch::JointVector q = Touch::JointVector::Zero();
 
   SUBCASE("waist q1 = pi/2 turns the whole arm about z0") {
@@ -154,7 +162,7 @@ TEST_CASE("Geomagic Touch preset: single joints at 90 degrees worked out by hand
     CHECK(touch.forward(q).translation().isApprox(Eigen::Vector3d(L, 0, L), 1e-12));
   }
   SUBCASE("theta1 is the same as an offset on q2") {
-    const Touch shifted = geomagic_touch_chain<double>({.theta1 = half_pi});
+    const Touch shifted = shoulder_chain(half_pi);
     CHECK(shifted.forward(q).translation().isApprox(Eigen::Vector3d(L, 0, L), 1e-12));
   }
   SUBCASE("elbow q3 = pi/2 stretches the arm forward") {
@@ -180,6 +188,49 @@ TEST_CASE("Geomagic Touch preset: single joints at 90 degrees worked out by hand
         1, 0, 0;
     CHECK(touch.forward(q).rotation().isApprox(expected, 1e-12));
   }
+}
+
+TEST_CASE("Touch preset: the rest pose maps to mid-range setpoints through the default chain") {
+  // Issue 14: frame 0 must be the mapper's frame (origin on the waist axis at the desk, x towards
+  // the operator, z up). Rest pose = stylus straight ahead where the 2016 eq. 5.9 puts pitch and
+  // clamps mid-range: r = 0.7 / 5.384 = 0.130015 m, z = 0.54 / 3.93 = 0.137405 m; the gimbal
+  // centre is then z - d1 = 0.012405 m above the shoulder (d1 = 0.125 m, URDF). Joint angles by
+  // the law of cosines, elbow up (python3, same formulas): D = hypot(0.130015, 0.012405) =
+  // 0.130605 m, interior elbow angle gamma = acos(1 - D^2 / (2 L^2)) = 1.023511 rad,
+  // q2 = atan2(0.012405, 0.130015) + (pi - gamma) / 2 = 1.154162 rad (upper arm 66.1 deg up),
+  // q3 = pi/2 - (pi - gamma) = -0.547285 rad (forearm 55.2 deg below horizontal).
+  const Eigen::Vector3d rest = endohaptics::kinematics::rest_position<double>();
+  const double h = rest.z() - TouchGeometry<double>{}.d1;
+  const double D = std::hypot(rest.x(), h);
+  const double gamma = std::acos(1 - D * D / (2 * L * L));
+  Touch::JointVector q = Touch::JointVector::Zero();
+  q[1] = std::atan2(h, rest.x()) + (pi - gamma) / 2;
+  q[2] = half_pi - (pi - gamma);
+  CHECK(q[1] == doctest::Approx(1.154162).epsilon(1e-6));
+  CHECK(q[2] == doctest::Approx(-0.547285).epsilon(1e-6));
+
+  const Touch touch = geomagic_touch_chain();  // the default geometry: frame 0 on the desk
+  const Eigen::Vector3d p = touch.forward(q).translation();
+  CHECK((p - rest).norm() < 1e-12);
+  endohaptics::kinematics::CylindricalMapper<> mapper;
+  Eigen::Vector4d setpoint = Eigen::Vector4d::Zero();
+  const auto result = mapper.map_position(p, setpoint);
+  REQUIRE(result.ok());
+  CHECK(std::abs(setpoint[0]) < 0.01);  // roll (0.0066 rad)
+  CHECK(std::abs(setpoint[1]) < 0.01);  // pitch (before the fix, from the shoulder: -0.491 rad)
+  CHECK(std::abs(setpoint[2]) < 0.01);  // clamps
+  CHECK(result.clamped_mask == 0);
+
+  // The gimbal joints do not move the point that is mapped.
+  q[3] = 0.4;
+  q[4] = -0.7;
+  q[5] = 1.1;
+  CHECK((touch.forward(q).translation() - rest).norm() < 1e-12);
+  // The waist turns the stylus about z: q1 > 0 moves it from +x towards +y (the operator's
+  // right), theta = atan2(x, y) falls by q1 and roll with it.
+  q[0] = 0.3;
+  REQUIRE(mapper.map_position(touch.forward(q).translation(), setpoint).ok());
+  CHECK(mapper.theta() == doctest::Approx(half_pi - 0.3).epsilon(1e-12));
 }
 
 TEST_CASE("Geomagic Touch preset equals table D.1 as printed read as modified DH") {

@@ -8,8 +8,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <endohaptics/kinematics/cylindrical_mapper.hpp>
 #include <endohaptics/teleop/haptic_device.hpp>
 #include <hd_standin_control.hpp>
+#include <numbers>
 #include <openhaptics_device.hpp>
 #include <string>
 #include <thread>
@@ -18,9 +20,10 @@ namespace openhaptics_openhaptics_device_test {
 
 // The Geomagic Touch adapter (examples/teleop_bridge/openhaptics_device.hpp) against the HD API
 // stand-in (tests/openhaptics_standin). Conventions under test:
-//  - HD_CURRENT_POSITION is mm in the Touch frame (x right, y up, z towards the user); the sample
-//    is m in the base frame (x right, y away from the user, z up): (x, -z, y) / 1000;
-//  - forces are N in both; base (Fx, Fy, Fz) is sent to the Touch as (Fx, Fz, -Fy);
+//  - HD_CURRENT_POSITION is mm in the Touch frame (x right, y up, z towards the operator); the
+//    sample is m in CylindricalMapper's mapping frame (x towards the operator, y right, z up,
+//    origin on the waist axis at the desk): (z, x, y) / 1000 + hd_origin;
+//  - forces are N in both; mapping-frame (Fx, Fy, Fz) is sent to the Touch as (Fy, Fz, Fx);
 //  - the servo thread and the loop thread hand values over wait-free, the newest wins.
 #ifndef ENDOHAPTICS_HD_STANDIN
 #error "these tests drive the simulated Touch: compile them against tests/openhaptics_standin"
@@ -56,7 +59,10 @@ const hd::Vec3 kZero{0.0, 0.0, 0.0};
 
 }  // namespace
 
-TEST_CASE("units and axes: Touch mm (x right, y up, z to the user) read as base m (y away, z up)") {
+TEST_CASE("units and axes: Touch mm (x right, y up, z to the operator) read in the mapping frame") {
+  // Default HD origin in the mapping frame: (a3, 0, d1 - d4) = (0.13335, 0, 0.125 - 0.13335) m.
+  const Eigen::Vector3d o(0.13335, 0.0, 0.125 - 0.13335);
+  CHECK((bridge::default_hd_origin() - o).norm() < 1e-15);
   fresh();
   {
     OpenHapticsDevice device;
@@ -65,46 +71,113 @@ TEST_CASE("units and axes: Touch mm (x right, y up, z to the user) read as base 
 
     struct Case {
       hd::Vec3 touch_mm;
-      Eigen::Vector3d base_m;
+      Eigen::Vector3d mapping_m;
     };
     const Case cases[] = {
-        {{10.0, 0.0, 0.0}, {0.01, 0.0, 0.0}},   // right stays right
-        {{0.0, 10.0, 0.0}, {0.0, 0.0, 0.01}},   // up is base +z
-        {{0.0, 0.0, 10.0}, {0.0, -0.01, 0.0}},  // towards the user is base -y
-        {{-25.5, 80.0, -120.0}, {-0.0255, 0.12, 0.08}},
+        {{0.0, 0.0, 0.0}, o},                                     // the HD origin
+        {{10.0, 0.0, 0.0}, o + Eigen::Vector3d(0.0, 0.01, 0.0)},  // right is mapping +y
+        {{0.0, 10.0, 0.0}, o + Eigen::Vector3d(0.0, 0.0, 0.01)},  // up is mapping +z
+        {{0.0, 0.0, 10.0}, o + Eigen::Vector3d(0.01, 0.0, 0.0)},  // to the operator is +x
+        {{-25.5, 80.0, -120.0}, o + Eigen::Vector3d(-0.12, -0.0255, 0.08)},
     };
     for (const Case& c : cases) {
-      CAPTURE(c.base_m.transpose());
+      CAPTURE(c.mapping_m.transpose());
       hd::set_position_mm(c.touch_mm);
       REQUIRE(hd::step() == 1);
       REQUIRE(device.read(sample) == tp::DeviceStatus::ok);
-      CHECK((sample.position - c.base_m).norm() < 1e-15);
+      CHECK((sample.position - c.mapping_m).norm() < 1e-12);
     }
 
     hd::set_buttons(HD_DEVICE_BUTTON_1 | HD_DEVICE_BUTTON_2);
     hd::step();
     REQUIRE(device.read(sample) == tp::DeviceStatus::ok);
     CHECK(sample.buttons == 0b11);
-    CHECK(hd::state().frames >= 5);
+    CHECK(hd::state().frames >= 6);
+  }
+  check_released();
+
+  // Another origin (measured on a rig) is taken as given; a non-finite one is refused.
+  fresh();
+  {
+    OpenHapticsDevice device(Eigen::Vector3d(0.2, -0.01, 0.09));
+    hd::set_position_mm({1.0, 2.0, 3.0});
+    REQUIRE(hd::step() == 1);
+    tp::StylusSample sample;
+    REQUIRE(device.read(sample) == tp::DeviceStatus::ok);
+    CHECK((sample.position - Eigen::Vector3d(0.203, -0.009, 0.092)).norm() < 1e-12);
+  }
+  check_released();
+  fresh();
+  CHECK_THROWS_WITH_AS(OpenHapticsDevice(Eigen::Vector3d(0.1, std::nan(""), 0.0)),
+                       "OpenHapticsDevice: hd_origin must be finite, got (0.1, nan, 0) m",
+                       endohaptics::Error);
+  CHECK_FALSE(hd::state().device_open);
+}
+
+TEST_CASE("the rest pose read through the adapter maps to mid-range setpoints") {
+  // Issue 14: with the 2016 frame passed through ((x, -z, y) / 1000, no origin shift) the stylus
+  // straight ahead gave theta = 0: roll pinned at its -1.028 rad limit (and clamp 1 at 0.682).
+  // The rest pose (kinematics::rest_position: straight ahead, r = 0.130015 m, z = 0.137405 m)
+  // has the joint angles q2 = 1.154162 rad, absolute forearm angle q2 + q3 = 0.606876 rad (see
+  // tests/kinematics/denavit_hartenberg_test.cpp). The published HD-frame kinematics of the
+  // Phantom (x = -sin q1 (l1 cos q2 + l2 sin q3), y = l1 sin q2 - l2 cos q3 + l2,
+  // z = -l1 + cos q1 (l1 cos q2 + l2 sin q3), l1 = l2 = 133.35 mm, q3 absolute) put the stylus
+  // there at HD (0, 145.7546, -3.3351) mm (python3, same formulas), independently of the adapter.
+  const double l = 133.35;
+  const double q2 = 1.1541618871391688;
+  const double q3 = 0.6068764694012174;
+  const hd::Vec3 rest_mm{0.0, l * std::sin(q2) - l * std::cos(q3) + l,
+                         -l + (l * std::cos(q2) + l * std::sin(q3))};
+  CHECK(rest_mm[1] == doctest::Approx(145.7546).epsilon(1e-6));
+  CHECK(rest_mm[2] == doctest::Approx(-3.3351).epsilon(1e-4));
+  fresh();
+  {
+    OpenHapticsDevice device;
+    hd::set_position_mm(rest_mm);
+    REQUIRE(hd::step() == 1);
+    tp::StylusSample sample;
+    REQUIRE(device.read(sample) == tp::DeviceStatus::ok);
+    CHECK((sample.position - endohaptics::kinematics::rest_position<double>()).norm() < 1e-9);
+    endohaptics::kinematics::CylindricalMapper<> mapper;
+    Eigen::Vector4d setpoint = Eigen::Vector4d::Zero();
+    const auto result = mapper.map_position(sample.position, setpoint);
+    REQUIRE(result.ok());
+    CHECK(result.coordinates.theta == doctest::Approx(std::numbers::pi / 2));
+    CHECK(std::abs(setpoint[0]) < 0.01);  // roll (before: -1.028, pinned at its limit)
+    CHECK(std::abs(setpoint[1]) < 0.01);  // pitch
+    CHECK(std::abs(setpoint[2]) < 0.01);  // clamps
+    CHECK(result.clamped_mask == 0);
+
+    // Turning the waist so that the stylus goes to the operator's right (HD +x) lowers theta.
+    hd::set_position_mm({30.0, rest_mm[1], rest_mm[2]});
+    REQUIRE(hd::step() == 1);
+    REQUIRE(device.read(sample) == tp::DeviceStatus::ok);
+    REQUIRE(mapper.map_position(sample.position, setpoint).ok());
+    CHECK(mapper.theta() < std::numbers::pi / 2 - 0.2);
   }
   check_released();
 }
 
 TEST_CASE("axes: one proper rotation for position and force, so force times motion is preserved") {
+  const HDdouble zero[3] = {0.0, 0.0, 0.0};
   const HDdouble ex[3] = {1000.0, 0.0, 0.0};  // 1 m along each Touch axis
   const HDdouble ey[3] = {0.0, 1000.0, 0.0};
   const HDdouble ez[3] = {0.0, 0.0, 1000.0};
+  const Eigen::Vector3d o = bridge::touch_to_mapping_position(zero);
+  const Eigen::Vector3d mx = bridge::touch_to_mapping_position(ex) - o;
+  const Eigen::Vector3d my = bridge::touch_to_mapping_position(ey) - o;
+  const Eigen::Vector3d mz = bridge::touch_to_mapping_position(ez) - o;
   // Right-handed in, right-handed out (determinant +1, not a mirror).
-  CHECK(bridge::touch_to_base_position(ex).cross(bridge::touch_to_base_position(ey)) ==
-        bridge::touch_to_base_position(ez));
+  CHECK((mx.cross(my) - mz).norm() < 1e-12);
 
   const HDdouble motion_mm[3] = {3.0, -7.0, 11.0};
-  const Eigen::Vector3d force_base(0.4, -1.5, 2.25);
-  const auto force_touch = bridge::base_to_touch_force(force_base);
+  const Eigen::Vector3d force_mapping(0.4, -1.5, 2.25);
+  const auto force_touch = bridge::mapping_to_touch_force(force_mapping);
   const double work_touch =
       force_touch[0] * motion_mm[0] + force_touch[1] * motion_mm[1] + force_touch[2] * motion_mm[2];
-  const double work_base = force_base.dot(bridge::touch_to_base_position(motion_mm)) * 1e3;
-  CHECK(work_base == doctest::Approx(work_touch).epsilon(1e-12));
+  const double work_mapping =
+      force_mapping.dot(bridge::touch_to_mapping_position(motion_mm) - o) * 1e3;
+  CHECK(work_mapping == doctest::Approx(work_touch).epsilon(1e-12));
 }
 
 TEST_CASE("forces: N to N, rotated back into the Touch frame, non-finite sent as zero") {
@@ -117,18 +190,18 @@ TEST_CASE("forces: N to N, rotated back into the Touch frame, non-finite sent as
     CHECK(hd::state().force_n == kZero);  // nothing commanded yet
 
     struct Case {
-      Eigen::Vector3d base_n;
+      Eigen::Vector3d mapping_n;
       hd::Vec3 touch_n;
     };
     const Case cases[] = {
-        {{1.0, 0.0, 0.0}, {1.0, 0.0, 0.0}},   // right stays right
-        {{0.0, 1.0, 0.0}, {0.0, 0.0, -1.0}},  // away from the user is Touch -z
-        {{0.0, 0.0, 1.0}, {0.0, 1.0, 0.0}},   // up is Touch +y
-        {{0.5, -1.25, 2.0}, {0.5, 2.0, 1.25}},
+        {{1.0, 0.0, 0.0}, {0.0, 0.0, 1.0}},  // towards the operator is Touch +z
+        {{0.0, 1.0, 0.0}, {1.0, 0.0, 0.0}},  // the operator's right is Touch +x
+        {{0.0, 0.0, 1.0}, {0.0, 1.0, 0.0}},  // up is Touch +y
+        {{0.5, -1.25, 2.0}, {-1.25, 2.0, 0.5}},
     };
     for (const Case& c : cases) {
-      CAPTURE(c.base_n.transpose());
-      REQUIRE(device.command_force(c.base_n) == tp::DeviceStatus::ok);
+      CAPTURE(c.mapping_n.transpose());
+      REQUIRE(device.command_force(c.mapping_n) == tp::DeviceStatus::ok);
       hd::step();
       CHECK(hd::state().force_n == c.touch_n);
     }
@@ -150,19 +223,19 @@ TEST_CASE("newest wins: the loop reads the last servo sample, the servo sends th
     }
     tp::StylusSample sample;
     REQUIRE(device.read(sample) == tp::DeviceStatus::ok);
-    CHECK(sample.position.x() == doctest::Approx(0.003));
+    CHECK(sample.position.y() == doctest::Approx(0.003));  // Touch x is mapping y
     sample = tp::StylusSample{};
     REQUIRE(device.read(sample) == tp::DeviceStatus::ok);  // nothing newer: the same sample again
-    CHECK(sample.position.x() == doctest::Approx(0.003));
+    CHECK(sample.position.y() == doctest::Approx(0.003));  // Touch x is mapping y
 
     for (int j = 1; j <= 3; ++j) {
       REQUIRE(device.command_force(Eigen::Vector3d(static_cast<double>(j), 0.0, 0.0)) ==
               tp::DeviceStatus::ok);
     }
     hd::step();
-    CHECK(hd::state().force_n == hd::Vec3{3.0, 0.0, 0.0});
+    CHECK(hd::state().force_n == hd::Vec3{0.0, 0.0, 3.0});
     hd::step();  // no new command: the newest force is held
-    CHECK(hd::state().force_n == hd::Vec3{3.0, 0.0, 0.0});
+    CHECK(hd::state().force_n == hd::Vec3{0.0, 0.0, 3.0});
   }
   check_released();
 }
@@ -183,7 +256,7 @@ TEST_CASE("loop side: read and command_force do not allocate while the servo thr
     CHECK(allocations == 0);
     CHECK(ok == 40000);
     REQUIRE(hd::wait_ticks(3, 2s));
-    CHECK(hd::state().force_n == hd::Vec3{0.1, 0.3, -0.2});
+    CHECK(hd::state().force_n == hd::Vec3{0.2, 0.3, 0.1});
   }
   check_released();
 }
@@ -204,8 +277,8 @@ TEST_CASE("hand-off stress: samples and forces whole, never older, across two th
   hd::set_force_observer([&](std::uint64_t, const hd::Vec3& f) {
     if (!checking.load(std::memory_order_acquire)) return;
     frames.fetch_add(1, std::memory_order_relaxed);
-    const double j = f[0];
-    if (f[1] != 3.0 * j || f[2] != -2.0 * j) torn_forces.fetch_add(1, std::memory_order_relaxed);
+    const double j = f[2];  // (j, 2j, 3j) in the mapping frame is (2j, 3j, j) on the Touch
+    if (f[0] != 2.0 * j || f[1] != 3.0 * j) torn_forces.fetch_add(1, std::memory_order_relaxed);
     if (j < last_j) older_forces.fetch_add(1, std::memory_order_relaxed);
     last_j = j;
   });
@@ -233,9 +306,9 @@ TEST_CASE("hand-off stress: samples and forces whole, never older, across two th
       }
       if (device.read(sample) != tp::DeviceStatus::ok) continue;
       ++reads;
-      const double k = std::round(sample.position.x() * 1e3);
+      const double k = std::round(sample.position.y() * 1e3);  // Touch x
       const HDdouble p[3] = {k, 2.0 * k, 3.0 * k};
-      if (sample.position != bridge::touch_to_base_position(p)) ++torn;
+      if (sample.position != bridge::touch_to_mapping_position(p)) ++torn;
       if (k < last_k) ++older;
       if (k > last_k) ++distinct;
       if (k < static_cast<double>(finished)) ++stale;
@@ -325,9 +398,9 @@ TEST_CASE("calibration needed: not ready and no force until calibrated") {
 
       hd::step();
       REQUIRE(device.read(sample) == tp::DeviceStatus::ok);
-      CHECK(sample.position.x() == doctest::Approx(0.01));
+      CHECK(sample.position.y() == doctest::Approx(0.01));
       CHECK(device.calibration_status() == HD_CALIBRATION_OK);
-      CHECK(hd::state().force_n == hd::Vec3{1.0, 0.0, 0.0});
+      CHECK(hd::state().force_n == hd::Vec3{0.0, 0.0, 1.0});
     }
   }
   SUBCASE("auto calibration is preferred when the device offers it") {
@@ -403,7 +476,7 @@ TEST_CASE("destruction: zero force sent, scheduler stopped, servo unscheduled, d
     OpenHapticsDevice device;
     REQUIRE(device.command_force(Eigen::Vector3d(1.0, 2.0, 3.0)) == tp::DeviceStatus::ok);
     REQUIRE(hd::wait_ticks(3, 2s));
-    CHECK(hd::state().force_n == hd::Vec3{1.0, 3.0, -2.0});
+    CHECK(hd::state().force_n == hd::Vec3{2.0, 3.0, 1.0});
   }
   CHECK(last_sent == kZero);  // the scheduler thread is joined: no race on last_sent
   check_released();

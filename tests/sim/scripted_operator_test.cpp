@@ -1,8 +1,10 @@
 #include <doctest/doctest.h>
 
 #include <chrono>
+#include <cmath>
 #include <endohaptics/kinematics/cylindrical_mapper.hpp>
 #include <endohaptics/sim/scripted_operator.hpp>
+#include <numbers>
 
 namespace sim_scripted_operator_test {
 
@@ -31,6 +33,27 @@ TEST_CASE("the default script opens and closes clamp 1 through the default mappi
   REQUIRE(op.read(s) == tp::DeviceStatus::ok);
   REQUIRE(mapper.map_position(s.position, setpoint).ok());
   CHECK(setpoint[2] == doctest::Approx(0.0).scale(1).epsilon(0.01));
+}
+
+TEST_CASE("the scripted rest pose is the mapper's rest pose: straight ahead, mid-range setpoints") {
+  // One definition of the rest pose (kinematics::rest_position, the mapping frame: +x towards the
+  // operator, z up, origin on the waist axis at the desk), shared with the Touch adapters.
+  endohaptics::ManualClock clock(0s);
+  sim::ScriptedOperator op(clock);
+  tp::StylusSample s;
+  REQUIRE(op.read(s) == tp::DeviceStatus::ok);  // t = 0: resting open, no force yet
+  const Eigen::Vector3d rest = endohaptics::kinematics::rest_position<double>();
+  CHECK((s.position - rest).norm() < 1e-15);  // before: 5 um off (z = 0.1374, r = 0.1300)
+  CHECK(std::abs(s.position.y()) < 1e-15);    // straight ahead: +x
+  endohaptics::kinematics::CylindricalMapper<> mapper;
+  Eigen::Vector4d setpoint;
+  const auto result = mapper.map_position(s.position, setpoint);
+  REQUIRE(result.ok());
+  CHECK(result.coordinates.theta == doctest::Approx(std::numbers::pi / 2).epsilon(1e-15));
+  CHECK(std::abs(setpoint[0]) < 0.01);   // roll 0.0066 rad
+  CHECK(std::abs(setpoint[1]) < 1e-12);  // pitch
+  CHECK(std::abs(setpoint[2]) < 1e-12);  // clamps open at mid-range
+  CHECK(std::abs(setpoint[3]) < 1e-12);
 }
 
 TEST_CASE("the rendered force moves the stylus by the arm's static compliance (eq. 5.3 at DC)") {

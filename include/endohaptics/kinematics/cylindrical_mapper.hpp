@@ -1,8 +1,17 @@
 //! @file
 //! CylindricalMapper: Geomagic Touch stylus position -> EndoWrist joint setpoints (eq. 5.9) and
 //! tool joint forces -> stylus force (eq. 5.8), worksheet 5.5 and figure 5.14.
-//! Units: position in m (Touch base frame, z up), theta and setpoints in rad (motor side, after
-//! gearing), forces in N. Conventions and defaults: docs/models/cylindrical_mapper.md.
+//! Units: position in m, theta and setpoints in rad (motor side, after gearing), forces in N.
+//!
+//! The mapping frame (the one definition every device adapter converts into; details and what is
+//! measured vs assumed: docs/models/cylindrical_mapper.md):
+//!  - origin O_c on the Touch's waist (vertical) axis, at the underside of its base (the desk);
+//!  - +z up, along the waist axis; +x horizontal, from the waist axis towards the operator, i.e.
+//!    where the arm points with the waist centred: the neutral direction, theta = pi/2;
+//!  - +y = z x x (right-handed): the operator's right; theta = atan2(x, y) grows from +y to +x.
+//! The 2016 coefficients put mid-range setpoints at the rest pose `rest_position()`: stylus
+//! straight ahead (theta = pi/2), r = b_clamp / a_clamp = 0.130 m, z = -b_pitch / a_pitch = 0.137
+//! m.
 #pragma once
 
 #include <Eigen/Core>
@@ -64,7 +73,10 @@ struct [[nodiscard]] PositionResult {
 //! What `map_force` did.
 struct [[nodiscard]] ForceResult {
   MapperStatus status = MapperStatus::ok;  //!< ok, or why the mapping was refused
-  bool limited = false;  //!< the force was scaled down to `force_limit` (direction kept)
+  //! Bit k: channel k (0 clamp/radial, 1 roll/tangential, 2 pitch/vertical) was limited to
+  //! `channel_limit[k]` (sign kept).
+  std::uint8_t channel_limited_mask = 0;
+  bool limited = false;  //!< the force was then scaled down to `force_limit` (direction kept)
 
   //! True when `status` is ok (force written).
   [[nodiscard]] constexpr bool ok() const noexcept { return status == MapperStatus::ok; }
@@ -92,10 +104,36 @@ struct CylindricalMapperConfig {
   //! rad, in [-pi, pi]: theta is reported in (neutral - pi, neutral + pi], and held at this
   //! value until the first position with r > min_radius.
   Scalar theta_neutral = std::numbers::pi_v<Scalar> / 2;
-  //! Per cylindrical axis (clamp/radial, roll/tangential, pitch/vertical), N per tool-force unit.
+  //! Per cylindrical axis (clamp/radial, roll/tangential, pitch/vertical), N per tool-force unit,
+  //! >= 0: a negative scale would turn the feedback to push along the operator's motion.
   Vector3 force_scale = Vector3::Ones();
+  //! N, > 0, per channel (clamp, roll, pitch), applied before `force_limit` so that one wrong
+  //! joint estimate cannot crowd out the others. 1.4 N <= force_limit / sqrt(3) = 1.44 N: with the
+  //! defaults the shared limit never scales a force whose channels are each within their limit.
+  Vector3 channel_limit = Vector3::Constant(Scalar(1.4));
   Scalar force_limit = Scalar(2.5);  //!< N, magnitude limit of the stylus force (Touch peak 3.3)
 };
+
+//! The rest pose of the mapping frame (m): the stylus straight ahead (theta = pi/2, +x) at the
+//! radius where the clamp setpoints and the height where the pitch setpoint are mid-range,
+//! r = (b_clamp - (lower + upper)[clamp1] / 2) / a_clamp, z = ((lower + upper)[pitch] / 2 -
+//! b_pitch) / a_pitch. 2016 defaults: (0.13002, 0, 0.13740); roll there is 0.0066 rad.
+//! Throws endohaptics::Error when a_clamp or a_pitch is 0 (no such height or radius).
+template <typename Scalar = double>
+[[nodiscard]] Eigen::Matrix<Scalar, 3, 1> rest_position(
+    const CylindricalMapperConfig<Scalar>& config = {}) {
+  if (!(config.a_clamp != 0) || !(config.a_pitch != 0)) {
+    ENDOHAPTICS_THROW(Error("rest_position: a_clamp and a_pitch must be non-zero, got a_clamp " +
+                            endohaptics::detail::format_number(config.a_clamp) + ", a_pitch " +
+                            endohaptics::detail::format_number(config.a_pitch)));
+  }
+  const auto clamp1 = static_cast<Eigen::Index>(Motor::clamp1);
+  const auto pitch = static_cast<Eigen::Index>(Motor::pitch);
+  const Scalar clamp_mid = (config.lower[clamp1] + config.upper[clamp1]) / 2;
+  const Scalar pitch_mid = (config.lower[pitch] + config.upper[pitch]) / 2;
+  return {(config.b_clamp - clamp_mid) / config.a_clamp, Scalar(0),
+          (pitch_mid - config.b_pitch) / config.a_pitch};
+}
 
 //! Eq. 5.9 (position -> joint setpoints, with per-joint range limits) and eq. 5.8 (joint forces
 //! -> stylus force, with a magnitude limit). Per-tick functions are noexcept and allocation-free.
@@ -117,7 +155,7 @@ class CylindricalMapper {
   //! The validated configuration.
   [[nodiscard]] const Config& config() const noexcept { return config_; }
 
-  //! Eq. 5.9: stylus position (m, base frame) -> setpoints (rad, motor order), each limited to
+  //! Eq. 5.9: stylus position (m, mapping frame) -> setpoints (rad, motor order), each limited to
   //! its range. Updates the held theta. `setpoint` is untouched unless the result is ok.
   PositionResult<Scalar> map_position(const Vector3& position, MotorVector& setpoint) noexcept {
     PositionResult<Scalar> result;
@@ -160,8 +198,10 @@ class CylindricalMapper {
   }
 
   //! Eq. 5.8 at stylus angle `theta` (rad): joint forces (motor order; each the external force on
-  //! that joint, positive along its positive setpoint) -> stylus force (N, base frame), scaled per
-  //! axis and limited in magnitude. `stylus_force` is untouched unless the result is ok.
+  //! that joint, positive along its positive setpoint) -> stylus force (N, mapping frame), scaled
+  //! and limited per channel, then limited in magnitude. sign(a_i) makes each channel oppose the
+  //! stylus motion that would drive its joint further against the force (docs: "Signs of a").
+  //! `stylus_force` is untouched unless the result is ok.
   ForceResult map_force(const MotorVector& motor_force, Scalar theta,
                         Vector3& stylus_force) const noexcept {
     ForceResult result;
@@ -174,9 +214,21 @@ class CylindricalMapper {
     const Scalar f_clamp1 = motor_force[motor_of(Motor::clamp1)];
     const Scalar f_clamp2 = motor_force[motor_of(Motor::clamp2)];
     // Generalised forces along r, theta, z (virtual work: P_clamp2 grows with r, P_clamp1 falls).
-    const Scalar clamp = sign(config_.a_clamp) * (f_clamp2 - f_clamp1) / 2 * config_.force_scale[0];
-    const Scalar roll = sign(config_.a_roll) * f_roll * config_.force_scale[1];
-    const Scalar pitch = sign(config_.a_pitch) * f_pitch * config_.force_scale[2];
+    std::array<Scalar, 3> channel = {
+        sign(config_.a_clamp) * (f_clamp2 - f_clamp1) / 2 * config_.force_scale[0],
+        sign(config_.a_roll) * f_roll * config_.force_scale[1],
+        sign(config_.a_pitch) * f_pitch * config_.force_scale[2]};
+    for (std::size_t k = 0; k < channel.size(); ++k) {
+      const Scalar limit = config_.channel_limit[static_cast<Eigen::Index>(k)];
+      if (std::fabs(channel[k]) > limit) {  // an overflow to inf is limited too
+        channel[k] = std::copysign(limit, channel[k]);
+        result.channel_limited_mask =
+            static_cast<std::uint8_t>(result.channel_limited_mask | (1u << k));
+      }
+    }
+    const Scalar clamp = channel[0];
+    const Scalar roll = channel[1];
+    const Scalar pitch = channel[2];
     const Scalar s = std::sin(theta);
     const Scalar c = std::cos(theta);
     Vector3 force(clamp * s + roll * c, clamp * c - roll * s, pitch);
@@ -280,8 +332,23 @@ class CylindricalMapper {
                               endohaptics::detail::format_number(config_.theta_neutral)));
     }
     for (int k = 0; k < 3; ++k) {
+      // Appended, not "[" + to_string(k): GCC 12's -Wrestrict misfires on const char* + string&&.
+      std::string index(1, '[');
+      index += std::to_string(k);
+      index += ']';
       endohaptics::detail::require_finite(config_.force_scale[k], "CylindricalMapper",
-                                          ("force_scale[" + std::to_string(k) + "]").c_str());
+                                          ("force_scale" + index).c_str());
+      if (config_.force_scale[k] < 0) {  // the feedback would push along the operator's motion
+        ENDOHAPTICS_THROW(Error("CylindricalMapper: force_scale" + index + " must be >= 0, got " +
+                                endohaptics::detail::format_number(config_.force_scale[k])));
+      }
+      endohaptics::detail::require_finite(config_.channel_limit[k], "CylindricalMapper",
+                                          ("channel_limit" + index).c_str());
+      if (!(config_.channel_limit[k] > 0)) {
+        ENDOHAPTICS_THROW(Error("CylindricalMapper: channel_limit" + index +
+                                " must be > 0 N, got " +
+                                endohaptics::detail::format_number(config_.channel_limit[k])));
+      }
     }
     endohaptics::detail::require_finite(config_.force_limit, "CylindricalMapper", "force_limit");
     if (!(config_.force_limit > 0)) {

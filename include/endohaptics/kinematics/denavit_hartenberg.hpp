@@ -133,20 +133,24 @@ class DhChain {
   Rows rows_;
 };
 
-//! Link lengths of the Touch preset. Published Phantom Omni values (literature, not measured
-//! here): a3 = d4 = 133.35 mm (Jarillo-Silva et al., CERMA 2009). d1 and theta1 are not defined
-//! by the worksheet: 0 puts frame 0 at the shoulder and q2 = 0 at a horizontal upper arm.
+//! Geometry of the Touch preset. Link lengths: published Phantom Omni values (literature, not
+//! measured here): a3 = d4 = 133.35 mm (Jarillo-Silva et al., CERMA 2009). d1 = 0.125 m, the
+//! shoulder above the desk (public Omni URDF, WPI-AIM/ros_geomagic: 0.09 + 0.035 m), puts frame 0
+//! at the origin of CylindricalMapper's mapping frame (on the waist axis at the desk, x towards
+//! the operator at q1 = 0, z up), so forward() gives positions the mapper takes as they are.
+//! d1 = 0 puts frame 0 at the shoulder instead (0.49 rad of 2016 pitch lower).
 template <typename Scalar = double>
 struct TouchGeometry {
-  Scalar d1 = Scalar(0);        //!< m, base frame to shoulder along z0
+  Scalar d1 = Scalar(0.125);    //!< m, desk (mapping-frame origin) to shoulder along z0
   Scalar a3 = Scalar(0.13335);  //!< m, upper arm (shoulder to elbow)
   Scalar d4 = Scalar(0.13335);  //!< m, forearm (elbow to gimbal centre)
-  Scalar theta1 = Scalar(0);    //!< rad, offset of the shoulder joint q2
+  Scalar theta1 = Scalar(0);    //!< rad, offset of the shoulder joint q2 (0: q2 = 0 is horizontal)
 };
 
 //! Table D.1 (Geomagic Touch, joints q1..q6 in rad) converted to eq. D.1: the table lists
 //! (a_{i-1}, alpha_{i-1}) per row, so a and alpha move up one row. Same T_0^6 as the table read
 //! with the modified-DH product Rot_x(alpha_{i-1}) Trans_x(a_{i-1}) Rot_z(theta_i) Trans_z(d_i).
+//! The end frame's origin is the gimbal centre, in the mapping frame with the default d1.
 template <typename Scalar = double>
 [[nodiscard]] DhChain<6, Scalar> geomagic_touch_chain(const TouchGeometry<Scalar>& g = {}) {
   constexpr Scalar half_pi = std::numbers::pi_v<Scalar> / 2;

@@ -2,7 +2,9 @@
 //! ScriptedOperator: a simulated operator holding the stylus (a teleop::HapticDevice). The hand
 //! follows a grasp-and-release script in cylindrical coordinates (figure 5.14: the radius r
 //! closes the clamps, eq. 5.9), and the stylus is where the arm of worksheet 5.1 (eq. 5.3,
-//! table 5.1) puts it under the force the loop renders. Units: m, s, N.
+//! table 5.1) puts it under the force the loop renders. Units: m, s, N; positions and forces in
+//! CylindricalMapper's mapping frame (kinematics/cylindrical_mapper.hpp: origin on the Touch's
+//! waist axis at the desk, x towards the operator, z up), the frame the Touch adapters produce.
 #pragma once
 
 #include <Eigen/Core>
@@ -14,25 +16,27 @@
 
 #include "endohaptics/core/clock.hpp"
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/kinematics/cylindrical_mapper.hpp"
 #include "endohaptics/model/human_arm_model.hpp"
 #include "endohaptics/teleop/haptic_device.hpp"
 
 namespace endohaptics::sim {
 
-//! The script: rest open, close (smoothly, raised cosine), hold, open, repeat. Defaults map
-//! through the default CylindricalMapperConfig to clamp 1 from 0 rad (open) to +0.6 rad (closed,
-//! into the default tissue), roll and pitch near 0; the setpoint moves at most ~1.2 rad/s, within
-//! what the simulated cascade follows (docs/models/sim.md).
+//! The script: rest open, close (smoothly, raised cosine), hold, open, repeat. The rest (open)
+//! pose is the mapper's kinematics::rest_position(): straight ahead at the height and radius where
+//! the default CylindricalMapperConfig puts pitch and clamps mid-range (roll 0.0066 rad). Closing
+//! takes clamp 1 from 0 rad to +0.6 rad (into the default tissue); the setpoint moves at most
+//! ~1.2 rad/s, within what the simulated cascade follows (docs/models/sim.md).
 struct OperatorScript {
-  double theta = std::numbers::pi / 2;  //!< rad, stylus azimuth (roll ~ 0 with the defaults)
-  double z = 0.1374;                    //!< m, stylus height (pitch ~ 0 with the defaults)
-  double r_open = 0.1300;               //!< m, radius with the clamps open
-  double r_closed = 0.0186;             //!< m, radius the hand aims at when grasping
-  double open_time = 0.7;               //!< s, resting open at the start of a cycle
-  double close_time = 0.8;              //!< s, closing
-  double hold_time = 0.7;               //!< s, holding closed
-  double release_time = 0.8;            //!< s, opening
-  double arm_sample_time = 1e-3;        //!< s, the arm model's ZOH period
+  double theta = std::numbers::pi / 2;                 //!< rad, stylus azimuth: straight ahead (+x)
+  double z = kinematics::rest_position<double>().z();  //!< m, stylus height (0.13740)
+  double r_open = kinematics::rest_position<double>().x();  //!< m, radius, clamps open (0.13002)
+  double r_closed = 0.0186;       //!< m, radius the hand aims at when grasping
+  double open_time = 0.7;         //!< s, resting open at the start of a cycle
+  double close_time = 0.8;        //!< s, closing
+  double hold_time = 0.7;         //!< s, holding closed
+  double release_time = 0.8;      //!< s, opening
+  double arm_sample_time = 1e-3;  //!< s, the arm model's ZOH period
 
   //! Duration of one open-close-hold-release cycle, s.
   [[nodiscard]] double cycle() const noexcept {
@@ -59,7 +63,7 @@ struct OperatorScript {
           arm_sample_time);
   }
 
-  //! Where the hand aims at time `t` (s since start), m, device base frame.
+  //! Where the hand aims at time `t` (s since start), m, mapping frame.
   [[nodiscard]] Eigen::Vector3d intent(double t) const noexcept {
     const double c = cycle();
     double phase = std::fmod(std::max(t, 0.0), c);
@@ -113,7 +117,8 @@ class ScriptedOperator {
     return teleop::DeviceStatus::ok;
   }
 
-  //! Force (N) on the hand from now on; a non-finite force is refused (zero force, error).
+  //! Force (N, mapping frame) on the hand from now on; a non-finite force is refused (zero force,
+  //! error).
   teleop::DeviceStatus command_force(const Eigen::Vector3d& force) noexcept {
     if (!force.allFinite()) {
       force_.setZero();
