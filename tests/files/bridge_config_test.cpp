@@ -391,6 +391,10 @@ TEST_CASE("the joint range and the plausibility bounds are keys, checked and rou
   CHECK(back.loop.safety.joint_upper == c.loop.safety.joint_upper);
   CHECK(back.loop.safety.plausibility.max_current == 5.0);
 
+  CHECK(files::parse_bridge_config(R"({"mapping": {"channel_limit": [2, 0.5, 0.5]}})")
+            .mapping.channel_limit[1] == 0.5);
+  CHECK(error_of(R"({"mapping": {"channel_limit": [1, 1, 10]}})") ==
+        "bridge.json: mapping.channel_limit[2]: must be a number in (0, 3.3] N, got 10");
   CHECK(error_of(R"({"plausibility": {"max_current": 100}})") ==
         "bridge.json: plausibility.max_current: must be a number in (0, 15] A, got 100");
   CHECK(error_of(R"({"plausibility": {"max_velocity": 0}})") ==

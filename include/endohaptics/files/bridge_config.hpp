@@ -178,6 +178,9 @@ void visit_schema(Config& c, Visitor& v) {
   Range force_limit = Range::between(0.0, teleop::SafetyBounds::max_stylus_force, "N");
   force_limit.lo_open = true;
   v.number("mapping", "force_limit", m.force_limit, force_limit);
+  // Per channel (clamp, roll, pitch) before the shared force_limit: one wrong estimate cannot
+  // crowd out the others.
+  v.vector("mapping", "channel_limit", m.channel_limit, force_limit);
 
   auto& s = c.loop.safety;
   using SB = teleop::SafetyBounds;
