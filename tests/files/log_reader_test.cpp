@@ -274,9 +274,10 @@ TEST_CASE("read_csv: header names, separators detected, time column by name") {
 TEST_CASE("read_log and parse_log_format: the command-line entry points") {
   CHECK(files::parse_log_format("endowrist-2016") == files::LogFormat::endowrist_2016);
   CHECK(files::parse_log_format("csv") == files::LogFormat::csv);
-  CHECK_THROWS_WITH_AS((void)files::parse_log_format("mat"),
-                       doctest::Contains("unknown log format 'mat' (valid: endowrist-2016, csv)"),
-                       Error);
+  CHECK_THROWS_WITH_AS(
+      (void)files::parse_log_format("mat"),
+      doctest::Contains("unknown log format 'mat' (valid: endowrist-2016, csv, umn-mis-2018)"),
+      Error);
   const TempDir dir;
   const files::Log log =
       files::read_log(dir.write("a.csv", "0,0.4,0.001,0,0,0,0\n0.02,0.4,0.001,0,0,0,0\n"),

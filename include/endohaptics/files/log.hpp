@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "endohaptics/core/error.hpp"
@@ -24,6 +25,8 @@ struct Log {
   Eigen::VectorXd time;            //!< s, strictly increasing (rebased: starts at 0)
   Eigen::MatrixXd data;            //!< rows: samples, columns: signals in `names` order
   LogReport report;                //!< what the reader dropped, repaired, found
+  //! `key=value` pairs of the file's header, in file order (formats that have them)
+  std::vector<std::pair<std::string, std::string>> metadata;
 
   //! Number of samples (rows of `data`, entries of `time`).
   [[nodiscard]] Eigen::Index rows() const noexcept { return time.size(); }
