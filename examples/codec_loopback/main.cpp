@@ -7,8 +7,11 @@
 #include <boost/asio.hpp>
 #include <chrono>
 #include <endohaptics/protocol/packet_codec.hpp>
+#include <endohaptics/workflow/command_line.hpp>
 #include <string>
 #include <thread>
+
+#include "../cli_numbers.hpp"
 
 using Codec = endohaptics::protocol::PacketCodec<4>;
 using boost::asio::ip::udp;
@@ -40,7 +43,7 @@ void fake_sbrio(udp::socket& socket, int count) {
 int main(int argc, char** argv) {
   CLI::App app{"endohaptics codec round trip over UDP loopback"};
   int count = 5;
-  app.add_option("--count", count, "number of round trips")->check(CLI::Range(1, 1000000));
+  app.add_option("--count", count, "number of round trips")->check(examples::number_in(1, 1000000));
   CLI11_PARSE(app, argc, argv);
 
   boost::asio::io_context io;
@@ -75,5 +78,11 @@ int main(int argc, char** argv) {
   }
   responder.join();
   fmt::print("{}/{} round trips ok\n", ok, count);
+  try {
+    endohaptics::workflow::require_written(stdout, "standard output");
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "error: {}\n", e.what());
+    return 1;
+  }
   return ok == count ? 0 : 1;
 }

@@ -7,6 +7,9 @@
 #include <cmath>
 #include <endohaptics/kinematics/cylindrical_mapper.hpp>
 #include <endohaptics/teleop/teleop_loop.hpp>
+#include <endohaptics/workflow/command_line.hpp>
+
+#include "../cli_numbers.hpp"
 
 namespace tp = endohaptics::teleop;
 namespace transport = endohaptics::transport;
@@ -61,7 +64,8 @@ static_assert(tp::HapticDevice<ScriptedHand>);
 int main(int argc, char** argv) {
   CLI::App app{"endohaptics: a TeleopLoop over a user-defined transport and device"};
   int ticks = 2000;
-  app.add_option("--ticks", ticks, "ticks to run (simulated 1 kHz)")->check(CLI::PositiveNumber);
+  app.add_option("--ticks", ticks, "ticks to run (simulated 1 kHz)")
+      ->check(examples::number_in(1, 10000000));
   CLI11_PARSE(app, argc, argv);
 
   MailboxTransport transport;
@@ -80,5 +84,11 @@ int main(int argc, char** argv) {
              }
            });
   fmt::print("{}", loop.stats().to_table());
+  try {
+    endohaptics::workflow::require_written(stdout, "standard output");
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "error: {}\n", e.what());
+    return 1;
+  }
   return loop.stats().received() == static_cast<std::uint64_t>(ticks) ? 0 : 1;
 }

@@ -11,9 +11,12 @@
 #include <endohaptics/files/log_reader.hpp>
 #include <endohaptics/files/tick_log.hpp>
 #include <endohaptics/sim/force_accuracy.hpp>
+#include <endohaptics/workflow/command_line.hpp>
 #include <filesystem>
 #include <string>
 #include <vector>
+
+#include "../cli_numbers.hpp"
 
 namespace files = endohaptics::files;
 namespace sim = endohaptics::sim;
@@ -54,10 +57,10 @@ int main(int argc, char** argv) {
       ->required()
       ->check(CLI::ExistingFile);
   app.add_option("--joint", joint, "motor slot to compare (0 roll, 1 pitch, 2 clamp1, 3 clamp2)")
-      ->check(CLI::Range(0, 3))
+      ->check(examples::number_in(0, 3))
       ->capture_default_str();
   app.add_option("--skip", skip, "seconds at the start of the bridge log to leave out (start-up)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(examples::number_in(0.0, 1e7))
       ->capture_default_str();
   app.add_option("--plot-dir", plot_dir, "write forces.png and period.png here (needs gnuplot)");
   CLI11_PARSE(app, argc, argv);
@@ -131,6 +134,14 @@ int main(int argc, char** argv) {
         fmt::print("plots: gnuplot failed or is not installed (apt-get install gnuplot-nox)\n");
       }
     }
+    // No false success: results that are not finite, or a report that could not be written.
+    if (!std::isfinite(a.fit_percent) || !std::isfinite(a.correlation) || !std::isfinite(a.rmse)) {
+      throw endohaptics::Error("the force accuracy is not finite (fit " +
+                               fmt::format("{}", a.fit_percent) + " %, correlation " +
+                               fmt::format("{}", a.correlation) +
+                               "): no overlap of the logs after --skip, or a constant force");
+    }
+    endohaptics::workflow::require_written(stdout, "standard output");
     return 0;
   } catch (const std::exception& e) {
     fmt::print(stderr, "error: {}\n", e.what());

@@ -6,15 +6,20 @@
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
-#include <charconv>
+#include <cstdio>
+#include <endohaptics/workflow/command_line.hpp>
 #include <endohaptics/workflow/workflow.hpp>
 #include <exception>
 #include <string>
 #include <vector>
 
+#include "../cli_numbers.hpp"
+
 namespace id = endohaptics::identification;
 namespace wf = endohaptics::workflow;
 namespace files = endohaptics::files;
+namespace limits = endohaptics::workflow::limits;
+using examples::number_in;
 
 int main(int argc, char** argv) {
   CLI::App app{"endohaptics identify: subspace (+ dead zone) model from logs"};
@@ -32,21 +37,27 @@ int main(int argc, char** argv) {
   app.add_option("--output", outputs, "output signal (repeat; default for endowrist-2016: force)");
   app.add_option("--order", order,
                  "model order N, or auto (largest log gap of the singular values)")
+      ->check(number_in(1, limits::max_order, {"auto"}))
       ->capture_default_str();
   app.add_option("--max-order", max_order, "largest order --order auto considers")
+      ->check(number_in(1, limits::max_order))
       ->capture_default_str();
   app.add_option("--method", method, "n4sid, moesp, cva, best (highest mean fit) or static")
       ->capture_default_str();
   app.add_option("--deadzone", deadzone,
                  "input dead zone: auto, none or half width (or one per input, comma-separated)")
       ->capture_default_str();
-  app.add_option("--ts", ts,
-                 "resampling period, s (csv without time column: the row time, default 1; else "
-                 "default: median step of the first log)");
+  auto* ts_opt = app.add_option("--ts", ts,
+                                "resampling period, s (csv without time column: the row time, "
+                                "default 1; else default: median step of the first log)")
+                     ->check(number_in(limits::min_sample_time, limits::max_sample_time));
   app.add_option("--lowpass", pre.cutoff,
                  "zero-phase Butterworth low-pass cutoff, Hz (0: none; worksheet 4.2.1 used 20)")
+      ->check(number_in(0.0, limits::max_cutoff))
       ->capture_default_str();
-  app.add_option("--filter-order", pre.filter_order, "Butterworth order")->capture_default_str();
+  app.add_option("--filter-order", pre.filter_order, "Butterworth order")
+      ->check(number_in(limits::min_filter_order, limits::max_filter_order))
+      ->capture_default_str();
   app.add_option("--offset", offset,
                  "output offset removal: none, start, median or mean (per file)")
       ->capture_default_str();
@@ -54,14 +65,17 @@ int main(int argc, char** argv) {
                  "input offset removal: none, start, median or mean")
       ->capture_default_str();
   app.add_option("--offset-window", pre.offset_duration, "s at the start used by --offset start")
+      ->check(number_in(limits::min_offset_duration, limits::max_duration))
       ->capture_default_str();
   app.add_flag("--detrend", pre.detrend,
                "remove a least-squares line from the outputs of each segment");
   app.add_option("--max-gap", pre.max_gap,
                  "s; longer time steps split a log (0: 5 x max(ts, median step))")
+      ->check(number_in(0.0, limits::max_duration))
       ->capture_default_str();
   app.add_option("--min-segment", pre.min_segment,
                  "samples; shorter gap-free stretches are dropped")
+      ->check(number_in<Eigen::Index>(limits::min_segment, limits::max_grid_samples))
       ->capture_default_str();
   app.add_flag("--drop-non-finite", drop_non_finite,
                "drop rows holding NaN/Inf instead of failing");
@@ -88,13 +102,7 @@ int main(int argc, char** argv) {
     pre.input_offset = wf::offset_mode_from_string(input_offset);
     wf::WorkflowOptions options;
     options.max_order = max_order;
-    if (order != "auto") {
-      const auto [end, ec] =
-          std::from_chars(order.data(), order.data() + order.size(), options.order);
-      if (ec != std::errc{} || end != order.data() + order.size() || options.order < 1) {
-        throw endohaptics::Error("--order must be a positive integer or auto, got '" + order + "'");
-      }
-    }
+    if (order != "auto") options.order = wf::parse_number(order, "--order", 1, limits::max_order);
     if (method == "best") {
       options.candidates = {id::Weighting::n4sid, id::Weighting::moesp, id::Weighting::cva};
     } else if (method == "static") {
@@ -110,8 +118,9 @@ int main(int argc, char** argv) {
 
     // Sample time: given, else the median step of the first log (a CSV without time column:
     // its row time, 1 s unless --ts says otherwise).
-    sel.csv_row_time = ts > 0.0 ? ts : 1.0;
-    if (ts <= 0.0) ts = wf::default_sample_time(logs.front(), sel);
+    const bool ts_given = ts_opt->count() > 0;
+    sel.csv_row_time = ts_given ? ts : 1.0;
+    if (!ts_given) ts = wf::default_sample_time(logs.front(), sel);
     std::vector<wf::PreparedLog> prepared;
     for (const auto& path : logs) {
       prepared.push_back(wf::prepare_log(path, sel, ts, pre));
@@ -157,6 +166,13 @@ int main(int argc, char** argv) {
     }
     for (const std::string& f : result.failures) fmt::print("failed: {}\n", f);
     const wf::CandidateModel& best = result.chosen();
+    if (!options.static_gain && (best.linear.input_scale.array() != 1.0).any()) {
+      fmt::print(
+          "scaling: each column divided by its RMS for the fit (inputs {:.4g}, outputs "
+          "{:.4g}); the model is in the logs' units\n",
+          fmt::join(best.linear.input_scale.begin(), best.linear.input_scale.end(), " "),
+          fmt::join(best.linear.output_scale.begin(), best.linear.output_scale.end(), " "));
+    }
     fmt::print("chosen: {} (order {}){}\n", best.method, best.model.state_space.state_size(),
                best.spectral_radius >= 1.0 ? ", NOT STABLE: no stable candidate" : "");
     for (const wf::FileComparison& f : best.files) {
@@ -166,6 +182,8 @@ int main(int argc, char** argv) {
       }
       fmt::print("fit {}:{}\n", f.source, fits);
     }
+    // No false success: a fit that is not finite (a diverging model, a constant output) fails.
+    for (const wf::FileComparison& f : best.files) wf::require_finite_scores(f, sel.outputs);
     fmt::print("mean fit: {:.2f}%\n", best.mean_fit);
     if (!out_path.empty()) {
       files::ModelFile model = best.model;
@@ -175,6 +193,7 @@ int main(int argc, char** argv) {
       files::save_model(out_path, model);
       fmt::print("model written to {}\n", out_path);
     }
+    wf::require_written(stdout, "standard output");
   } catch (const std::exception& e) {
     fmt::print(stderr, "endohaptics-identify: error: {}\n", e.what());
     return 1;

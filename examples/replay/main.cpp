@@ -6,14 +6,19 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <endohaptics/workflow/command_line.hpp>
 #include <endohaptics/workflow/workflow.hpp>
 #include <exception>
 #include <string>
 #include <vector>
 
+#include "../cli_numbers.hpp"
+
 namespace id = endohaptics::identification;
 namespace wf = endohaptics::workflow;
 namespace files = endohaptics::files;
+namespace limits = endohaptics::workflow::limits;
+using examples::number_in;
 
 namespace {
 
@@ -36,7 +41,7 @@ void plot(const std::string& png, const std::vector<wf::FileComparison>& files,
     }
     fmt::print(out, "\n");
   }
-  std::fclose(out);
+  wf::close_written(out, "--plot data " + data);
   std::string script = fmt::format(
       "set terminal pngcairo size 1400,{} noenhanced\nset output '{}'\nset multiplot layout {},1\n"
       "set grid\nset xlabel 'time (s)'\n",
@@ -77,17 +82,24 @@ int main(int argc, char** argv) {
   app.add_option("--output", outputs, "output signal per model output (default: the model's)");
   app.add_option("--x0", x0, "initial state: estimate (least squares), zero or stored")
       ->capture_default_str();
-  app.add_option("--ts", ts, "csv without time column: s per row (default: the model's Ts)");
+  app.add_option("--ts", ts, "csv without time column: s per row (default: the model's Ts)")
+      ->check(number_in(limits::min_sample_time, limits::max_sample_time));
   // Preprocessing: default what the model file records (identify writes it), else none.
-  auto* lowpass = app.add_option("--lowpass", pre.cutoff, "low-pass cutoff, Hz (0: none)");
-  auto* filter_order = app.add_option("--filter-order", pre.filter_order, "Butterworth order");
+  auto* lowpass = app.add_option("--lowpass", pre.cutoff, "low-pass cutoff, Hz (0: none)")
+                      ->check(number_in(0.0, limits::max_cutoff));
+  auto* filter_order = app.add_option("--filter-order", pre.filter_order, "Butterworth order")
+                           ->check(number_in(limits::min_filter_order, limits::max_filter_order));
   auto* offset_opt = app.add_option("--offset", offset, "output offset: none, start, median, mean");
   auto* input_offset_opt =
       app.add_option("--input-offset", input_offset, "input offset: none, start, median, mean");
-  auto* window = app.add_option("--offset-window", pre.offset_duration, "s for --offset start");
+  auto* window = app.add_option("--offset-window", pre.offset_duration, "s for --offset start")
+                     ->check(number_in(limits::min_offset_duration, limits::max_duration));
   auto* detrend = app.add_flag("--detrend", pre.detrend, "remove a line from each output segment");
-  auto* max_gap = app.add_option("--max-gap", pre.max_gap, "s; longer steps split a log");
-  auto* min_segment = app.add_option("--min-segment", pre.min_segment, "samples per segment");
+  auto* max_gap = app.add_option("--max-gap", pre.max_gap, "s; longer steps split a log")
+                      ->check(number_in(0.0, limits::max_duration));
+  auto* min_segment =
+      app.add_option("--min-segment", pre.min_segment, "samples per segment")
+          ->check(number_in<Eigen::Index>(limits::min_segment, limits::max_grid_samples));
   app.add_flag("--drop-non-finite", drop_non_finite,
                "drop rows holding NaN/Inf instead of failing");
   app.add_option("--plot", plot_path, "measured vs simulated as PNG (gnuplot pngcairo)");
@@ -112,7 +124,7 @@ int main(int argc, char** argv) {
           model_in.size(), fmt::join(model_in, ", "), model_out.size(), fmt::join(model_out, ", "),
           sel.inputs.size(), sel.outputs.size()));
     }
-    sel.csv_row_time = ts > 0.0 ? ts : model.state_space.sample_time();
+    sel.csv_row_time = ts > 0.0 ? ts : model.state_space.sample_time();  // ts > 0 when given
 
     // Flags given on the command line win over the recorded preprocessing.
     const wf::Preprocessing given = pre;
@@ -142,6 +154,8 @@ int main(int argc, char** argv) {
       fmt::print("{}", wf::summary(log));
       results.push_back(wf::compare_log(model, log, mode));
       const wf::FileComparison& c = results.back();
+      // No false success: a diverging model or an undefined score fails the run.
+      wf::require_finite_scores(c, sel.outputs);
       for (Eigen::Index i = 0; i < c.fit.size(); ++i) {
         const auto& o = model.outputs[static_cast<std::size_t>(i)];
         fmt::print("{}: {} fit {:.2f} %, correlation {:.4f}, RMSE {:.4g}{}{}\n", path,
@@ -155,6 +169,7 @@ int main(int argc, char** argv) {
       fmt::print("plot written to {}\n", plot_path);
     }
     fmt::print("mean fit: {:.2f}%\n", sum / static_cast<double>(logs.size()));
+    wf::require_written(stdout, "standard output");
   } catch (const std::exception& e) {
     fmt::print(stderr, "endohaptics-replay: error: {}\n", e.what());
     return 1;

@@ -13,9 +13,13 @@
 #include <endohaptics/sim/simulated_rig.hpp>
 #include <endohaptics/teleop/realtime.hpp>
 #include <endohaptics/transport/udp_server_transport.hpp>
+#include <endohaptics/workflow/command_line.hpp>
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
+
+#include "../cli_numbers.hpp"
 
 namespace sim = endohaptics::sim;
 namespace transport = endohaptics::transport;
@@ -52,23 +56,26 @@ int main(int argc, char** argv) {
       {"tissue", sim::Environment::tissue}};
   app.add_option("--bind", bind, "address to listen on")->capture_default_str();
   app.add_option("--port", port, "UDP port to listen on (0: any free port, printed)")
+      ->check(examples::number_in<std::uint16_t>(0, 65535))
       ->capture_default_str();
   app.add_option("--motors", motors, "number of motors (the EndoWrist has 4)")
-      ->check(CLI::IsMember({4}))
+      ->check(examples::number_in(4, 4))
       ->capture_default_str();
   app.add_option("--environment", environment, "what the tool touches: free|loadcell|tissue")
       ->check(CLI::IsMember({"free", "loadcell", "tissue"}))
       ->capture_default_str();
-  app.add_option("--truth-log", truth_path,
-                 "CSV: time, setpoints, positions, velocities, currents, true contact forces");
+  app.add_option(
+      "--truth-log", truth_path,
+      "CSV: time, setpoints, positions, velocities, currents, true external forces (N, along "
+      "+setpoint)");
   app.add_option("--truth-period-ms", truth_period_ms, "truth log row period")
-      ->check(CLI::Range(0.01, 1000.0))
+      ->check(examples::number_in(0.01, 1000.0))
       ->capture_default_str();
   app.add_option("--duration", duration, "seconds to run (0: until SIGINT/SIGTERM)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(examples::number_in(0.0, 1e7))
       ->capture_default_str();
   app.add_option("--watchdog-ms", watchdog_ms, "disable the motors after this long without packets")
-      ->check(CLI::Range(1.0, 10000.0))
+      ->check(examples::number_in(1.0, 10000.0))
       ->capture_default_str();
   app.add_flag("--quiet", quiet, "print only the final summary");
   CLI11_PARSE(app, argc, argv);
@@ -135,7 +142,9 @@ int main(int argc, char** argv) {
         for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", tr.joint_position[i]);
         for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", tr.motor_velocity[i]);
         for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", tr.motor_current[i]);
-        for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", tr.contact_force[i]);
+        // force: the true external force along +setpoint (RigTruth::external_force), the
+        // convention of the estimate in the bridge's tick log.
+        for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", tr.external_force[i]);
         // What the sbRIO reports (encoder, its velocity, its filtered current): the inputs a
         // force model sees, next to the truth it should reproduce.
         for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", state.position[i]);
@@ -159,6 +168,12 @@ int main(int argc, char** argv) {
         std::chrono::duration<double>(clock.now() - start).count(), c.received, c.answered,
         c.rejected, c.rejected_size, c.rejected_non_finite, c.rejected_mask, c.stale_dropped,
         c.transport_errors, c.watchdog_trips);
+    // No false success: a truth log that could not be written (full disk) fails the run.
+    if (truth.file != nullptr) {
+      std::FILE* file = std::exchange(truth.file, nullptr);
+      endohaptics::workflow::close_written(file, "the truth log '" + truth_path + "'");
+    }
+    endohaptics::workflow::require_written(stdout, "standard output");
     return 0;
   } catch (const std::exception& e) {
     fmt::print(stderr, "error: {}\n", e.what());

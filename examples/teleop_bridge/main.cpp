@@ -19,11 +19,13 @@
 #include <endohaptics/teleop/teleop_loop.hpp>
 #include <endohaptics/teleop/tick_recorder.hpp>
 #include <endohaptics/transport/udp_transport.hpp>
+#include <endohaptics/workflow/command_line.hpp>
 #include <memory>
 #include <optional>
 #include <string>
 #include <thread>
 
+#include "../cli_numbers.hpp"
 #ifdef ENDOHAPTICS_HAVE_OPENHAPTICS
 #include "openhaptics_device.hpp"
 #endif
@@ -63,23 +65,19 @@ struct Window {
   double clamp_force = 0.0;  // N, the estimate for clamp 1 at the end of the window
 };
 
+// Ranges of the numeric options (stated in --help; examples::number_in refuses the rest).
+constexpr double min_rate_hz = 1.0;
+constexpr double max_rate_hz = 100000.0;
+constexpr double max_duration_s = 1e7;  // ~116 days; 0 runs until SIGINT
+
 std::pair<std::string, std::uint16_t> parse_endpoint(const std::string& s) {
   const auto colon = s.rfind(':');
   if (colon == std::string::npos || colon == 0 || colon + 1 == s.size()) {
     throw endohaptics::Error("--sbrio must be HOST:PORT, got '" + s + "'");
   }
-  const std::string port_text = s.substr(colon + 1);
-  std::size_t used = 0;
-  unsigned long port = 0;
-  try {
-    port = std::stoul(port_text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != port_text.size() || port == 0 || port > 65535) {
-    throw endohaptics::Error("--sbrio port must be 1..65535, got '" + port_text + "'");
-  }
-  return {s.substr(0, colon), static_cast<std::uint16_t>(port)};
+  const auto port = endohaptics::workflow::parse_number<std::uint16_t>(
+      std::string_view(s).substr(colon + 1), "--sbrio port", 1, 65535);
+  return {s.substr(0, colon), port};
 }
 
 template <typename Device>
@@ -104,15 +102,8 @@ int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& o
   if (opt.rate == "max") {
     loop_config.period = nanoseconds(0);
   } else {
-    double hz = 0.0;
-    try {
-      hz = std::stod(opt.rate);
-    } catch (const std::exception&) {
-      hz = 0.0;
-    }
-    if (!(hz >= 1.0 && hz <= 100000.0)) {
-      throw endohaptics::Error("--rate must be 1..100000 Hz or 'max', got '" + opt.rate + "'");
-    }
+    const double hz =
+        endohaptics::workflow::parse_number(opt.rate, "--rate", min_rate_hz, max_rate_hz);
     loop_config.period = nanoseconds(static_cast<std::int64_t>(1e9 / hz + 0.5));
   }
   tp::TeleopLoop loop(transport, device, paced, mapper, clock, loop_config);
@@ -128,6 +119,7 @@ int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& o
   }
   boost::lockfree::spsc_queue<Window> windows(64);
   std::atomic<bool> done{false};
+  std::string log_error;  // set by the writer thread when the log cannot be written
   // Started before apply_realtime and reset explicitly: the writer never runs SCHED_FIFO or on
   // the loop's CPU.
   std::thread writer([&] {
@@ -146,7 +138,13 @@ int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& o
     };
     for (;;) {
       const bool last = done.load();
-      if (recorder) recorder->drain(log);
+      if (recorder && log_error.empty()) {
+        try {
+          recorder->drain(log);
+        } catch (const std::exception& e) {
+          log_error = "writing the log '" + opt.log_path + "' failed: " + e.what();  // full disk
+        }
+      }
       Window w;
       while (windows.pop(w)) {
         if (opt.stats) print_window(w);
@@ -191,7 +189,13 @@ int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& o
   loop.shutdown();  // zero force on the device, one packet with every motor disabled
   done.store(true);
   writer.join();
-  if (log != nullptr) std::fclose(log);
+  if (log != nullptr) {
+    try {
+      endohaptics::workflow::close_written(log, "the log '" + opt.log_path + "'");
+    } catch (const std::exception& e) {
+      if (log_error.empty()) log_error = e.what();
+    }
+  }
 
   const auto& s = loop.stats();
   fmt::print("bridge: final statistics after {:.2f} s\n{}",
@@ -202,7 +206,7 @@ int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& o
   const auto& pc = paced.counters();
   fmt::print("bridge: estimator steps {}, held {}, skipped periods {}, rejected {}\n", pc.steps,
              pc.held, pc.skipped, pc.rejected);
-  if (recorder) {
+  if (recorder && log_error.empty()) {
     fmt::print("bridge: log {} rows written to {}, {} dropped (ring full)\n", recorder->written(),
                opt.log_path, recorder->dropped());
   }
@@ -213,6 +217,9 @@ int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& o
       "rejected={} stale_dropped={} link_losses={} recoveries={}\n",
       s.ticks(), s.received(), complete, s.decode_errors(), s.state_faults(), s.rejected().total(),
       s.stale_dropped(), loop.watchdog().link_losses(), loop.watchdog().recoveries());
+  // No false success: a log that could not be written (full disk) fails the run.
+  if (!log_error.empty()) throw endohaptics::Error(log_error);
+  endohaptics::workflow::require_written(stdout, "standard output");
   return 0;
 }
 
@@ -223,9 +230,10 @@ int main(int argc, char** argv) {
   Options opt;
   app.add_option("--sbrio", opt.sbrio, "sbRIO address HOST:PORT")->capture_default_str();
   app.add_option("--rate", opt.rate, "loop rate in Hz, or 'max' (as fast as the link allows)")
+      ->check(examples::number_in(min_rate_hz, max_rate_hz, {"max"}))
       ->capture_default_str();
   app.add_option("--duration", opt.duration, "seconds to run (0: until SIGINT)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(examples::number_in(0.0, max_duration_s))
       ->capture_default_str();
   app.add_option("--device", opt.device, "haptic device: sim (scripted operator) or openhaptics")
       ->check(CLI::IsMember({"sim", "openhaptics"}))
@@ -235,12 +243,12 @@ int main(int argc, char** argv) {
   app.add_option("--log", opt.log_path, "per-tick CSV log");
   app.add_flag("--stats", opt.stats, "print table-3.1 figures every second");
   app.add_option("--fifo-priority", opt.fifo_priority, "SCHED_FIFO priority 1..99 (0: off)")
-      ->check(CLI::Range(0, 99));
+      ->check(examples::number_in(0, 99));
   app.add_option("--cpu", opt.cpu, "pin the loop thread to this CPU (-1: no pinning)")
-      ->check(CLI::Range(-1, 1023));
+      ->check(examples::number_in(-1, 1023));
   app.add_option("--busy-wait-us", opt.busy_wait_us,
                  "spin the last microseconds of each period (lower jitter, one busy core)")
-      ->check(CLI::Range(0.0, 1000.0));
+      ->check(examples::number_in(0.0, 1000.0));
   CLI11_PARSE(app, argc, argv);
 
   try {

@@ -87,7 +87,7 @@ case $scenario in
     expect_error "too few samples" "$identify" --log "$work/short.csv" "${csv[@]}"
     expect_error "non-finite" "$identify" --log "$work/nan.csv" "${csv[@]}"
     expect_error "unknown log format" "$identify" --log "$work/sys.csv" --format xls --input u1 --output y
-    expect_error "--order must be" "$identify" --log "$work/sys.csv" "${csv[@]}" --order two
+    expect_error "--order: 'two' is not an integer" "$identify" --log "$work/sys.csv" "${csv[@]}" --order two
     expect_error "--deadzone" "$identify" --log "$work/sys.csv" "${csv[@]}" --deadzone 0.1,0.2,0.3
     "$identify" --log "$work/sys.csv" "${csv[@]}" --out "$work/model.json" >/dev/null
     expect_error "has 2 input(s) (u1, u2)" "$replay" --model "$work/model.json" --format csv --log "$work/sys.csv" --input u1 --output y

@@ -213,7 +213,8 @@ TEST_CASE("load errors name the file, the field and the value") {
   text.replace(text.find("0.9"), 3, "NaN");
   write_text(tmp.path, text);
   const std::string nan_message = message_of([&] { (void)files::load_model(tmp.path); });
-  CHECK(nan_message.find("model file " + tmp.path.string() + ": [json.exception.parse_error") == 0);
+  CHECK(nan_message.find("model file " + tmp.path.string() +
+                         ": not valid JSON: parse error at line 1") == 0);
   write_text(tmp.path, valid_json().dump());
   CHECK(message_of([&] {
           (void)files::load_hammerstein_wiener<2, 1, 1, double, model::Saturation<double>>(
@@ -249,6 +250,31 @@ TEST_CASE("saving refuses a NaN state and mismatched signal or map counts, namin
       }) ==
       "make_model_file: field \"inputs\" has 1 entries, the model has 2 inputs (columns "
       "of B)");
+}
+
+TEST_CASE("hostile model files: deep nesting, duplicate keys, huge values are refused, bounded") {
+  // Before: 80,000 nested arrays crashed replay --model (the error path dumped the value).
+  TempFile tmp("hostile.json");
+  write_text(tmp.path, "{\"states\": " + std::string(80000, '[') + std::string(80000, ']') + "}");
+  const std::string deep = message_of([&] { (void)files::load_model(tmp.path); });
+  CHECK(deep.find(": nested deeper than 32 levels (the limit; a model file needs 4)") !=
+        std::string::npos);
+  // A value nested within the limit is echoed in at most 60 characters.
+  json j = valid_json();
+  json nested = json::array();
+  for (int i = 0; i < 20; ++i) nested = json::array({nested, nested});
+  j["states"] = nested;
+  write_text(tmp.path, j.dump());
+  const std::string echoed = message_of([&] { (void)files::load_model(tmp.path); });
+  CHECK(echoed.find("field \"states\"") != std::string::npos);
+  CHECK(echoed.size() < 300);
+  // Duplicate keys: never "the last one wins".
+  std::string dup = valid_json().dump();
+  dup.insert(1, "\"version\": 1, ");
+  write_text(tmp.path, dup);
+  CHECK(message_of([&] {
+          (void)files::load_model(tmp.path);
+        }).find("duplicate key 'version' (a key may appear only once)") != std::string::npos);
 }
 
 }  // namespace files_model_file_test

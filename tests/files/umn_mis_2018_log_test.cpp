@@ -70,7 +70,7 @@ TEST_CASE("UMN log: header, conversions to SI, causal velocity, metadata") {
   CHECK(files::read_log(path, files::LogFormat::umn_mis_2018).rows() == 3);
 }
 
-TEST_CASE("UMN log: bad rows are dropped and counted; a file without header is refused") {
+TEST_CASE("UMN log: bad rows are dropped and counted, a file without header is refused") {
   const TempDir dir("umn-bad");
   const auto path =
       dir.write("bad.TXT", std::string(header) + "0.000,0,0,0.1,0,-1,0,0,0,0\n" +

@@ -329,7 +329,7 @@ TEST_CASE("each implausible state after contact: fault, counted by cause, safe s
   }
 }
 
-TEST_CASE("junk after the newest valid state cannot displace it; rejections counted by cause") {
+TEST_CASE("junk after the newest valid state cannot displace it, rejections counted by cause") {
   Rig rig;
   rig.link.responder().fixed = Answer::flood;
   tp::TickResult r;

@@ -11,9 +11,11 @@
 #include <Eigen/Core>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
@@ -23,12 +25,18 @@
 #include <vector>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/files/json_text.hpp"
 #include "endohaptics/model/hammerstein_wiener.hpp"
 #include "endohaptics/model/state_space.hpp"
 #include "endohaptics/model/static_map.hpp"
 #include "endohaptics/model/static_nonlinearity.hpp"
 
 namespace endohaptics::files {
+
+//! Largest model file `load_model` reads, bytes (a 1000-state model's A alone is ~25 MB of text).
+inline constexpr std::size_t model_file_max_bytes = std::size_t{64} << 20;
+//! Deepest nesting of arrays and objects accepted in a model file (the format needs 4).
+inline constexpr int model_file_max_depth = 32;
 
 //! Name and unit of one input or output signal (e.g. {"current", "A"}).
 struct SignalInfo {
@@ -54,9 +62,11 @@ struct ModelProvenance {
 //! empty state): `model_from_json`, `make_model_file` or `ModelFile{.state_space = ...}`.
 struct ModelFile {
   static constexpr int format_version = 1;  //!< "version" written and accepted
-  model::DynamicStateSpace<> state_space;   //!< A, B, C, D, sample time (s); state() = x0
-  std::vector<SignalInfo> inputs{};         //!< nu entries
-  std::vector<SignalInfo> outputs{};        //!< ny entries
+  //! Largest "states" accepted on load: A alone is states^2 numbers (8 MB at 1000).
+  static constexpr int max_states = 1000;
+  model::DynamicStateSpace<> state_space;  //!< A, B, C, D, sample time (s); state() = x0
+  std::vector<SignalInfo> inputs{};        //!< nu entries
+  std::vector<SignalInfo> outputs{};       //!< ny entries
   //! Hammerstein-Wiener maps, nu and ny entries; both empty for a plain state-space model.
   std::vector<model::StaticMap> input_nonlinearity{};
   std::vector<model::StaticMap> output_nonlinearity{};  //!< see input_nonlinearity
@@ -149,23 +159,43 @@ inline const json& field(const json& object, const char* key, const std::string&
 
 inline double number(const json& value, const std::string& where, const std::string& name) {
   if (!value.is_number()) {
-    fail(where + ": field \"" + name + "\" is not a number (" + value.dump() + ")");
+    fail(where + ": field \"" + name + "\" is not a number (" + detail::json_text::show(value) +
+         ")");
   }
   return value.get<double>();
 }
 
 inline std::string text(const json& value, const std::string& where, const std::string& name) {
   if (!value.is_string()) {
-    fail(where + ": field \"" + name + "\" is not a string (" + value.dump() + ")");
+    fail(where + ": field \"" + name + "\" is not a string (" + detail::json_text::show(value) +
+         ")");
   }
   return value.get<std::string>();
 }
 
-inline int integer(const json& value, const std::string& where, const std::string& name) {
+//! An integer field in [min, max]; a value outside (e.g. 4294967298, which an int would wrap
+//! to 2) throws naming the field, the value and the range.
+inline int integer(const json& value, const std::string& where, const std::string& name,
+                   int min = std::numeric_limits<int>::min(),
+                   int max = std::numeric_limits<int>::max()) {
   if (!value.is_number_integer()) {
-    fail(where + ": field \"" + name + "\" is not an integer (" + value.dump() + ")");
+    fail(where + ": field \"" + name + "\" is not an integer (" + detail::json_text::show(value) +
+         ")");
   }
-  return value.get<int>();
+  bool in_range = false;
+  if (value.is_number_unsigned()) {
+    const auto v = value.get<std::uint64_t>();
+    in_range =
+        max >= 0 && v <= static_cast<std::uint64_t>(max) && static_cast<std::int64_t>(v) >= min;
+  } else {
+    const auto v = value.get<std::int64_t>();
+    in_range = v >= min && v <= max;
+  }
+  if (!in_range) {
+    fail(where + ": field \"" + name + "\" is " + detail::json_text::show(value) + ", outside [" +
+         std::to_string(min) + ", " + std::to_string(max) + "]");
+  }
+  return static_cast<int>(value.get<std::int64_t>());
 }
 
 //! A matrix stored as an array of `rows` rows of `cols` numbers.
@@ -304,7 +334,8 @@ inline std::vector<StaticMap> maps_from_json(const json& object, const char* key
 
 //! Parses and validates a model from JSON; `source` (e.g. the path) prefixes error messages.
 //! Throws Error naming the field and value: missing field, wrong type, wrong dimensions,
-//! non-number (e.g. null, which is how NaN is written), bad breakpoints, sample time <= 0.
+//! non-number (e.g. null, which is how NaN is written), bad breakpoints, sample time <= 0,
+//! "states" outside [1, ModelFile::max_states], an integer field that does not fit an int.
 [[nodiscard]] inline ModelFile model_from_json(const nlohmann::json& j,
                                                const std::string& source = "model") {
   namespace mf = detail::model_file;
@@ -330,8 +361,8 @@ inline std::vector<StaticMap> maps_from_json(const json& object, const char* key
     mf::fail(where + ": field \"sample_time_s\" must be finite and > 0, got " +
              mf::format_number(sample_time));
   }
-  const int n = mf::integer(mf::field(j, "states", where), where, "states");
-  if (n < 1) mf::fail(where + ": field \"states\" must be >= 1, got " + std::to_string(n));
+  const int n =
+      mf::integer(mf::field(j, "states", where), where, "states", 1, ModelFile::max_states);
   std::vector<SignalInfo> inputs = mf::signals_from_json(j, "inputs", where);
   std::vector<SignalInfo> outputs = mf::signals_from_json(j, "outputs", where);
   if (outputs.empty()) mf::fail(where + ": field \"outputs\" must name at least one output");
@@ -344,7 +375,7 @@ inline std::vector<StaticMap> maps_from_json(const json& object, const char* key
   const auto& x0 = mf::field(j, "x0", where);
   if (!x0.is_array() || static_cast<int>(x0.size()) != n) {
     mf::fail(where + ": field \"x0\" must be an array of " + std::to_string(n) +
-             " numbers (states), got " + x0.dump());
+             " numbers (states), got " + detail::json_text::show(x0));
   }
   Eigen::VectorXd state(n);
   for (int i = 0; i < n; ++i) {
@@ -397,30 +428,18 @@ inline void save_model(const std::filesystem::path& path, const ModelFile& model
   std::ofstream out(path);
   if (!out) detail::model_file::fail("save_model: cannot open " + path.string() + " for writing");
   out << j.dump(2) << '\n';
+  out.close();  // flushes: a full disk shows here, not in the destructor
   if (!out) detail::model_file::fail("save_model: writing " + path.string() + " failed");
 }
 
 //! Reads and validates the model file at `path`. Throws Error naming the path and, for bad
 //! content, the field and value (invalid JSON: the parser's message with the byte position).
 [[nodiscard]] inline ModelFile load_model(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) detail::model_file::fail("model file " + path.string() + ": cannot be opened");
-  std::stringstream text;
-  text << in.rdbuf();
-  const nlohmann::json j = nlohmann::json::parse(text.str(), nullptr, /*allow_exceptions=*/false);
-  if (j.is_discarded()) {
-    // Parse again with exceptions for the parser's message (position and token).
-    std::string reason = "not valid JSON";
-#if defined(__cpp_exceptions)
-    try {
-      const nlohmann::json unused = nlohmann::json::parse(text.str());
-      static_cast<void>(unused);
-    } catch (const nlohmann::json::parse_error& e) {
-      reason = e.what();
-    }
-#endif
-    detail::model_file::fail("model file " + path.string() + ": " + reason);
-  }
+  namespace jt = detail::json_text;
+  const std::string text = jt::read_bounded(path, model_file_max_bytes, "model file");
+  const nlohmann::json j = jt::parse_strict(
+      text, "model file " + path.string(),
+      {.max_depth = model_file_max_depth, .needed = "a model file needs 4", .comments = false});
   return model_from_json(j, path.string());
 }
 

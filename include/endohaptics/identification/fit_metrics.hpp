@@ -2,10 +2,12 @@
 //! Goodness of fit of a model output: MATLAB's NRMSE fit, 100 (1 - ||y - yhat|| / ||y - mean y||)
 //! in %, per output column; Pearson correlation; RMSE (output units). `compare` simulates a model
 //! like MATLAB's compare (x0 by least squares or zero) and reports all three.
+//! Each is computed on the columns divided by their largest magnitude, so any finite data works.
 //! Configuration time (validation tools): dynamic sizes, throws Error on mismatched data.
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -32,6 +34,13 @@ inline void check_pair(const Eigen::MatrixXd& y, const Eigen::MatrixXd& y_hat, c
   subspace::require_finite(y_hat, std::string(where) + ": yhat");
 }
 
+//! Largest magnitude in column i of y and y_hat (1 when both are all zero): the metrics divide
+//! both columns by it first, so that data of 1e150 does not overflow their sums of squares.
+inline double column_scale(const Eigen::MatrixXd& y, const Eigen::MatrixXd& y_hat, Eigen::Index i) {
+  const double peak = std::max(y.col(i).cwiseAbs().maxCoeff(), y_hat.col(i).cwiseAbs().maxCoeff());
+  return peak > 0.0 ? peak : 1.0;
+}
+
 }  // namespace detail::fit
 
 //! NRMSE fit per output, %: 100 (1 - ||y_i - yhat_i|| / ||y_i - mean(y_i)||) (MATLAB goodnessOfFit
@@ -43,8 +52,11 @@ inline void check_pair(const Eigen::MatrixXd& y, const Eigen::MatrixXd& y_hat, c
   detail::fit::check_pair(y, y_hat, "nrmse_fit");
   Eigen::VectorXd fit(y.cols());
   for (Eigen::Index i = 0; i < y.cols(); ++i) {
-    const double error = (y.col(i) - y_hat.col(i)).norm();
-    const double spread = (y.col(i).array() - y.col(i).mean()).matrix().norm();
+    const double scale = detail::fit::column_scale(y, y_hat, i);
+    const Eigen::VectorXd a = y.col(i) / scale;
+    const Eigen::VectorXd b = y_hat.col(i) / scale;
+    const double error = (a - b).norm();
+    const double spread = (a.array() - a.mean()).matrix().norm();
     if (spread > 0.0) {
       fit[i] = 100.0 * (1.0 - error / spread);
     } else {
@@ -58,9 +70,14 @@ inline void check_pair(const Eigen::MatrixXd& y, const Eigen::MatrixXd& y_hat, c
 //! Throws Error as `nrmse_fit`.
 [[nodiscard]] inline Eigen::VectorXd rmse(const Eigen::MatrixXd& y, const Eigen::MatrixXd& y_hat) {
   detail::fit::check_pair(y, y_hat, "rmse");
-  return ((y - y_hat).colwise().squaredNorm() / static_cast<double>(y.rows()))
-      .cwiseSqrt()
-      .transpose();
+  Eigen::VectorXd r(y.cols());
+  for (Eigen::Index i = 0; i < y.cols(); ++i) {
+    const double scale = detail::fit::column_scale(y, y_hat, i);
+    const double mean_square =
+        ((y.col(i) - y_hat.col(i)) / scale).squaredNorm() / static_cast<double>(y.rows());
+    r[i] = scale * std::sqrt(mean_square);
+  }
+  return r;
 }
 
 //! Pearson correlation per output, in [-1, 1]; NaN when either column is constant.
@@ -70,8 +87,11 @@ inline void check_pair(const Eigen::MatrixXd& y, const Eigen::MatrixXd& y_hat, c
   detail::fit::check_pair(y, y_hat, "correlation");
   Eigen::VectorXd r(y.cols());
   for (Eigen::Index i = 0; i < y.cols(); ++i) {
-    const Eigen::VectorXd a = y.col(i).array() - y.col(i).mean();
-    const Eigen::VectorXd b = y_hat.col(i).array() - y_hat.col(i).mean();
+    const double scale = detail::fit::column_scale(y, y_hat, i);
+    const Eigen::VectorXd ys = y.col(i) / scale;
+    const Eigen::VectorXd ys_hat = y_hat.col(i) / scale;
+    const Eigen::VectorXd a = ys.array() - ys.mean();
+    const Eigen::VectorXd b = ys_hat.array() - ys_hat.mean();
     const double denominator = a.norm() * b.norm();
     r[i] = denominator > 0.0 ? a.dot(b) / denominator : std::numeric_limits<double>::quiet_NaN();
   }

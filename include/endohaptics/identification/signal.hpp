@@ -98,6 +98,9 @@ struct ResampleOptions {
   double max_gap = 0;
   //! Stretches that give fewer grid samples are dropped (and counted).
   Eigen::Index min_samples = 2;
+  //! Largest number of grid samples of one stretch (a tiny ts on a long log): more throws Error
+  //! before anything is allocated. 10^8 samples are 800 MB per signal.
+  Eigen::Index max_samples = 100'000'000;
 };
 
 //! Uniformly sampled stretches, with the bookkeeping of what was split or dropped.
@@ -129,7 +132,8 @@ struct Segments {
 //! start + k * ts of each stretch between time steps > max_gap: no data is invented across a
 //! gap. A stretch starts at its first source sample; its last grid point is at or before its
 //! last source sample. Throws Error when sizes differ, ts <= 0, time is not finite and strictly
-//! increasing, or a signal value is not finite (naming row and column).
+//! increasing, a signal value is not finite (naming row and column), or a stretch would give
+//! more than options.max_samples grid samples.
 [[nodiscard]] inline Segments resample_uniform(const Eigen::Ref<const Eigen::VectorXd>& time,
                                                const Eigen::Ref<const Eigen::MatrixXd>& signals,
                                                double ts, const ResampleOptions& options = {}) {
@@ -171,7 +175,14 @@ struct Segments {
       out.largest_step = std::max(out.largest_step, time[end] - time[end - 1]);
     }
     const double span = time[end - 1] - time[begin];
-    const auto points = static_cast<Eigen::Index>(std::floor(span / ts + 1e-9)) + 1;
+    const double grid = std::floor(span / ts + 1e-9) + 1.0;
+    if (!(grid <= static_cast<double>(options.max_samples))) {
+      detail::signal::fail(fn, "a stretch of " + detail::signal::format(span) +
+                                   " s at ts = " + detail::signal::format(ts) + " s gives " +
+                                   detail::signal::format(grid) + " grid samples, more than " +
+                                   "the limit of " + std::to_string(options.max_samples));
+    }
+    const auto points = static_cast<Eigen::Index>(grid);
     if (points < std::max<Eigen::Index>(options.min_samples, 1)) {
       ++out.dropped_segments;
       out.dropped_source_rows += static_cast<std::size_t>(end - begin);

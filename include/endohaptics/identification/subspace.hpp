@@ -77,6 +77,12 @@ struct SubspaceOptions {
   //! filtered far below the Nyquist frequency) and O is mostly amplified noise: `identify` throws
   //! Error instead of returning that model. Infinity: no check. See docs/models/subspace.md.
   double max_projection_gain = 1e3;
+  //! Scale each input and output column to unit RMS before the fit (the model is scaled back):
+  //! automatic does it when a column's RMS lies outside [1e-6, 1e6], where the sums of squares
+  //! of the LQ factorisation lose precision or overflow, and otherwise leaves the data as given
+  //! (results and singular values then match SLICOT and MATLAB, which do not scale).
+  enum class Scaling : std::uint8_t { automatic, unit_rms, none };
+  Scaling scaling = Scaling::automatic;  //!< see Scaling
 };
 
 //! An identified model and what identification adds to it. The model itself is the library's
@@ -96,6 +102,10 @@ struct SubspaceModel {
   int order = 0;                           //!< n
   int block_rows = 0;                      //!< horizon s used (0: not a subspace result)
   Weighting weighting = Weighting::moesp;  //!< weighting used
+  //! What `identify` divided each input column by before the fit (its RMS, units of u; all 1
+  //! when it did not scale: SubspaceOptions::scaling).
+  Eigen::VectorXd input_scale{};
+  Eigen::VectorXd output_scale{};  //!< the same for each output column (units of y)
 };
 
 namespace detail::subspace {
@@ -177,7 +187,7 @@ inline Vector scaled_least_squares(Matrix Phi, const Vector& rhs, const char* wh
   }
   Vector scale(Phi.cols());
   for (Index j = 0; j < Phi.cols(); ++j) {
-    const double norm = Phi.col(j).norm();
+    const double norm = Phi.col(j).stableNorm();  // no overflow for columns of 1e150
     scale[j] = norm > 0.0 ? 1.0 / norm : 1.0;
     Phi.col(j) *= scale[j];
   }
@@ -200,6 +210,35 @@ inline Vector estimate_initial_state(const Matrices& m, const Matrix& u, const M
   const Matrix residual_t = residual.transpose();  // sample-major, like free_response's rows
   const Eigen::Map<const Vector> rhs(residual_t.data(), residual_t.size());
   return scaled_least_squares(free_response(m.A, m.C, u.rows()), rhs, where);
+}
+
+//! RMS of every column of `part` (&DataSet::u or &DataSet::y) over all data sets, computed
+//! without overflow or underflow (each column divided by its largest magnitude first); 1 for an
+//! all-zero column.
+inline Vector column_rms(std::span<const DataSet> data, Matrix DataSet::*part) {
+  const Index cols = (data.front().*part).cols();
+  Vector peak = Vector::Zero(cols);
+  Index rows = 0;
+  for (const DataSet& d : data) {
+    const Matrix& m = d.*part;
+    for (Index j = 0; j < cols && m.rows() > 0; ++j) {
+      peak[j] = std::max(peak[j], m.col(j).cwiseAbs().maxCoeff());
+    }
+    rows += m.rows();
+  }
+  Vector sum = Vector::Zero(cols);
+  for (const DataSet& d : data) {
+    for (Index j = 0; j < cols; ++j) {
+      if (peak[j] > 0.0) sum[j] += ((d.*part).col(j) / peak[j]).squaredNorm();
+    }
+  }
+  Vector rms = Vector::Ones(cols);
+  for (Index j = 0; j < cols; ++j) {
+    if (peak[j] > 0.0 && rows > 0) {
+      rms[j] = peak[j] * std::sqrt(sum[j] / static_cast<double>(rows));
+    }
+  }
+  return rms;
 }
 
 //! Least-squares B, D and one x0 per data set for given A, C: the output is linear in them
@@ -323,11 +362,17 @@ inline Regressed regress_b_d_x0(const Matrix& A, const Matrix& C, std::span<cons
   return fits(s) ? s : 0;
 }
 
+//! Largest block-Hankel matrix `identify` builds, entries (2^28 doubles: 2 GB).
+inline constexpr double max_hankel_entries = 268'435'456.0;
+
 //! Identifies one model from one or several experiments (Hankel columns of all experiments are
-//! concatenated; B, D are shared, one x0 per experiment). Throws Error on empty or mismatched
+//! concatenated; B, D are shared, one x0 per experiment). Data of extreme magnitude (or all data,
+//! SubspaceOptions::scaling) is scaled to unit RMS per column internally and the model scaled
+//! back, so the result does not depend on the units (the singular values are then those of the
+//! scaled data). Throws Error on empty or mismatched
 //! data, non-finite samples, too few samples for the horizon, an order the horizon cannot
-//! carry (n <= (s - 1) ny), or (N4SID) an oblique projection larger than
-//! `max_projection_gain` x the future outputs.
+//! carry (n <= (s - 1) ny), a block-Hankel matrix above max_hankel_entries, or (N4SID) an
+//! oblique projection larger than `max_projection_gain` x the future outputs.
 [[nodiscard]] inline SubspaceModel identify(std::span<const DataSet> data,
                                             const SubspaceOptions& options = {}) {
   namespace ds = detail::subspace;
@@ -369,6 +414,30 @@ inline Regressed regress_b_d_x0(const Matrix& A, const Matrix& C, std::span<cons
     fail("identify: max_projection_gain must be > 0, got " +
          ds::format_number(options.max_projection_gain));
   }
+  // Every input and output column scaled to unit RMS over all data sets (options.scaling): the LQ
+  // factorisation, the SVD and the B, D, x0 regression then see columns of one size whatever the
+  // units (1e150 next to 1), and the model is scaled back at the end (same x, so the same x0).
+  Vector u_scale = ds::column_rms(data, &DataSet::u);
+  Vector y_scale = ds::column_rms(data, &DataSet::y);
+  const auto extreme = [](const Vector& rms) {
+    return (rms.array() < 1e-6).any() || (rms.array() > 1e6).any();
+  };
+  const bool scale = options.scaling == SubspaceOptions::Scaling::unit_rms ||
+                     (options.scaling == SubspaceOptions::Scaling::automatic &&
+                      (extreme(u_scale) || extreme(y_scale)));
+  if (!scale) {
+    u_scale.setOnes();
+    y_scale.setOnes();
+  }
+  std::vector<DataSet> scaled_data;
+  scaled_data.reserve(data.size());
+  for (const DataSet& d : data) {
+    scaled_data.push_back(
+        {d.u * u_scale.cwiseInverse().asDiagonal(), d.y * y_scale.cwiseInverse().asDiagonal()});
+    ds::require_finite(scaled_data.back().u, "identify: u scaled to unit RMS");
+    ds::require_finite(scaled_data.back().y, "identify: y scaled to unit RMS");
+  }
+  const std::span<const DataSet> scaled(scaled_data);
   const int wanted = options.order > 0 ? options.order : options.max_order;
   const auto sets = static_cast<int>(data.size());
   const int s = options.block_rows > 0 ? options.block_rows
@@ -409,9 +478,14 @@ inline Regressed regress_b_d_x0(const Matrix& A, const Matrix& C, std::span<cons
 
   // H^T, one row per Hankel column, blocks [Uf | Up | Yp | Yf]; R of its QR is L^T of the LQ
   // factorisation [Uf; Wp; Yf] = L Q.
+  if (static_cast<double>(columns) * static_cast<double>(r) > max_hankel_entries) {
+    fail("identify: the block-Hankel matrix would have " + idx(columns) + " x " + idx(r) +
+         " entries, more than the limit of " + ds::format_number(max_hankel_entries) +
+         " (2 GB): use fewer samples (a larger sample time) or a lower max_order");
+  }
   Matrix Ht(columns, r);
   Index c = 0;
-  for (const DataSet& d : data) {
+  for (const DataSet& d : scaled) {
     const Index jn = d.u.rows() - 2 * s + 1;
     for (Index i = 0; i < s; ++i) {
       for (Index m = 0; m < nu; ++m) {
@@ -496,8 +570,16 @@ inline Regressed regress_b_d_x0(const Matrix& A, const Matrix& C, std::span<cons
   const Matrix A = Gamma.topRows(f - ny).colPivHouseholderQr().solve(Gamma.bottomRows(f - ny));
   ds::require_finite(A, "identify: A");
 
-  ds::Regressed bd = ds::regress_b_d_x0(A, C, data, options.estimate_d, options.estimate_x0);
-  model::DynamicStateSpace<> state_space(A, bd.B, C, bd.D, options.sample_time);
+  const ds::Regressed bd =
+      ds::regress_b_d_x0(A, C, scaled, options.estimate_d, options.estimate_x0);
+  // Back to the data's units: u = Su u', y = Sy y' give B = B' Su^-1, C = Sy C', D = Sy D' Su^-1.
+  const Matrix B = bd.B * u_scale.cwiseInverse().asDiagonal();
+  const Matrix C_unscaled = y_scale.asDiagonal() * C;
+  const Matrix D = y_scale.asDiagonal() * bd.D * u_scale.cwiseInverse().asDiagonal();
+  ds::require_finite(B, "identify: B in the data's units");
+  ds::require_finite(C_unscaled, "identify: C in the data's units");
+  ds::require_finite(D, "identify: D in the data's units");
+  model::DynamicStateSpace<> state_space(A, B, C_unscaled, D, options.sample_time);
   state_space.reset(bd.x0.front());
   return SubspaceModel{.state_space = std::move(state_space),
                        .initial_states = std::move(bd.x0),
@@ -505,7 +587,9 @@ inline Regressed regress_b_d_x0(const Matrix& A, const Matrix& C, std::span<cons
                        .order_singular_values = moesp_values,
                        .order = n,
                        .block_rows = s,
-                       .weighting = options.weighting};
+                       .weighting = options.weighting,
+                       .input_scale = u_scale,
+                       .output_scale = y_scale};
 }
 
 //! One experiment: u is N x nu, y is N x ny. Throws Error as the multi-experiment overload.

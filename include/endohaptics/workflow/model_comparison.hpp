@@ -6,6 +6,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -101,6 +102,39 @@ struct FileComparison {
   c.correlation = correlation(y_all, y_hat_all);
   c.rmse = rmse(y_all, y_hat_all);
   return c;
+}
+
+//! Throws Error naming the file and the output when a score of `c` is not finite, so that a
+//! program never reports such a run as a success: a simulated output that diverges (an unstable
+//! model: fit -Inf), a constant measured output the model does not match (fit -Inf), or a
+//! constant measured or simulated output (correlation undefined). `outputs` names the outputs
+//! (fewer names: numbered).
+inline void require_finite_scores(const FileComparison& c,
+                                  const std::vector<std::string>& outputs) {
+  const auto name = [&](Eigen::Index i) {
+    const auto k = static_cast<std::size_t>(i);
+    return k < outputs.size() ? "'" + outputs[k] + "'" : "output " + std::to_string(i);
+  };
+  bool diverged = false;
+  for (const Eigen::MatrixXd& y_hat : c.y_hat) diverged = diverged || !y_hat.allFinite();
+  if (diverged) {
+    detail::fail(c.source +
+                 ": the simulated output is not finite: the model diverges on this log " +
+                 "(unstable, or unstable for these inputs); no fit can be given");
+  }
+  for (Eigen::Index i = 0; i < c.fit.size(); ++i) {
+    if (!std::isfinite(c.fit[i])) {
+      detail::fail(c.source + ": fit of " + name(i) + " is " + detail::format_number(c.fit[i]) +
+                   ": the measured output is constant and the model does not reproduce it");
+    }
+    if (i < c.correlation.size() && !std::isfinite(c.correlation[i])) {
+      detail::fail(c.source + ": correlation of " + name(i) +
+                   " is undefined: the measured or the simulated output is constant");
+    }
+    if (i < c.rmse.size() && !std::isfinite(c.rmse[i])) {
+      detail::fail(c.source + ": RMSE of " + name(i) + " is not finite");
+    }
+  }
 }
 
 }  // namespace endohaptics::workflow

@@ -2,7 +2,9 @@
 //! The workflow's settings as text, as endohaptics-identify/-replay take them on the command
 //! line and model files record them: offset and x0 mode names, --deadzone lists (input units),
 //! and the one-line `key=value` form of Preprocessing kept in a model file's provenance notes.
-//! Numbers are read locale-independently. Configuration time: throws endohaptics::Error.
+//! Numbers are read locale-independently and whole (workflow/command_line.hpp); settings outside
+//! their ranges (workflow/preprocessing.hpp, limits) are refused. Configuration time: throws
+//! endohaptics::Error.
 #pragma once
 
 #include <Eigen/Core>
@@ -17,6 +19,7 @@
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/files/log_text.hpp"
 #include "endohaptics/files/model_file.hpp"
+#include "endohaptics/workflow/command_line.hpp"
 #include "endohaptics/workflow/error_context.hpp"
 #include "endohaptics/workflow/model_comparison.hpp"
 #include "endohaptics/workflow/preprocessing.hpp"
@@ -71,7 +74,8 @@ inline std::vector<std::string_view> split(std::string_view text, char separator
   return out.str();
 }
 
-//! Reads what `describe` wrote. Unknown keys or bad values throw Error naming them.
+//! Reads what `describe` wrote. Unknown keys, bad values and values outside their ranges
+//! (`validate`) throw Error naming them.
 [[nodiscard]] inline Preprocessing parse_preprocessing(std::string_view text) {
   namespace wf = detail;
   Preprocessing p;
@@ -86,7 +90,8 @@ inline std::vector<std::string_view> split(std::string_view text, char separator
     if (key == "lowpass_hz") {
       p.cutoff = wf::parse_double(value, what);
     } else if (key == "filter_order") {
-      p.filter_order = static_cast<int>(wf::parse_double(value, what));
+      p.filter_order =
+          parse_number<int>(value, what, limits::min_filter_order, limits::max_filter_order);
     } else if (key == "output_offset") {
       p.output_offset = offset_mode_from_string(value);
     } else if (key == "input_offset") {
@@ -100,11 +105,13 @@ inline std::vector<std::string_view> split(std::string_view text, char separator
     } else if (key == "max_gap_s") {
       p.max_gap = wf::parse_double(value, what);
     } else if (key == "min_segment") {
-      p.min_segment = static_cast<Eigen::Index>(wf::parse_double(value, what));
+      p.min_segment =
+          parse_number<Eigen::Index>(value, what, limits::min_segment, limits::max_grid_samples);
     } else {
       wf::fail("preprocessing: unknown key '" + key + "'");
     }
   }
+  validate(p);
   return p;
 }
 

@@ -85,8 +85,9 @@ struct PreparedLog {
 
 //! Reads `path`, selects the named signals, resamples to `ts` (split at gaps), filters and
 //! removes offsets as `pre` says. Throws Error naming the file: unreadable, unknown signal
-//! (listing the known ones), non-finite values (unless drop_non_finite), fewer than
-//! `min_samples` grid samples, bad options.
+//! (listing the known ones), a signal named twice, non-finite values (unless drop_non_finite),
+//! fewer than `min_samples` or more than limits::max_grid_samples grid samples, bad options
+//! (`validate`).
 [[nodiscard]] inline PreparedLog prepare_log(const std::string& path, const LogSelection& sel,
                                              double ts, const Preprocessing& pre,
                                              Eigen::Index min_samples = 20) {
@@ -95,6 +96,17 @@ struct PreparedLog {
   if (sel.outputs.empty()) wf::fail(path + ": no output signal named");
   if (!std::isfinite(ts) || !(ts > 0.0))
     wf::fail(path + ": sample time must be finite and > 0 s, got " + wf::format_number(ts));
+  validate(pre);
+  std::vector<std::string> names = sel.inputs;
+  names.insert(names.end(), sel.outputs.begin(), sel.outputs.end());
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    for (std::size_t k = 0; k < i; ++k) {
+      if (names[k] != names[i]) continue;
+      const auto role = [&](std::size_t at) { return at < sel.inputs.size() ? "input" : "output"; };
+      wf::fail(path + ": signal '" + names[i] + "' is named twice (as " + role(k) + " and as " +
+               role(i) + "): a model needs distinct input and output signals");
+    }
+  }
   const files::Log log = read_selected_format(path, sel);
   if (!sel.drop_non_finite && log.report.non_finite > 0) {
     std::string where;
@@ -107,8 +119,6 @@ struct PreparedLog {
     wf::fail(path + ": " + std::to_string(log.report.non_finite) +
              " row(s) hold non-finite values" + where + "; pass --drop-non-finite to drop them");
   }
-  std::vector<std::string> names = sel.inputs;
-  names.insert(names.end(), sel.outputs.begin(), sel.outputs.end());
   for (const std::string& name : names) {
     if (name == "time" || !log.has(name)) {
       wf::fail(path + ": no signal named '" + name + "' (signals: " + wf::join(log.names) + ")");
@@ -116,6 +126,12 @@ struct PreparedLog {
   }
   const Eigen::MatrixXd signals = log.select(names);
   const double span = log.time[log.rows() - 1] - log.time[0];
+  const double grid = std::floor(span / ts + 1e-9) + 1.0;
+  if (!(grid <= static_cast<double>(limits::max_grid_samples))) {
+    wf::fail(path + ": " + wf::format_number(span) + " s at ts = " + wf::format_number(ts) +
+             " s would give " + wf::format_number(grid) + " grid samples, more than the limit of " +
+             std::to_string(limits::max_grid_samples) + " per log: choose a larger ts");
+  }
   if (std::floor(span / ts + 1e-9) + 1.0 < static_cast<double>(min_samples)) {
     wf::fail(path + ": too few samples: " + std::to_string(log.rows()) + " rows spanning " +
              wf::format_number(span) + " s give at most " +

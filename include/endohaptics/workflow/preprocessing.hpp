@@ -1,13 +1,18 @@
 //! @file
 //! What is done to a log between reading and identification (worksheet 4.2.1): zero-phase
 //! Butterworth low-pass (Hz), offset removal per signal, linear detrend, and the gap (s) and
-//! segment length (samples) at which a log is split. Settings only: workflow/prepared_log.hpp
-//! applies them; workflow/option_parsing.hpp reads and writes their text form.
+//! segment length (samples) at which a log is split, and the ranges they may take. Settings and
+//! their check only: workflow/prepared_log.hpp applies them; workflow/option_parsing.hpp reads
+//! and writes their text form.
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 #include <cstdint>
+#include <string>
 #include <string_view>
+
+#include "endohaptics/core/error.hpp"
 
 namespace endohaptics::workflow {
 
@@ -45,5 +50,42 @@ struct Preprocessing {
   double max_gap = 0.0;           //!< s, longer time steps split a log; 0: 5 x max(Ts, median step)
   Eigen::Index min_segment = 20;  //!< samples; shorter gap-free stretches are dropped
 };
+
+//! The ranges the workflow accepts (inclusive), stated once for `validate` and the programs'
+//! options. The sizes bound memory and time: a log gives at most max_grid_samples samples.
+namespace limits {
+inline constexpr Eigen::Index max_grid_samples = 10'000'000;  //!< grid samples per log
+inline constexpr double min_sample_time = 1e-9;               //!< s
+inline constexpr double max_sample_time = 1e6;                //!< s
+inline constexpr double max_cutoff = 1e9;                     //!< Hz (also < Nyquist)
+inline constexpr int min_filter_order = 1;                    //!< Butterworth order
+inline constexpr int max_filter_order = 32;                   //!< Butterworth order
+inline constexpr double min_offset_duration = 1e-9;           //!< s
+inline constexpr double max_duration = 1e9;                   //!< s, offset window and max gap
+inline constexpr Eigen::Index min_segment = 2;                //!< samples
+inline constexpr int max_order = 100;                         //!< model order
+}  // namespace limits
+
+//! Throws Error naming the setting, its value and its range when `p` holds a value outside
+//! the ranges of `limits` (or a non-finite one).
+inline void validate(const Preprocessing& p) {
+  using endohaptics::detail::fail;
+  using endohaptics::detail::format_number;
+  const auto check = [](bool ok, const char* name, const std::string& value,
+                        const std::string& range) {
+    if (!ok) fail("preprocessing: " + std::string(name) + " is " + value + ", expected " + range);
+  };
+  check(std::isfinite(p.cutoff) && p.cutoff >= 0.0 && p.cutoff <= limits::max_cutoff, "lowpass_hz",
+        format_number(p.cutoff), "0 (none) or a cutoff in (0, 1e9] Hz");
+  check(p.filter_order >= limits::min_filter_order && p.filter_order <= limits::max_filter_order,
+        "filter_order", std::to_string(p.filter_order), "[1, 32]");
+  check(std::isfinite(p.offset_duration) && p.offset_duration >= limits::min_offset_duration &&
+            p.offset_duration <= limits::max_duration,
+        "offset_duration_s", format_number(p.offset_duration), "[1e-09, 1e+09] s");
+  check(std::isfinite(p.max_gap) && p.max_gap >= 0.0 && p.max_gap <= limits::max_duration,
+        "max_gap_s", format_number(p.max_gap), "[0, 1e+09] s (0: automatic)");
+  check(p.min_segment >= limits::min_segment && p.min_segment <= limits::max_grid_samples,
+        "min_segment", std::to_string(p.min_segment), "[2, 10000000] samples");
+}
 
 }  // namespace endohaptics::workflow
