@@ -136,6 +136,11 @@ struct RigConfig {
   int plant_substeps = 1;                 //!< mechanical sub-steps per current-loop period
   int velocity_window = 20;               //!< position samples in the reported velocity (1..64)
   Scalar current_filter_cutoff = Scalar(100.0);  //!< Hz, sbRIO first-order low-pass on the current
+  //! +-1: the sign of the current the sbRIO reports relative to the physical one (positive
+  //! current drives positive motion). The 2016 rig reports it negated on every motor (the current
+  //! opposes the position error in 40 of its 41 logs: docs/models.md, "Current direction"), so
+  //! endowrist_2016_rig() sets -1 and the estimator's default current_sign (-1) matches it.
+  int reported_current_sign = 1;
 
   //! Throws Error naming the first invalid field and its value.
   void validate() const;
@@ -228,6 +233,8 @@ void RigConfig<N, Scalar>::validate() const {
   require(velocity_window >= 1 && velocity_window <= 63, "velocity_window", velocity_window,
           "in 1..63");
   positive(current_filter_cutoff, "current_filter_cutoff (Hz)");
+  require(reported_current_sign == 1 || reported_current_sign == -1, "reported_current_sign",
+          reported_current_sign, "+1 or -1");
   for (int j = 0; j < N; ++j) {
     const auto& c = joints[static_cast<std::size_t>(j)];
     const std::string p = "joints[" + std::to_string(j) + "].";
@@ -284,6 +291,7 @@ void RigConfig<N, Scalar>::validate() const {
 template <int N = 4, typename Scalar = double>
 [[nodiscard]] RigConfig<N, Scalar> endowrist_2016_rig(Environment env = Environment::tissue) {
   RigConfig<N, Scalar> config;
+  config.reported_current_sign = -1;  // the 2016 sbRIO reports the current negated
   // Per joint: K_s, K_c [A], F_mu [A s/rad], lever [m], tendon [N m/rad], load cell [N m/rad],
   // tissue k [N m/rad^1.5]. Sources and derivations: docs/models/sim.md, "Parameters".
   struct Preset {
@@ -324,6 +332,9 @@ struct RigTruth {
   Vector motor_velocity = Vector::Zero();  //!< rad/s (gear output)
   Vector motor_current = Vector::Zero();   //!< A, unfiltered
   Vector contact_force = Vector::Zero();   //!< N at the tool, >= 0 (pushes)
+  //! N at the tool, signed: the contact's force along the joint's positive setpoint
+  //! (-direction x contact_force), the convention of ForceEstimator and map_force.
+  Vector external_force = Vector::Zero();
 };
 
 //! The simulated rig. Not thread-safe; one instance per rig. advance() is the real-time path.
@@ -411,7 +422,8 @@ class SimulatedRig {
       const auto& s = joints_[static_cast<std::size_t>(j)];
       out.position[j] = static_cast<double>(encoder_position(j));
       out.velocity[j] = static_cast<double>(s.reported_velocity);
-      out.current[j] = static_cast<double>(s.filtered_current);
+      out.current[j] = static_cast<double>(config_.reported_current_sign) *
+                       static_cast<double>(s.filtered_current);
       if (s.enabled) out.active_mask = static_cast<std::uint8_t>(out.active_mask | (1u << j));
     }
     return out;
@@ -434,6 +446,7 @@ class SimulatedRig {
     if (env == Environment::free_space) {
       joints_[static_cast<std::size_t>(joint)].contact_torque = Scalar(0);
       truth_.contact_force[joint] = Scalar(0);
+      truth_.external_force[joint] = Scalar(0);
     }
   }
 
@@ -619,6 +632,8 @@ class SimulatedRig {
       truth_.motor_velocity[j] = s.motor_velocity;
       truth_.motor_current[j] = s.current;
       truth_.contact_force[j] = s.contact_torque / config_.joints[ju].transmission.lever_arm;
+      truth_.external_force[j] =
+          -static_cast<Scalar>(config_.joints[ju].contact.direction) * truth_.contact_force[j];
     }
   }
 
