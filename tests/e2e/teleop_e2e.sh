@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # End-to-end tests on UDP loopback: endohaptics-sbrio-emulator + endohaptics-bridge as separate
-# processes, bounded in time. Usage: teleop_e2e.sh BIN_DIR steady|kill-restart
+# processes, bounded in time. Usage: teleop_e2e.sh BIN_DIR steady|kill-restart|identified
 set -euo pipefail
 bin=$1
 scenario=$2
@@ -97,6 +97,24 @@ case $scenario in
       }' "$work/ticks.csv" || fail "kill/restart behaviour (see above)"
     grep -q "link_losses=1 recoveries=1" "$work/bridge.out" || fail "summary should count 1 loss, 1 recovery"
     echo "PASS: safe state on loss, kept running, recovered with a force ramp"
+    ;;
+  identified)
+    # The demo's pipeline (examples/demo.sh), 6 s per run: the clamp model identified on the
+    # emulator must render the force it estimates. Thresholds below the demo's targets (fit 80 %,
+    # correlation 0.95) for a loaded CI machine.
+    bash "$(dirname "${BASH_SOURCE[0]}")/../../examples/demo.sh" "$bin" "$work/demo" 6 \
+      >"$work/demo.out" 2>&1 || fail "demo.sh exited with $?: $(cat "$work/demo.out")"
+    cat "$work/demo.out"
+    line=$(tail -n 1 "$work/demo.out")
+    [[ $line == identified:* ]] || fail "the last line is not the identified model's: $line"
+    fit=$(sed -n 's/^identified: fit \([-0-9.]*\)%.*/\1/p' <<<"$line")
+    corr=$(sed -n 's/.*correlation \([-0-9.]*\),.*/\1/p' <<<"$line")
+    [[ -n $fit && -n $corr ]] || fail "cannot read fit and correlation from: $line"
+    awk -v f="$fit" -v c="$corr" 'BEGIN { exit !(f >= 70 && c >= 0.9) }' ||
+      fail "identified model: fit $fit % (>= 70 needed), correlation $corr (>= 0.9 needed)"
+    [[ $(tail -n 2 "$work/demo.out" | head -n 1) == "2016 preset: fit "* ]] ||
+      fail "the second-to-last line is not the 2016 preset's"
+    echo "PASS: identified clamp model: fit $fit %, correlation $corr"
     ;;
   *) fail "unknown scenario $scenario" ;;
 esac

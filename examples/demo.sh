@@ -1,0 +1,67 @@
+#!/usr/bin/env bash
+# The main job (./run demo; tests/e2e/teleop_e2e.sh identified): loopback teleoperation that
+# identifies its own clamp model first.
+#   1. identification experiment: sbRIO emulator (simulated EndoWrist, clamps closing on tissue)
+#      and bridge with the force feedback off, a scripted operator grasping at another depth and
+#      pace than in the runs below; the emulator logs what the sbRIO reports and the true force;
+#   2. endohaptics-identify: a Hammerstein-Wiener clamp model (reported current and velocity ->
+#      force, 6 states: what the bridge loads) from that log;
+#   3. teleoperation with the 2016 preset (appendix C), then with the identified model;
+#   4. endohaptics-force-report: both runs against the emulator's truth, one plot, and as its last
+#      two lines "2016 preset: fit ..." and "identified: fit ...".
+# Usage: demo.sh BIN_DIR OUT_DIR [SECONDS per run, default 10]
+set -euo pipefail
+bin=$1
+out=$2
+seconds=${3:-10}
+mkdir -p "$out"
+rm -f "$out"/*.csv "$out"/*.png "$out"/*.json "$out"/*.out
+
+emulator=""
+trap '[[ -n $emulator ]] && kill "$emulator" 2>/dev/null || true' EXIT
+
+# run NAME [bridge options...]: one emulator + bridge session; NAME.truth.csv, NAME.ticks.csv.
+run() {
+  local name=$1 port=""
+  shift
+  "$bin/endohaptics-sbrio-emulator" --bind 127.0.0.1 --port 0 --environment tissue \
+    --truth-log "$out/$name.truth.csv" --quiet >"$out/$name.emulator.out" 2>&1 &
+  emulator=$!
+  for _ in $(seq 100); do
+    port=$(sed -n 's/.*listening on 127.0.0.1:\([0-9]*\).*/\1/p' "$out/$name.emulator.out")
+    [[ -n $port ]] && break
+    sleep 0.05
+  done
+  [[ -n $port ]] || { cat "$out/$name.emulator.out"; echo "the emulator did not start" >&2; exit 1; }
+  "$bin/endohaptics-bridge" --sbrio "127.0.0.1:$port" --rate 1000 --duration "$seconds" \
+    --log "$out/$name.ticks.csv" "$@" >"$out/$name.bridge.out"
+  kill -INT "$emulator"
+  wait "$emulator" || true
+  emulator=""
+  grep -h "bridge: summary" "$out/$name.bridge.out"
+  tail -n 1 "$out/$name.emulator.out"
+}
+
+echo "== 1. identification experiment: ${seconds} s, force feedback off, deeper and faster grasps"
+cat >"$out/experiment.json" <<'JSON'
+{ "mapping": { "force_scale": [0, 0, 0] },
+  "operator": { "r_closed": 0.010, "open_time": 0.5, "close_time": 0.6, "hold_time": 1.0,
+                "release_time": 0.6 } }
+JSON
+run experiment --config "$out/experiment.json"
+
+echo "== 2. identify the clamp model: reported current and velocity of motor 2 -> true force"
+"$bin/endohaptics-identify" --format csv --log "$out/experiment.truth.csv" \
+  --input reported_current2 --input reported_velocity2 --output force2 --ts 0.001 --order 6 \
+  --deadzone auto --method best --out "$out/clamp_model.json" | tail -n 3
+
+echo "== 3. teleoperation with the 2016 preset (appendix C yaw model)"
+run preset
+echo "== 3. teleoperation with the identified model"
+printf '{ "estimator": { "clamp_model": "clamp_model.json" } }\n' >"$out/identified.json"
+run identified --config "$out/identified.json"
+
+echo "== 4. force feedback against the emulator's truth (motor 2, clamp 1)"
+"$bin/endohaptics-force-report" --joint 2 --plot-dir "$out" \
+  --truth "$out/preset.truth.csv" --log "$out/preset.ticks.csv" --label "2016 preset" \
+  --truth "$out/identified.truth.csv" --log "$out/identified.ticks.csv" --label identified
