@@ -6,6 +6,7 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -204,9 +205,11 @@ struct RandomBytes {
   }
 };
 
-// The envelope, checked on one tick. `previous`: the tick before (its setpoint and mask).
+// The envelope, checked on one tick. `previous`: the tick before (its setpoint and mask);
+// `recovered`: the state `previous` received ended a loss (link lost -> recovering), so this
+// tick's setpoint starts from the measured position of every joint the sbRIO reported released.
 void check_envelope(const tp::TickResult& r, const tp::TickResult& previous,
-                    const tp::TeleopLoopConfig& config) {
+                    const tp::TeleopLoopConfig& config, bool recovered = false) {
   const auto& s = config.safety;
   REQUIRE(r.setpoint.allFinite());
   for (int i = 0; i < 4; ++i) {
@@ -221,10 +224,17 @@ void check_envelope(const tp::TickResult& r, const tp::TickResult& previous,
     REQUIRE(std::fabs(r.measured.velocity[i]) <= s.plausibility.max_velocity);
     REQUIRE(std::fabs(r.measured.current[i]) <= s.plausibility.max_current);
   }
-  // Enabled motors move at most the rate limit per tick.
+  // Enabled motors move at most the rate limit per tick: from the previous setpoint, or after a
+  // recovery from where a released joint was measured (the robot is there, not at the old
+  // setpoint; docs/safety.md).
   if (r.enable_mask != 0 && previous.enable_mask != 0) {
-    REQUIRE((r.setpoint - previous.setpoint).cwiseAbs().maxCoeff() <=
-            s.max_setpoint_rate * 1e-3 + 1e-12);
+    for (int j = 0; j < 4; ++j) {
+      const bool released = ((previous.measured.active_mask >> j) & 1u) == 0;
+      const double from = recovered && released ? std::clamp(previous.measured.position[j],
+                                                             s.joint_lower[j], s.joint_upper[j])
+                                                : previous.setpoint[j];
+      REQUIRE(std::fabs(r.setpoint[j] - from) <= s.max_setpoint_rate * 1e-3 + 1e-12);
+    }
   }
   // A fault is reported and takes the link down (or keeps it waiting), never "ok".
   if (r.state_fault != tp::StateFault::none) {
@@ -368,12 +378,14 @@ TEST_CASE("property: random and adversarial state streams never open the envelop
       rig.link.responder().honest_percent = seed % 3 == 0 ? 90 : 50;
       rig.device.rng.seed(seed + 100);
       tp::TickResult previous;
+      bool recovered = false;
       previous.enable_mask = 0;
       std::uint64_t faults = 0;
       std::uint64_t enabled = 0;
       for (int i = 0; i < 3000; ++i) {
         const auto r = rig.tick();
-        check_envelope(r, previous, config);
+        check_envelope(r, previous, config, recovered);
+        recovered = previous.link == tp::LinkState::lost && r.link == tp::LinkState::recovering;
         faults += r.state_fault != tp::StateFault::none;
         enabled += r.enable_mask != 0;
         previous = r;
@@ -395,10 +407,12 @@ TEST_CASE("property: uniformly random state bytes never open the envelope") {
   tp::TeleopLoopConfig config;
   tp::TeleopLoop loop(link, device, estimator, mapper, clock, config);
   tp::TickResult previous;
+  bool recovered = false;
   for (int i = 0; i < 20000; ++i) {
     const auto r = loop.tick();
     clock.advance(1ms);
-    check_envelope(r, previous, config);
+    check_envelope(r, previous, config, recovered);
+    recovered = previous.link == tp::LinkState::lost && r.link == tp::LinkState::recovering;
     previous = r;
   }
   // About half of all bit patterns are NaN/Inf-free floats; few states are plausible as a whole.
@@ -459,6 +473,111 @@ TEST_CASE("safety configuration: physical bounds, with the field and range in th
   CHECK(message([](C& c) {
           c.receive_timeout = 1s;
         }).starts_with("TeleopLoopConfig: receive_timeout must be in [0, 500000000] ns"));
+}
+
+TEST_CASE(
+    "after a loss with the motors released, the first enabled setpoint starts where the "
+    "robot is") {
+  // Review finding: the limiter was re-seeded on first contact only, so after disable_motors (or
+  // the sbRIO's own watchdog) let the robot drift, re-enabling jumped back to the old setpoint.
+  tp::TeleopLoopConfig config;
+  config.safety.policy = tp::SafeStatePolicy::disable_motors;
+  Rig rig(config);
+  auto& sbrio = rig.link.responder();
+  sbrio.fixed = Answer::honest;
+  tp::TickResult r;
+  for (int i = 0; i < 700; ++i) r = rig.tick();
+  REQUIRE(r.status == tp::TickStatus::ok);
+  sbrio.fixed = Answer::silent;
+  for (int i = 0; i < 300; ++i) r = rig.tick();
+  REQUIRE(r.link == tp::LinkState::lost);
+  REQUIRE(r.enable_mask == 0);
+  sbrio.truth.position[1] = 0.8;  // released, the pitch sagged meanwhile
+  sbrio.fixed = Answer::honest;
+  r = rig.tick();  // the first answer: recovering, still disabled this tick
+  REQUIRE(r.link == tp::LinkState::recovering);
+  r = rig.tick();
+  REQUIRE(r.enable_mask != 0);
+  CHECK(std::fabs(r.setpoint[1] - 0.8) <= 4.0 * 1e-3 + 1e-9);
+}
+
+namespace {
+
+// A stylus that stays where the test puts it.
+struct PlacedDevice {
+  Eigen::Vector3d position{0.13, 0.0, 0.137};
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();
+  tp::DeviceStatus read(tp::StylusSample& s) noexcept {
+    s.position = position;
+    return tp::DeviceStatus::ok;
+  }
+  tp::DeviceStatus command_force(const Eigen::Vector3d& f) noexcept {
+    force = f;
+    return tp::DeviceStatus::ok;
+  }
+};
+
+}  // namespace
+
+TEST_CASE("a stylus beyond the joint range does not park the setpoint at the edge") {
+  // Review finding: the limiter chased the unclamped desired setpoint, so with a mapper range
+  // wider than the safety range the sent setpoint stuck at the edge on the way back (332 ms).
+  Link link{HostileSbrio{}};
+  link.responder().fixed = Answer::honest;
+  PlacedDevice device;
+  LoudEstimator estimator;
+  endohaptics::kinematics::CylindricalMapperConfig<double> wide;
+  wide.lower.setConstant(-3.0);
+  wide.upper.setConstant(3.0);
+  Mapper mapper(wide);
+  endohaptics::ManualClock clock{1s};
+  tp::TeleopLoop loop(link, device, estimator, mapper, clock, tp::TeleopLoopConfig{});
+  auto tick = [&] {
+    const auto r = loop.tick();
+    clock.advance(1ms);
+    return r;
+  };
+  tp::TickResult r;
+  for (int i = 0; i < 100; ++i) r = tick();
+  device.position.z() += 0.6;  // desired pitch 2.5 rad: beyond the safety range
+  for (int i = 0; i < 1000; ++i) r = tick();
+  REQUIRE(r.setpoint[1] == doctest::Approx(1.028));
+  device.position.z() -= 0.6;  // back to the middle: the setpoint leaves the edge at once
+  r = tick();
+  CHECK(r.setpoint[1] < 1.028 - 0.003);
+}
+
+TEST_CASE("a period so long that the watchdog product would overflow is refused") {
+  tp::TeleopLoopConfig config;
+  config.period = std::chrono::nanoseconds(std::int64_t{1} << 62);
+  CHECK_THROWS_AS(config.validate(), endohaptics::Error);
+}
+
+TEST_CASE("a channel clipped by the mapper counts as a limited force") {
+  // Review finding: with the default channel limits (1.4 N each) neither the magnitude limit nor
+  // the loop's guard could fire, so a clipped estimate was reported as not limited.
+  struct PitchEstimator {  // a spurious 10 N on pitch (the worksheet saw ~10 N there)
+    bool estimate(const tp::MotorState4&, const tp::MotorVector&, tp::MotorVector& f) noexcept {
+      f = tp::MotorVector(0.0, 10.0, 0.0, 0.0);
+      return true;
+    }
+    void reset() noexcept {}
+  };
+  Link link{HostileSbrio{}};
+  link.responder().fixed = Answer::honest;
+  PlacedDevice device;
+  PitchEstimator estimator;
+  Mapper mapper;
+  endohaptics::ManualClock clock{1s};
+  tp::TeleopLoop loop(link, device, estimator, mapper, clock, tp::TeleopLoopConfig{});
+  tp::TickResult r;
+  for (int i = 0; i < 1000; ++i) {
+    r = loop.tick();
+    clock.advance(1ms);
+  }
+  REQUIRE(r.status == tp::TickStatus::ok);
+  CHECK(std::fabs(r.stylus_force.z()) == doctest::Approx(1.4));  // the pitch channel's limit
+  CHECK(r.force_limited);
 }
 
 }  // namespace teleop_safety_envelope_test

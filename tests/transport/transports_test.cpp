@@ -457,4 +457,28 @@ TEST_CASE("filtered drain through fault injection: damage is shown to the filter
   CHECK(faulty.counters().truncated == 1);
 }
 
+TEST_CASE("filtered drain (UDP): junk that wakes the wait does not end it before the deadline") {
+  // Review finding: a refused datagram ended the receive at once, so the valid answer 300 us
+  // behind it counted as a miss and the loop ran one tick behind.
+  transport::UdpServerTransport server({.bind_address = "127.0.0.1", .port = 0});
+  transport::UdpTransport client({.local_address = "127.0.0.1",
+                                  .remote_address = "127.0.0.1",
+                                  .remote_port = server.local_endpoint().port()});
+  std::array<std::byte, 64> scratch{};
+  REQUIRE(client.send(pattern<17>(1)) == TransportStatus::ok);
+  REQUIRE(server.receive(scratch, 100ms).status == TransportStatus::ok);  // learns the peer
+  std::thread sbrio([&] {
+    (void)server.send(pattern<3>(0));  // junk first
+    std::this_thread::sleep_for(2ms);
+    (void)server.send(pattern<17>(7));  // then the answer
+  });
+  std::array<std::byte, 17> buffer{};
+  SizeFilter filter{17};
+  const auto r = client.receive(buffer, 50ms, filter);
+  sbrio.join();
+  CHECK(r.status == TransportStatus::ok);
+  CHECK(buffer[0] == std::byte{7});
+  CHECK(r.rejected == 1);
+}
+
 }  // namespace transport_transports_test

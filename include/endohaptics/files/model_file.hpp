@@ -209,15 +209,20 @@ inline Eigen::MatrixXd matrix_from_json(const json& object, const char* key, Eig
     fail(where + ": field \"" + name + "\" has " + std::to_string(value.size()) +
          " rows, expected " + std::to_string(rows) + " (" + row_name + ")");
   }
+  // Every row's length first: the allocation below is then bounded by what the file holds (a
+  // file cannot ask for rows x cols doubles it does not contain).
+  for (Eigen::Index i = 0; i < rows; ++i) {
+    const json& row = value[static_cast<std::size_t>(i)];
+    if (!row.is_array() || static_cast<Eigen::Index>(row.size()) != cols) {
+      fail(where + ": field \"" + name + "[" + std::to_string(i) + "]\" has " +
+           (row.is_array() ? std::to_string(row.size()) : std::string("no")) +
+           " columns, expected " + std::to_string(cols) + " (" + col_name + ")");
+    }
+  }
   Eigen::MatrixXd M(rows, cols);
   for (Eigen::Index i = 0; i < rows; ++i) {
     const json& row = value[static_cast<std::size_t>(i)];
     const std::string row_field = name + "[" + std::to_string(i) + "]";
-    if (!row.is_array() || static_cast<Eigen::Index>(row.size()) != cols) {
-      fail(where + ": field \"" + row_field + "\" has " +
-           (row.is_array() ? std::to_string(row.size()) : std::string("no")) +
-           " columns, expected " + std::to_string(cols) + " (" + col_name + ")");
-    }
     for (Eigen::Index j = 0; j < cols; ++j) {
       const std::string entry = row_field + "[" + std::to_string(j) + "]";
       M(i, j) = number(row[static_cast<std::size_t>(j)], where, entry);

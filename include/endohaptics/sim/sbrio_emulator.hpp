@@ -215,7 +215,8 @@ class SbrioEmulator {
   std::chrono::nanoseconds last_packet_;
   bool tripped_ = false;
   EmulatorCounters counters_{};
-  std::array<std::byte, Codec::setpoint_packet_size> rx_buffer_{};
+  // One byte longer than a setpoint packet: a long datagram never decodes as its first bytes.
+  std::array<std::byte, Codec::setpoint_packet_size + 1> rx_buffer_{};
 };
 
 }  // namespace endohaptics::sim

@@ -299,7 +299,7 @@ class LoopStats {
   [[nodiscard]] const DurationStats<>& period() const noexcept { return period_; }
   //! |period - nominal|: the period error the user feels as jitter.
   [[nodiscard]] const DurationStats<>& period_error() const noexcept { return period_error_; }
-  //! Send to receive (or to the deadline) of each exchange.
+  //! Send to receive of each exchange that brought a valid state (misses are not included).
   [[nodiscard]] const DurationStats<>& round_trip() const noexcept { return round_trip_; }
   //! Time each tick spent computing (everything but waiting).
   [[nodiscard]] const DurationStats<>& compute() const noexcept { return compute_; }

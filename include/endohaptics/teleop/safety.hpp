@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <string_view>
 
@@ -165,7 +166,7 @@ class Watchdog {
       }
       return state_;
     }
-    ++misses_;
+    if (misses_ < std::numeric_limits<int>::max()) ++misses_;  // a dead peer for days
     ++total_misses_;
     if (state_ == LinkState::waiting || state_ == LinkState::lost) return state_;
     if (misses_ > max_) {
@@ -180,7 +181,7 @@ class Watchdog {
   //! An implausible state arrived (StateFault): a miss, and the link is lost at once unless it
   //! is still waiting for its first valid state (then nothing was ever enabled).
   LinkState fault() noexcept {
-    ++misses_;
+    if (misses_ < std::numeric_limits<int>::max()) ++misses_;
     ++total_misses_;
     if (state_ != LinkState::waiting && state_ != LinkState::lost) {
       state_ = LinkState::lost;

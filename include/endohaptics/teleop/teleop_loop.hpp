@@ -139,8 +139,8 @@ struct TeleopLoopConfig {
     // The watchdog declares the link lost after max_consecutive_misses + 1 missed ticks of at
     // most max(period, receive_timeout) each: that must stay within max_watchdog_time.
     const auto tick = std::max(period, receive_timeout);
-    const auto silence = tick * (safety.max_consecutive_misses + 1);
-    if (silence > max_watchdog_time) {
+    // Divided, not multiplied: a huge period cannot overflow into a "valid" negative product.
+    if (tick > max_watchdog_time / (safety.max_consecutive_misses + 1)) {
       ENDOHAPTICS_THROW(Error(
           "TeleopLoopConfig: (safety.max_consecutive_misses + 1) x max(period, receive_timeout) "
           "= " +
@@ -221,7 +221,11 @@ class TeleopLoop {
         out.enable_mask = 0;
       }
     } else {
-      r.rate_limited = limiter_.shape(desired_, dt, out.position);
+      // The limiter moves towards the desired setpoint inside the joint range, so a stylus beyond
+      // the range never parks the limiter outside it (it would stick at the edge on the way back).
+      r.rate_limited = limiter_.shape(
+          desired_.cwiseMax(config_.safety.joint_lower).cwiseMin(config_.safety.joint_upper), dt,
+          out.position);
     }
     out.position =
         out.position.cwiseMax(config_.safety.joint_lower).cwiseMin(config_.safety.joint_upper);
@@ -294,10 +298,21 @@ class TeleopLoop {
                                : watchdog_.update(received, ramp_.done());
     if (received && (link_before == LinkState::waiting || link_before == LinkState::lost)) {
       ramp_.restart();
-      if (link_before == LinkState::waiting) {
-        limiter_.initialize(state_.position.cwiseMax(config_.safety.joint_lower)
-                                .cwiseMin(config_.safety.joint_upper));
+      // The limiter starts from where the robot is: on first contact for every joint; after a
+      // loss for each joint whose motor was released meanwhile (disable_motors, or the sbRIO's
+      // own watchdog: its active bit is clear), because that joint may have moved and its first
+      // enabled setpoint must not jump back to an old one. A joint held enabled throughout
+      // tracked the limiter's setpoint and keeps it (no step of its tracking error).
+      const MotorVector measured =
+          state_.position.cwiseMax(config_.safety.joint_lower).cwiseMin(config_.safety.joint_upper);
+      MotorVector from = limiter_.previous();
+      const bool released_all = link_before == LinkState::waiting ||
+                                config_.safety.policy == SafeStatePolicy::disable_motors;
+      for (int j = 0; j < loop_motors; ++j) {
+        const bool active = ((state_.active_mask >> j) & 1u) != 0;
+        if (released_all || !active) from[j] = measured[j];
       }
+      limiter_.initialize(from);
       estimator_->reset();
     }
     r.link = link;
@@ -325,6 +340,9 @@ class TeleopLoop {
       const auto fm = mapper_->map_force(motor_force_, force);
       if (!fm.ok()) force.setZero();
       r.force_limited = fm.limited;
+      if constexpr (requires { fm.channel_limited_mask; }) {
+        r.force_limited = r.force_limited || fm.channel_limited_mask != 0;  // a channel clipped
+      }
       force *= r.force_scale;
     } else {
       ramp_.hold_at_zero();
@@ -397,7 +415,9 @@ class TeleopLoop {
   void shutdown() noexcept {
     (void)device_->command_force(Eigen::Vector3d::Zero());
     Codec::Setpoint off;
-    off.position = limiter_.previous();
+    off.position = limiter_.previous()
+                       .cwiseMax(config_.safety.joint_lower)
+                       .cwiseMin(config_.safety.joint_upper);
     off.enable_mask = 0;
     typename Codec::SetpointBytes tx{};
     if (Codec::encode_setpoint(off, tx) == protocol::CodecStatus::ok) (void)transport_->send(tx);
@@ -447,7 +467,9 @@ class TeleopLoop {
   std::chrono::nanoseconds last_valid_at_{0};
   StateDecoder decoder_;
   MotorVector motor_force_ = MotorVector::Zero();
-  std::array<std::byte, Codec::state_packet_size> rx_buffer_{};
+  // One byte longer than a state packet: a transport that cuts long datagrams to the buffer
+  // still hands over a wrong size, never the first state_packet_size bytes of a longer one.
+  std::array<std::byte, Codec::state_packet_size + 1> rx_buffer_{};
   std::chrono::nanoseconds max_dt_;
   std::chrono::nanoseconds last_start_{0};
 };

@@ -54,30 +54,43 @@ template <typename F>
 ReceiveResult receive_newest(int fd, std::span<std::byte> buffer, std::chrono::nanoseconds timeout,
                              sockaddr_storage* from, std::size_t max_drain,
                              std::span<std::byte, max_datagram_bytes> scratch, F& filter) noexcept {
-  const TransportStatus waited = wait_readable(fd, timeout);
-  if (waited != TransportStatus::ok) {
-    ReceiveResult r;
-    r.status = waited;
-    return r;
-  }
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
   NewestAccepted<F> drain(buffer, filter);
   TransportStatus none = TransportStatus::timeout;  // readable but nothing (e.g. bad checksum)
-  for (std::size_t reads = 0; reads < max_drain;) {
-    sockaddr_storage sender{};
-    socklen_t sender_size = sizeof(sender);
-    const ssize_t n =
-        ::recvfrom(fd, scratch.data(), scratch.size(), MSG_DONTWAIT | MSG_TRUNC,
-                   from != nullptr ? reinterpret_cast<sockaddr*>(&sender) : nullptr,  // NOLINT
-                   from != nullptr ? &sender_size : nullptr);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      if (errno == EAGAIN || errno == EWOULDBLOCK) break;
+  std::size_t reads = 0;
+  // Until a datagram is accepted or the deadline passes: junk that wakes the wait does not end
+  // it (the valid answer may be a moment behind). At most max_drain reads in all.
+  for (;;) {
+    const auto left = std::chrono::duration_cast<std::chrono::nanoseconds>(
+        deadline - std::chrono::steady_clock::now());
+    const TransportStatus waited = wait_readable(fd, std::max(left, std::chrono::nanoseconds(0)));
+    if (waited == TransportStatus::error) {
       if (!drain.any()) none = TransportStatus::error;
       break;
     }
-    ++reads;
-    // MSG_TRUNC: n is the real length, also of a datagram longer than the scratch.
-    if (drain.offer(scratch, static_cast<std::size_t>(n)) && from != nullptr) *from = sender;
+    if (waited != TransportStatus::ok) break;  // timeout
+    bool accepted = false;
+    while (reads < max_drain) {
+      sockaddr_storage sender{};
+      socklen_t sender_size = sizeof(sender);
+      const ssize_t n =
+          ::recvfrom(fd, scratch.data(), scratch.size(), MSG_DONTWAIT | MSG_TRUNC,
+                     from != nullptr ? reinterpret_cast<sockaddr*>(&sender) : nullptr,  // NOLINT
+                     from != nullptr ? &sender_size : nullptr);
+      if (n < 0) {
+        if (errno == EINTR) continue;
+        if (errno != EAGAIN && errno != EWOULDBLOCK && !drain.any()) none = TransportStatus::error;
+        break;
+      }
+      ++reads;
+      // MSG_TRUNC: n is the real length, also of a datagram longer than the scratch.
+      if (drain.offer(scratch, static_cast<std::size_t>(n))) {
+        accepted = true;
+        if (from != nullptr) *from = sender;
+      }
+    }
+    if (accepted || reads >= max_drain || none == TransportStatus::error) break;
+    if (std::chrono::steady_clock::now() >= deadline) break;
   }
   return drain.finish(none);
 }
