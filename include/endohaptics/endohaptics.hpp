@@ -16,6 +16,7 @@
 #include "endohaptics/estimation/open_loop.hpp"
 #include "endohaptics/estimation/paced_estimator.hpp"
 #include "endohaptics/estimation/rate_policy.hpp"
+#include "endohaptics/estimation/stall_hold.hpp"
 #include "endohaptics/estimation/steady_state_kalman.hpp"
 #include "endohaptics/estimation/zoh_resampling.hpp"
 #include "endohaptics/files/csv_log.hpp"

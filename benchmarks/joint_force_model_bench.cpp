@@ -1,0 +1,52 @@
+// One joint step of the per-joint force models as ForceEstimator drives them (advance + force):
+// the stall-hold model (estimation/stall_hold.hpp) side by side with today's clamp model, the
+// 2016 yaw Hammerstein-Wiener preset run open loop (ClampModel2016). Issue 15's budget: <= 200 ns
+// per joint step.
+#include <benchmark/benchmark.h>
+
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <endohaptics/estimation/force_models_2016.hpp>
+#include <endohaptics/estimation/stall_hold.hpp>
+
+namespace {
+
+namespace est = endohaptics::estimation;
+
+// 256 samples of a slow current/velocity sweep crossing the dead zone and the stall threshold.
+constexpr std::size_t sweep_length = 256;
+std::array<est::JointSignals<double>, sweep_length> sweep() {
+  std::array<est::JointSignals<double>, sweep_length> s{};
+  for (std::size_t k = 0; k < sweep_length; ++k) {
+    const double phase = 2.0 * 3.141592653589793 * static_cast<double>(k) / sweep_length;
+    s[k] = {0.0, 0.3 * std::cos(phase), 0.6 * std::sin(phase), 0.0};
+  }
+  return s;
+}
+
+template <typename Model>
+void run(benchmark::State& st, Model model) {
+  const auto signals = sweep();
+  std::size_t k = 0;
+  for (auto _ : st) {
+    const auto status = model.advance(signals[k]);
+    const double f = model.force(signals[k]);
+    benchmark::DoNotOptimize(status);
+    benchmark::DoNotOptimize(f);
+    k = (k + 1) % sweep_length;
+  }
+  st.SetItemsProcessed(st.iterations());
+}
+
+void BM_JointModel_stall_hold(benchmark::State& st) {
+  run(st, est::StallHold<double>(est::StallHoldParameters<double>{}));
+}
+BENCHMARK(BM_JointModel_stall_hold);
+
+void BM_JointModel_clamp_2016_preset(benchmark::State& st) {
+  run(st, est::models_2016<double>().clamp1);
+}
+BENCHMARK(BM_JointModel_clamp_2016_preset);
+
+}  // namespace
