@@ -124,7 +124,9 @@ TEST_CASE("fit_stall_hold on the 2016 clamp hits, leave one file out, scored cau
   }
   const double mean = sum / static_cast<double>(files.size());
   MESSAGE("clamp-hits, leave one file out, causal: mean fit " << mean << " %");
-  CHECK(mean > 40.0);  // the research note's 61 % used other stamps; see identification_results
+  // 60.9 % with the priors above (per file 72.5, 42.8, 63.2, 70.7, 68.7, 47.7); the 2016 preset
+  // and the identified Hammerstein-Wiener models score below (docs/identification_results.md).
+  CHECK(mean > 58.0);
 }
 
 }  // namespace workflow_stall_hold_fit_test
