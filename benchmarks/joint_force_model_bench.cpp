@@ -1,5 +1,6 @@
 // One joint step of the per-joint force models as ForceEstimator drives them (advance + force):
-// the stall-hold model (estimation/stall_hold.hpp) side by side with today's clamp model, the
+// the stall-hold model (estimation/stall_hold.hpp) and the push-load observer
+// (estimation/push_load_observer.hpp) side by side with today's clamp model, the
 // 2016 yaw Hammerstein-Wiener preset run open loop (ClampModel2016). Issue 15's budget: <= 200 ns
 // per joint step.
 #include <benchmark/benchmark.h>
@@ -8,6 +9,7 @@
 #include <cmath>
 #include <cstddef>
 #include <endohaptics/estimation/force_models_2016.hpp>
+#include <endohaptics/estimation/push_load_observer.hpp>
 #include <endohaptics/estimation/stall_hold.hpp>
 
 namespace {
@@ -20,7 +22,7 @@ std::array<est::JointSignals<double>, sweep_length> sweep() {
   std::array<est::JointSignals<double>, sweep_length> s{};
   for (std::size_t k = 0; k < sweep_length; ++k) {
     const double phase = 2.0 * 3.141592653589793 * static_cast<double>(k) / sweep_length;
-    s[k] = {0.0, 0.3 * std::cos(phase), 0.6 * std::sin(phase), 0.0};
+    s[k] = {0.5 * std::sin(phase), 0.3 * std::cos(phase), 0.6 * std::sin(phase), 0.0};
   }
   return s;
 }
@@ -43,6 +45,11 @@ void BM_JointModel_stall_hold(benchmark::State& st) {
   run(st, est::StallHold<double>(est::StallHoldParameters<double>{}));
 }
 BENCHMARK(BM_JointModel_stall_hold);
+
+void BM_JointModel_push_load_observer(benchmark::State& st) {
+  run(st, est::PushLoadObserver<double>(est::PushLoadObserverParameters<double>{}));
+}
+BENCHMARK(BM_JointModel_push_load_observer);
 
 void BM_JointModel_clamp_2016_preset(benchmark::State& st) {
   run(st, est::models_2016<double>().clamp1);

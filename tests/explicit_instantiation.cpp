@@ -39,6 +39,8 @@ template class eh::model::HumanArm3<double>;
 template class eh::estimation::SteadyStateKalman<eh::model::StateSpace<3, 1, 2>>;
 template class eh::estimation::StallHold<double>;
 template class eh::estimation::StallHold<float>;
+template class eh::estimation::PushLoadObserver<double>;
+template class eh::estimation::PushLoadObserver<float>;
 
 // ForceEstimator. The rate policies (rate::SameRate, Decimate, Resample) are not templates:
 // their code is the stepper ForceEstimator instantiates, so ForceEstimator gets one argument

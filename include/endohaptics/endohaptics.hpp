@@ -15,6 +15,7 @@
 #include "endohaptics/estimation/kalman_corrected.hpp"
 #include "endohaptics/estimation/open_loop.hpp"
 #include "endohaptics/estimation/paced_estimator.hpp"
+#include "endohaptics/estimation/push_load_observer.hpp"
 #include "endohaptics/estimation/rate_policy.hpp"
 #include "endohaptics/estimation/stall_hold.hpp"
 #include "endohaptics/estimation/steady_state_kalman.hpp"

@@ -1,0 +1,205 @@
+//! @file
+//! PushLoadObserver: a JointForceModel for a cable-driven grasper whose grip load shows in the
+//! motor current only while the motor pushes against it (docs/research_force_models.md, structure
+//! K2): a scalar Kalman filter on a random-walk load, updated only in the push regime through
+//! i_f = c_p load + d_p + b_p v, held otherwise; the regime from a Dahl-type direction state on
+//! the encoder increments (rate-independent, Dahl 1968) and the filtered velocity; an output map
+//! for the direction-dependent friction on the load side. Filters: second-order Butterworth
+//! low-passes (bilinear transform) started at the steady state of the first sample. Per step
+//! about 40 flops; noexcept, allocation-free. Units: A, rad, rad/s, s; load in the fit's unit.
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "endohaptics/core/error.hpp"
+#include "endohaptics/estimation/joint_force_model.hpp"
+#include "endohaptics/model/state_space.hpp"
+
+namespace endohaptics::estimation {
+
+//! Parameters of PushLoadObserver. Defaults: the research note's (UMN grasper, 1 kHz); c_p, d_p,
+//! b_p, noise, e0, e1 and the initial load come from fit_push_load_observer.
+template <typename Scalar = double>
+struct PushLoadObserverParameters {
+  Scalar current_cutoff = Scalar(10);        //!< Hz, current low-pass (2nd-order Butterworth)
+  Scalar velocity_cutoff = Scalar(20);       //!< Hz, velocity low-pass (of the encoder difference)
+  Scalar direction_scale = Scalar(0.05);     //!< rad, q0: travel that flips the direction state
+  Scalar velocity_threshold = Scalar(0.05);  //!< rad/s: slower is rest, not sliding
+  Scalar direction_threshold = Scalar(0.5);  //!< |h| at or above: moving that way
+  Scalar push_sign = Scalar(1);              //!< +1: positive motion pushes against the load
+  Scalar current_per_load = Scalar(1);       //!< c_p, A per load unit in the push regime
+  Scalar current_offset = Scalar(0);         //!< d_p, A
+  Scalar current_per_velocity = Scalar(0);   //!< b_p, A s/rad
+  Scalar measurement_variance = Scalar(1e-4);  //!< R_p, A^2
+  Scalar process_variance = Scalar(1e-8);      //!< Q, load unit^2 per step
+  Scalar initial_load = Scalar(0);             //!< the load estimate before any push
+  Scalar initial_variance = Scalar(1e-2);      //!< P0, load unit^2
+  Scalar output_offset = Scalar(0);            //!< e0: friction on the load side while not pushing
+  Scalar output_slope = Scalar(0);             //!< e1: its growth with the load
+  Scalar sample_time = Scalar(0.001);          //!< s, one advance()
+
+  //! Throws Error naming the field, its value and the rule.
+  void validate() const {
+    auto require = [](bool ok, const char* field, Scalar value, const char* rule) {
+      if (!ok) {
+        ENDOHAPTICS_THROW(Error(std::string("PushLoadObserverParameters: ") + field + " must be " +
+                                rule + ", got " + endohaptics::detail::format_number(value)));
+      }
+    };
+    const Scalar nyquist = Scalar(0.5) / sample_time;
+    require(std::isfinite(sample_time) && sample_time > 0, "sample_time", sample_time,
+            "finite and > 0 s");
+    require(current_cutoff > 0 && current_cutoff < nyquist, "current_cutoff", current_cutoff,
+            "in (0, Nyquist) Hz");
+    require(velocity_cutoff > 0 && velocity_cutoff < nyquist, "velocity_cutoff", velocity_cutoff,
+            "in (0, Nyquist) Hz");
+    require(std::isfinite(direction_scale) && direction_scale > 0, "direction_scale",
+            direction_scale, "finite and > 0 rad");
+    require(std::isfinite(velocity_threshold) && velocity_threshold >= 0, "velocity_threshold",
+            velocity_threshold, "finite and >= 0 rad/s");
+    require(direction_threshold > 0 && direction_threshold <= 1, "direction_threshold",
+            direction_threshold, "in (0, 1]");
+    require(push_sign == 1 || push_sign == -1, "push_sign", push_sign, "+1 or -1");
+    require(std::isfinite(current_per_load) && current_per_load != 0, "current_per_load",
+            current_per_load, "finite and non-zero");
+    for (const Scalar v :
+         {current_offset, current_per_velocity, initial_load, output_offset, output_slope}) {
+      require(std::isfinite(v), "an offset, slope or initial load", v, "finite");
+    }
+    require(std::isfinite(measurement_variance) && measurement_variance > 0, "measurement_variance",
+            measurement_variance, "finite and > 0");
+    require(std::isfinite(process_variance) && process_variance >= 0, "process_variance",
+            process_variance, "finite and >= 0");
+    require(std::isfinite(initial_variance) && initial_variance >= 0, "initial_variance",
+            initial_variance, "finite and >= 0");
+  }
+};
+
+//! The push-regime load observer (see the file comment).
+template <typename Scalar = double>
+class PushLoadObserver {
+ public:
+  using ScalarType = Scalar;                              //!< floating-point type
+  using Parameters = PushLoadObserverParameters<Scalar>;  //!< the model's parameters
+  using Signals = JointSignals<Scalar>;                   //!< one joint's signals for one tick
+  //! (current filter z1, z2, velocity filter z1, z2, previous position, direction h, load, its
+  //! variance, regime -1/0/+1, started 0/1)
+  using State = Eigen::Matrix<Scalar, 10, 1>;
+
+  //! Validates `p` (throws Error naming the field).
+  explicit PushLoadObserver(const Parameters& p = {}) : p_((p.validate(), p)) {
+    current_ = biquad(p_.current_cutoff);
+    velocity_ = biquad(p_.velocity_cutoff);
+    reset();
+  }
+
+  [[nodiscard]] const Parameters& parameters() const noexcept { return p_; }    //!< as given
+  [[nodiscard]] Scalar sample_time() const noexcept { return p_.sample_time; }  //!< s
+  [[nodiscard]] bool memoryless() const noexcept { return false; }              //!< false: a state
+  //! The load estimate plus the load-side friction while not pushing: tau + g (e0 + e1 tau),
+  //! g = (1 - regime) / 2 (1 when back-driven, 1/2 at rest, 0 while pushing).
+  [[nodiscard]] Scalar force(const Signals&) const noexcept {
+    const Scalar g = (Scalar(1) - x_[8]) / 2;
+    return x_[6] + g * (p_.output_offset + p_.output_slope * x_[6]);
+  }
+
+  //! One sample_time. Non-finite signals: state untouched, StepStatus::non_finite_input.
+  model::StepStatus advance(const Signals& s) noexcept {
+    if (!std::isfinite(s.current) || !std::isfinite(s.position)) {
+      return model::StepStatus::non_finite_input;
+    }
+    State x = x_;
+    if (x[9] == Scalar(0)) {  // first sample: filters at its steady state, no motion yet
+      start(current_, s.current, x[0], x[1]);
+      start(velocity_, Scalar(0), x[2], x[3]);
+      x[4] = s.position;
+      x[9] = Scalar(1);
+    }
+    const Scalar delta = s.position - x[4];
+    x[4] = s.position;
+    const Scalar i_f = step(current_, s.current, x[0], x[1]);
+    const Scalar v = step(velocity_, delta / p_.sample_time, x[2], x[3]);
+    // Direction state: moves towards sign(delta) by |delta| / q0 of the way (at most all of it).
+    if (delta != Scalar(0)) {
+      const Scalar w = std::fmin(Scalar(1), std::fabs(delta) / p_.direction_scale);
+      x[5] += w * ((delta > 0 ? Scalar(1) : Scalar(-1)) - x[5]);
+    }
+    const Scalar h = p_.push_sign * x[5];
+    const Scalar vp = p_.push_sign * v;
+    x[8] = h >= p_.direction_threshold && vp > p_.velocity_threshold     ? Scalar(1)
+           : h <= -p_.direction_threshold && vp < -p_.velocity_threshold ? Scalar(-1)
+                                                                         : Scalar(0);
+    x[7] += p_.process_variance;
+    if (x[8] > 0) {  // pushing: the current sees the load
+      const Scalar c = p_.current_per_load;
+      const Scalar k = x[7] * c / (c * c * x[7] + p_.measurement_variance);
+      x[6] += k * (i_f - c * x[6] - p_.current_offset - p_.current_per_velocity * v);
+      x[7] *= Scalar(1) - k * c;
+    }
+    if (!x.allFinite()) return model::StepStatus::non_finite_result;
+    x_ = x;
+    last_filtered_current_ = i_f;
+    last_filtered_velocity_ = v;
+    return model::StepStatus::ok;
+  }
+
+  [[nodiscard]] const State& state() const noexcept { return x_; }  //!< see State
+  //! Sets the state; reset() starts over (filters wait for the next first sample).
+  void reset(const State& x) noexcept { x_ = x; }
+  //! Back to the start: initial load and variance, filters unstarted, direction 0, at rest.
+  void reset() noexcept {
+    x_.setZero();
+    x_[6] = p_.initial_load;
+    x_[7] = p_.initial_variance;
+  }
+  //! The regime of the last step: +1 pushing, -1 back-driven, 0 at rest or reversing.
+  [[nodiscard]] Scalar regime() const noexcept { return x_[8]; }
+  //! The filtered current and velocity of the last step (for identification).
+  [[nodiscard]] Scalar filtered_current() const noexcept { return last_filtered_current_; }
+  [[nodiscard]] Scalar filtered_velocity() const noexcept {
+    return last_filtered_velocity_;
+  }  //!< rad/s
+
+ private:
+  struct Biquad {
+    Scalar b0{}, b1{}, b2{}, a1{}, a2{};
+  };
+  // Second-order Butterworth low-pass by the bilinear transform with prewarping (unity DC gain).
+  Biquad biquad(Scalar cutoff) const noexcept {
+    const Scalar k = std::tan(std::numbers::pi_v<Scalar> * cutoff * p_.sample_time);
+    const Scalar root2 = std::numbers::sqrt2_v<Scalar>;
+    const Scalar norm = Scalar(1) / (Scalar(1) + root2 * k + k * k);
+    Biquad b;
+    b.b0 = k * k * norm;
+    b.b1 = 2 * b.b0;
+    b.b2 = b.b0;
+    b.a1 = 2 * (k * k - Scalar(1)) * norm;
+    b.a2 = (Scalar(1) - root2 * k + k * k) * norm;
+    return b;
+  }
+  // Direct form II transposed; the steady state for a constant input u is output u.
+  static void start(const Biquad& f, Scalar u, Scalar& z1, Scalar& z2) noexcept {
+    z1 = u * (Scalar(1) - f.b0);
+    z2 = u * (f.b2 - f.a2);
+  }
+  static Scalar step(const Biquad& f, Scalar u, Scalar& z1, Scalar& z2) noexcept {
+    const Scalar y = f.b0 * u + z1;
+    z1 = f.b1 * u - f.a1 * y + z2;
+    z2 = f.b2 * u - f.a2 * y;
+    return y;
+  }
+
+  Parameters p_;
+  Biquad current_{};
+  Biquad velocity_{};
+  State x_ = State::Zero();
+  Scalar last_filtered_current_{};
+  Scalar last_filtered_velocity_{};
+};
+
+static_assert(JointForceModel<PushLoadObserver<double>>);
+
+}  // namespace endohaptics::estimation
