@@ -1,16 +1,20 @@
 // endohaptics-identify: identifies a force model from logs (worksheet 4.2): reads each log and
-// prints what the reader dropped, resamples to --ts, low-pass/offset as 4.2.1, identifies with
-// N4SID/MOESP/CVA (or all three, keeping the best mean fit), optionally with input dead zones,
-// prints the Hankel singular values, the order and the fit per file, and writes a JSON model.
+// prints what the reader dropped, resamples to --ts, low-pass/offset as 4.2.1 for the fit,
+// identifies with N4SID/MOESP/CVA (or all three), optionally with input dead zones, and chooses
+// method, dead zones and order by the causal score (x0 from the inputs, warm-up excluded, inputs
+// filtered forward only, output as logged), refusing unstable and near-integrating models.
+// Each format has recommended defaults (workflow/format_defaults.hpp). Writes a JSON model.
 // Workflow: endohaptics/workflow/workflow.hpp; results: docs/identification_results.md.
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <endohaptics/workflow/command_line.hpp>
+#include <endohaptics/workflow/format_defaults.hpp>
 #include <endohaptics/workflow/workflow.hpp>
 #include <exception>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "../cli_numbers.hpp"
@@ -25,36 +29,42 @@ int main(int argc, char** argv) {
   CLI::App app{"endohaptics identify: subspace (+ dead zone) model from logs"};
   std::vector<std::string> logs, inputs, outputs;
   std::string format = "endowrist-2016", order = "auto", method = "moesp", deadzone = "none";
-  std::string offset = "none", input_offset = "none", x0 = "estimate", out_path;
+  std::string offset = "none", input_offset = "none", x0 = "steady", out_path;
   double ts = 0.0;
   int max_order = 10;
   wf::Preprocessing pre;
+  wf::ScoringOptions scoring;
+  double max_time_constant = 2.0;
   bool drop_non_finite = false;
   app.add_option("--log", logs, "log file (repeat for several experiments)")->required();
-  app.add_option("--format", format, "endowrist-2016 or csv (header line names the columns)")
+  app.add_option("--format", format,
+                 "endowrist-2016, umn-mis-2018 or csv (header line names the columns); sets the "
+                 "recommended defaults of the options marked [format]")
       ->capture_default_str();
-  app.add_option("--input", inputs, "input signal (repeat; default for endowrist-2016: current)");
-  app.add_option("--output", outputs, "output signal (repeat; default for endowrist-2016: force)");
-  app.add_option("--order", order,
-                 "model order N, or auto (largest log gap of the singular values)")
-      ->check(number_in(1, limits::max_order, {"auto"}))
-      ->capture_default_str();
+  app.add_option("--input", inputs, "input signal (repeat) [format]");
+  app.add_option("--output", outputs, "output signal (repeat) [format]");
+  auto* order_opt = app.add_option("--order", order,
+                                   "model order N, or auto (select_order, then every order "
+                                   "1..max-order by the causal score) [format]")
+                        ->check(number_in(1, limits::max_order, {"auto"}));
   app.add_option("--max-order", max_order, "largest order --order auto considers")
       ->check(number_in(1, limits::max_order))
       ->capture_default_str();
-  app.add_option("--method", method, "n4sid, moesp, cva, best (highest mean fit) or static")
-      ->capture_default_str();
-  app.add_option("--deadzone", deadzone,
-                 "input dead zone: auto, none or half width (or one per input, comma-separated)")
-      ->capture_default_str();
+  auto* method_opt = app.add_option(
+      "--method", method,
+      "n4sid, moesp, cva, best (all three, highest causal score) or static [format]");
+  auto* deadzone_opt = app.add_option(
+      "--deadzone", deadzone,
+      "input dead zone: auto, none or half width (or one per input, comma-separated) [format]");
   auto* ts_opt = app.add_option("--ts", ts,
                                 "resampling period, s (csv without time column: the row time, "
-                                "default 1; else default: median step of the first log)")
+                                "default 1; else [format] or the median step of the first log)")
                      ->check(number_in(limits::min_sample_time, limits::max_sample_time));
-  app.add_option("--lowpass", pre.cutoff,
-                 "zero-phase Butterworth low-pass cutoff, Hz (0: none; worksheet 4.2.1 used 20)")
-      ->check(number_in(0.0, limits::max_cutoff))
-      ->capture_default_str();
+  auto* lowpass_opt =
+      app.add_option("--lowpass", pre.cutoff,
+                     "Butterworth low-pass cutoff, Hz (0: none): zero-phase on the fit data, "
+                     "forward only on the scoring data and in replay [format]")
+          ->check(number_in(0.0, limits::max_cutoff));
   app.add_option("--filter-order", pre.filter_order, "Butterworth order")
       ->check(number_in(limits::min_filter_order, limits::max_filter_order))
       ->capture_default_str();
@@ -79,7 +89,16 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--drop-non-finite", drop_non_finite,
                "drop rows holding NaN/Inf instead of failing");
-  app.add_option("--x0", x0, "initial state of the per-file fits: estimate or zero")
+  app.add_option("--x0", x0,
+                 "initial state for the causal score: steady (first input sample) or zero")
+      ->capture_default_str();
+  app.add_option("--warmup", scoring.warmup,
+                 "s at the start of each segment left out of the score (inputs only set the state)")
+      ->check(number_in(0.0, wf::max_warmup))
+      ->capture_default_str();
+  app.add_option("--max-time-constant", max_time_constant,
+                 "s; models with a slower mode are refused as near-integrating")
+      ->check(number_in(1e-6, 1e6))
       ->capture_default_str();
   app.add_option("--out", out_path, "write the model here (JSON)");
   CLI11_PARSE(app, argc, argv);
@@ -88,49 +107,67 @@ int main(int argc, char** argv) {
     wf::LogSelection sel;
     sel.format = files::parse_log_format(format);
     sel.drop_non_finite = drop_non_finite;
-    const bool endowrist = sel.format == files::LogFormat::endowrist_2016;
-    sel.inputs = !inputs.empty() ? inputs
-                 : endowrist     ? std::vector<std::string>{"current"}
-                                 : inputs;
-    sel.outputs = !outputs.empty() ? outputs
-                  : endowrist      ? std::vector<std::string>{"force"}
-                                   : outputs;
+    const wf::FormatDefaults defaults = wf::format_defaults(sel.format);
+    sel.inputs = !inputs.empty() ? inputs : defaults.inputs;
+    sel.outputs = !outputs.empty() ? outputs : defaults.outputs;
     if (sel.inputs.empty() || sel.outputs.empty()) {
       throw endohaptics::Error("--format csv needs --input and --output column names");
     }
+    if (lowpass_opt->count() == 0) pre.cutoff = defaults.preprocessing.cutoff;
+    if (method_opt->count() == 0) method = defaults.method;
+    if (order_opt->count() == 0) order = defaults.order;
+    if (deadzone_opt->count() == 0) deadzone = wf::default_deadzone(defaults, sel.inputs);
+    if (ts_opt->count() == 0 && defaults.sample_time > 0.0) ts = defaults.sample_time;
     pre.output_offset = wf::offset_mode_from_string(offset);
     pre.input_offset = wf::offset_mode_from_string(input_offset);
     wf::WorkflowOptions options;
     options.max_order = max_order;
+    options.max_time_constant = max_time_constant;
     if (order != "auto") options.order = wf::parse_number(order, "--order", 1, limits::max_order);
-    if (method == "best") {
-      options.candidates = {id::Weighting::n4sid, id::Weighting::moesp, id::Weighting::cva};
-    } else if (method == "static") {
-      options.static_gain = true;
-    } else {
-      options.candidates = {id::weighting_from_string(method)};
+    // A comma list: n4sid, moesp, cva, best (= the three) and static, all scored alike.
+    options.candidates.clear();
+    for (std::string_view m : wf::detail::split(method, ',')) {
+      if (m == "best") {
+        for (const auto w : {id::Weighting::n4sid, id::Weighting::moesp, id::Weighting::cva}) {
+          options.candidates.push_back(w);
+        }
+      } else if (m == "static") {
+        options.static_gain = true;
+      } else {
+        options.candidates.push_back(id::weighting_from_string(m));
+      }
     }
     options.deadzone = wf::parse_deadzone(deadzone, sel.inputs.size());
-    options.initial_state = wf::initial_state_from_string(x0);
-    if (options.initial_state == wf::InitialStateMode::stored) {
-      throw endohaptics::Error("--x0 must be estimate or zero here");
+    scoring.initial_state = wf::initial_state_from_string(x0);
+    if (!wf::is_causal(scoring.initial_state) ||
+        scoring.initial_state == wf::InitialStateMode::stored) {
+      throw endohaptics::Error(
+          "--x0 must be steady or zero here: identify chooses by the causal "
+          "score (the oracle score of the chosen model is printed too)");
     }
+    options.scoring = scoring;
 
-    // Sample time: given, else the median step of the first log (a CSV without time column:
-    // its row time, 1 s unless --ts says otherwise).
+    // Sample time: given, else the format's, else the median step of the first log (a CSV
+    // without time column: its row time, 1 s unless --ts says otherwise).
     const bool ts_given = ts_opt->count() > 0;
     sel.csv_row_time = ts_given ? ts : 1.0;
-    if (!ts_given) ts = wf::default_sample_time(logs.front(), sel);
-    std::vector<wf::PreparedLog> prepared;
+    if (!(ts > 0.0)) ts = wf::default_sample_time(logs.front(), sel);
+    std::vector<wf::PreparedLog> prepared, scored;
     for (const auto& path : logs) {
       prepared.push_back(wf::prepare_log(path, sel, ts, pre));
+      scored.push_back(wf::prepare_log(path, sel, ts, pre, 20, wf::Preparation::score));
       fmt::print("{}", wf::summary(prepared.back()));
     }
-    fmt::print("preprocessing: {}\n", wf::describe(pre));
+    fmt::print("preprocessing for the fit: {}\n", wf::describe(pre));
+    fmt::print(
+        "scoring (causal): x0 {}, warm-up {} s per segment excluded, inputs held and low-passed "
+        "forward only ({} Hz), output as logged (no offset, filter or detrend); refused: "
+        "spectral radius >= 1 or slowest time constant > {} s\n",
+        x0, scoring.warmup, pre.cutoff, options.max_time_constant);
 
     auto units = [&](const std::vector<std::string>& names) {
       std::vector<files::SignalInfo> info;
-      const files::Log first = endowrist ? files::read_endowrist_2016(logs.front()) : files::Log{};
+      const files::Log first = files::read_log(logs.front(), sel.format);
       for (const auto& n : names) {
         std::string unit;
         for (std::size_t i = 0; i < first.names.size(); ++i) {
@@ -142,10 +179,11 @@ int main(int argc, char** argv) {
     };
     const auto in_info = units(sel.inputs);
     const auto out_info = units(sel.outputs);
-    const wf::WorkflowResult result = wf::identify_logs(prepared, in_info, out_info, options);
+    const wf::WorkflowResult result =
+        wf::identify_logs(prepared, scored, in_info, out_info, options);
 
     for (const wf::CandidateModel& c : result.candidates) {
-      if (!options.static_gain) {
+      if (!c.method.starts_with("static")) {
         const auto& sv = c.linear.order_singular_values;
         std::string line;
         for (Eigen::Index i = 0; i < std::min<Eigen::Index>(sv.size(), max_order + 5); ++i) {
@@ -153,43 +191,66 @@ int main(int argc, char** argv) {
         }
         fmt::print("{}: Hankel singular values (MOESP, {} block rows):{}\n", c.method,
                    c.linear.block_rows, line);
-        fmt::print("{}: order {} ({}), spectral radius {:.5f}{}\n", c.method, c.linear.order,
-                   options.order == 0 ? "automatic" : "given", c.spectral_radius,
-                   c.spectral_radius >= 1.0 ? " (NOT STABLE)" : "");
+        fmt::print("{}: order {} ({}), spectral radius {:.5f}, slowest time constant {:.3g} s{}\n",
+                   c.method, c.linear.order,
+                   c.order_searched     ? "order search"
+                   : options.order == 0 ? "automatic"
+                                        : "given",
+                   c.spectral_radius, c.time_constant,
+                   c.refused.empty() ? std::string() : " REFUSED: " + c.refused);
       }
       for (std::size_t j = 0; j < c.model.input_nonlinearity.size(); ++j) {
         const auto& m = c.model.input_nonlinearity[j];
+        if (m.kind == endohaptics::model::StaticMapKind::none) continue;
         fmt::print("{}: input {} dead zone [{:.4g}, {:.4g}]\n", c.method, sel.inputs[j], m.lower,
                    m.upper);
       }
-      fmt::print("{}: mean fit {:.2f} %\n", c.method, c.mean_fit);
+      fmt::print("{}: mean causal fit {:.2f} %\n", c.method, c.mean_fit);
     }
+    for (const wf::OrderTrial& t : result.order_search) {
+      fmt::print("order search: order {} mean causal fit {:.2f} %, spectral radius {:.5f}{}\n",
+                 t.order, t.mean_fit, t.spectral_radius,
+                 t.refused.empty() ? std::string() : " REFUSED: " + t.refused);
+    }
+    fmt::print("models fitted and scored: {}\n", result.evaluations);
     for (const std::string& f : result.failures) fmt::print("failed: {}\n", f);
     const wf::CandidateModel& best = result.chosen();
-    if (!options.static_gain && (best.linear.input_scale.array() != 1.0).any()) {
+    if (!best.method.starts_with("static") && (best.linear.input_scale.array() != 1.0).any()) {
       fmt::print(
           "scaling: each column divided by its RMS for the fit (inputs {:.4g}, outputs "
           "{:.4g}); the model is in the logs' units\n",
           fmt::join(best.linear.input_scale.begin(), best.linear.input_scale.end(), " "),
           fmt::join(best.linear.output_scale.begin(), best.linear.output_scale.end(), " "));
     }
-    fmt::print("chosen: {} (order {}){}\n", best.method, best.model.state_space.state_size(),
-               best.spectral_radius >= 1.0 ? ", NOT STABLE: no stable candidate" : "");
-    for (const wf::FileComparison& f : best.files) {
-      std::string fits;
+    fmt::print("chosen: {} (order {}, spectral radius {:.5f})\n", best.method,
+               best.model.state_space.state_size(), best.spectral_radius);
+    double rmse_sum = 0.0;
+    for (std::size_t k = 0; k < best.files.size(); ++k) {
+      const wf::FileComparison& f = best.files[k];
+      // The old, output-fitted score beside the causal one, labelled.
+      const wf::FileComparison oracle = wf::compare_log(
+          best.model, prepared[k], {wf::InitialStateMode::oracle, 0.0, scoring.max_lag});
       for (Eigen::Index i = 0; i < f.fit.size(); ++i) {
-        fits += fmt::format(" {} {:.2f} %", sel.outputs[static_cast<std::size_t>(i)], f.fit[i]);
+        fmt::print(
+            "fit {}: {} causal {:.2f} %, correlation {:.4f}, RMSE {:.4g} {}, delay {:.0f} ms "
+            "(oracle x0, zero-phase data: {:.2f} %)\n",
+            f.source, sel.outputs[static_cast<std::size_t>(i)], f.fit[i], f.correlation[i],
+            f.rmse[i], out_info[static_cast<std::size_t>(i)].unit, 1000.0 * f.delay[i],
+            oracle.fit[i]);
       }
-      fmt::print("fit {}:{}\n", f.source, fits);
+      rmse_sum += f.mean_rmse();
     }
     // No false success: a fit that is not finite (a diverging model, a constant output) fails.
     for (const wf::FileComparison& f : best.files) wf::require_finite_scores(f, sel.outputs);
+    fmt::print("mean RMSE: {:.4g} {}\n", rmse_sum / static_cast<double>(best.files.size()),
+               out_info.front().unit);
     fmt::print("mean fit: {:.2f}%\n", best.mean_fit);
     if (!out_path.empty()) {
       files::ModelFile model = best.model;
       model.provenance.notes = "preprocessing: " + wf::describe(pre) +
-                               "\nfit_percent: mean over the identification logs, x0 " + x0 +
-                               "\ntool: endohaptics-identify";
+                               "\nfit_percent: mean causal fit over the identification logs, x0 " +
+                               x0 + ", warm-up " + fmt::format("{}", scoring.warmup) +
+                               " s\ntool: endohaptics-identify";
       files::save_model(out_path, model);
       fmt::print("model written to {}\n", out_path);
     }

@@ -1,7 +1,9 @@
-// endohaptics-replay: replays a model (JSON file or preset) on logs like MATLAB's compare:
-// resamples each log to the model's sample time, preprocesses it as recorded in the model file
-// (or as the flags say), estimates x0 by least squares, and prints fit %, correlation and RMSE
-// per file and output; the last line is `mean fit: X%`. --plot draws measured vs simulated.
+// endohaptics-replay: runs a model (JSON file or preset) on logs as a force estimator would and
+// scores it causally (issue 15): each log on the model's sample time, inputs held and low-passed
+// forward only as the model file records, x0 the steady state of the first input sample, a
+// warm-up left out, the output compared as logged. Prints fit %, correlation, RMSE and delay per
+// file; the last two lines are `mean RMSE: X UNIT` and `mean fit: X%`. --x0 oracle gives the
+// old, output-fitted MATLAB compare score instead (labelled). --plot draws measured vs estimate.
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
@@ -69,18 +71,24 @@ void plot(const std::string& png, const std::vector<wf::FileComparison>& files,
 int main(int argc, char** argv) {
   CLI::App app{"endohaptics replay: a model on logs, fit as MATLAB compare"};
   std::vector<std::string> logs, inputs, outputs;
-  std::string model_arg, format = "endowrist-2016", x0 = "estimate", plot_path;
+  std::string model_arg, format = "endowrist-2016", x0 = "steady", plot_path;
   std::string offset = "none", input_offset = "none";
   double ts = 0.0;
   wf::Preprocessing pre;
+  wf::ScoringOptions scoring;
   bool drop_non_finite = false;
   app.add_option("--model", model_arg, "model file (JSON), preset:yaw2016 or preset:pitch2016")
       ->required();
   app.add_option("--log", logs, "log file (repeatable)")->required();
-  app.add_option("--format", format, "endowrist-2016 or csv")->capture_default_str();
+  app.add_option("--format", format, "endowrist-2016, umn-mis-2018 or csv")->capture_default_str();
   app.add_option("--input", inputs, "input signal per model input (default: the model's names)");
   app.add_option("--output", outputs, "output signal per model output (default: the model's)");
-  app.add_option("--x0", x0, "initial state: estimate (least squares), zero or stored")
+  app.add_option("--x0", x0,
+                 "initial state: steady (first input sample), zero, stored, or oracle (least "
+                 "squares on the measured output and the fit preprocessing: NOT causal)")
+      ->capture_default_str();
+  app.add_option("--warmup", scoring.warmup, "s per segment left out of the score (not oracle)")
+      ->check(number_in(0.0, wf::max_warmup))
       ->capture_default_str();
   app.add_option("--ts", ts, "csv without time column: s per row (default: the model's Ts)")
       ->check(number_in(limits::min_sample_time, limits::max_sample_time));
@@ -89,12 +97,14 @@ int main(int argc, char** argv) {
                       ->check(number_in(0.0, limits::max_cutoff));
   auto* filter_order = app.add_option("--filter-order", pre.filter_order, "Butterworth order")
                            ->check(number_in(limits::min_filter_order, limits::max_filter_order));
-  auto* offset_opt = app.add_option("--offset", offset, "output offset: none, start, median, mean");
-  auto* input_offset_opt =
-      app.add_option("--input-offset", input_offset, "input offset: none, start, median, mean");
+  auto* offset_opt = app.add_option("--offset", offset,
+                                    "output offset (--x0 oracle only): none, start, median, mean");
+  auto* input_offset_opt = app.add_option(
+      "--input-offset", input_offset, "input offset (--x0 oracle only): none, start, median, mean");
   auto* window = app.add_option("--offset-window", pre.offset_duration, "s for --offset start")
                      ->check(number_in(limits::min_offset_duration, limits::max_duration));
-  auto* detrend = app.add_flag("--detrend", pre.detrend, "remove a line from each output segment");
+  auto* detrend =
+      app.add_flag("--detrend", pre.detrend, "remove a line from each output (--x0 oracle only)");
   auto* max_gap = app.add_option("--max-gap", pre.max_gap, "s; longer steps split a log")
                       ->check(number_in(0.0, limits::max_duration));
   auto* min_segment =
@@ -140,35 +150,68 @@ int main(int argc, char** argv) {
     if (input_offset_opt->count() > 0) {
       pre.input_offset = wf::offset_mode_from_string(input_offset);
     }
-    const wf::InitialStateMode mode = wf::initial_state_from_string(x0);
+    scoring.initial_state = wf::initial_state_from_string(x0);
+    const bool causal = wf::is_causal(scoring.initial_state);
+    if (causal &&
+        (offset_opt->count() > 0 || input_offset_opt->count() > 0 || detrend->count() > 0)) {
+      throw endohaptics::Error(
+          "--offset, --input-offset and --detrend look at the whole file (or the output): they "
+          "apply only to the output-fitted --x0 oracle score; the causal score compares the "
+          "output as logged");
+    }
+    if (!causal) scoring.warmup = 0.0;  // MATLAB compare: every sample
     fmt::print("{}: {} states, {} -> {}, Ts {} s, {}\n", name, model.state_space.state_size(),
                fmt::join(model_in, ", "), fmt::join(model_out, ", "),
                model.state_space.sample_time(), model.provenance.method);
-    fmt::print("preprocessing ({}): {}\n", recorded ? "model file, flags override" : "flags",
-               wf::describe(pre));
+    if (causal) {
+      fmt::print(
+          "scoring (causal): x0 {}, warm-up {} s per segment excluded, inputs held and low-passed "
+          "forward only (lowpass_hz={} filter_order={}, {}), output as logged (no offset, filter "
+          "or detrend)\n",
+          x0, scoring.warmup, pre.cutoff, pre.filter_order,
+          recorded ? "as the model file records" : "flags");
+      if (pre.output_offset != wf::OffsetMode::none || pre.input_offset != wf::OffsetMode::none ||
+          pre.detrend) {
+        fmt::print(
+            "note: the model was fitted on data with offsets/detrend removed ({}); they "
+            "are not removed when scoring\n",
+            wf::describe(pre));
+      }
+    } else {
+      fmt::print(
+          "scoring: ORACLE, not a force-estimation result: x0 fitted to the measured output, "
+          "data preprocessed as for the fit ({}: {})\n",
+          recorded ? "model file, flags override" : "flags", wf::describe(pre));
+    }
 
     std::vector<wf::FileComparison> results;
-    double sum = 0.0;
+    double fit_sum = 0.0, rmse_sum = 0.0;
     for (const auto& path : logs) {
-      const wf::PreparedLog log = wf::prepare_log(path, sel, model.state_space.sample_time(), pre);
+      const wf::PreparedLog log =
+          wf::prepare_log(path, sel, model.state_space.sample_time(), pre, 20,
+                          causal ? wf::Preparation::score : wf::Preparation::fit);
       fmt::print("{}", wf::summary(log));
-      results.push_back(wf::compare_log(model, log, mode));
+      results.push_back(wf::compare_log(model, log, scoring));
       const wf::FileComparison& c = results.back();
       // No false success: a diverging model or an undefined score fails the run.
       wf::require_finite_scores(c, sel.outputs);
       for (Eigen::Index i = 0; i < c.fit.size(); ++i) {
         const auto& o = model.outputs[static_cast<std::size_t>(i)];
-        fmt::print("{}: {} fit {:.2f} %, correlation {:.4f}, RMSE {:.4g}{}{}\n", path,
-                   sel.outputs[static_cast<std::size_t>(i)], c.fit[i], c.correlation[i], c.rmse[i],
-                   o.unit.empty() ? "" : " ", o.unit);
+        fmt::print("{}: {} fit {:.2f} %, correlation {:.4f}, RMSE {:.4g}{}{}, delay {:.0f} ms\n",
+                   path, sel.outputs[static_cast<std::size_t>(i)], c.fit[i], c.correlation[i],
+                   c.rmse[i], o.unit.empty() ? "" : " ", o.unit, 1000.0 * c.delay[i]);
       }
-      sum += c.mean_fit();
+      fit_sum += c.mean_fit();
+      rmse_sum += c.mean_rmse();
     }
     if (!plot_path.empty()) {
       plot(plot_path, results, sel.outputs);
       fmt::print("plot written to {}\n", plot_path);
     }
-    fmt::print("mean fit: {:.2f}%\n", sum / static_cast<double>(logs.size()));
+    const auto files_count = static_cast<double>(logs.size());
+    const std::string unit = model.outputs.front().unit;
+    fmt::print("mean RMSE: {:.4g}{}{}\n", rmse_sum / files_count, unit.empty() ? "" : " ", unit);
+    fmt::print("mean fit: {:.2f}%\n", fit_sum / files_count);
     wf::require_written(stdout, "standard output");
   } catch (const std::exception& e) {
     fmt::print(stderr, "endohaptics-replay: error: {}\n", e.what());

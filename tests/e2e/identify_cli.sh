@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Command-line tests of endohaptics-identify and endohaptics-replay on a synthetic CSV from a
-# known 2nd-order, 2-input system, and their error handling.
+# known 2nd-order, 2-input system, their causal scoring (issue 15) and their error handling.
 # Usage: identify_cli.sh BIN_DIR recover|errors|plot   (each prints PASS: ... on success)
 set -euo pipefail
 bin=$1
@@ -29,6 +29,19 @@ make_csv() {
   }' >"$1"
 }
 mean_fit() { sed -n 's/^mean fit: \([-0-9.]*\)%$/\1/p' "$1" | tail -1; }
+# An integrator: y(k) = 0.02 sum of u1 (awk seeded); identify must refuse it.
+make_integrator_csv() {
+  awk -v rows="$2" -v seed="$3" 'BEGIN {
+    srand(seed); y = 0; u = 0; h = 0
+    print "time,u1,y"
+    for (k = 0; k < rows; k++) {
+      if (h == 0) { u = 2 * rand() - 1; h = 1 + int(8 * rand()) }
+      h--
+      printf "%.4f,%.6f,%.6f\n", k * 0.01, u, y
+      y += 0.02 * u
+    }
+  }' >"$1"
+}
 at_least() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a >= b) }'; }
 
 # Runs "$@", expects a non-zero exit (not a crash) and $expected in stderr.
@@ -70,11 +83,19 @@ case $scenario in
     [[ -n $rp_fit ]] || fail "replay printed no mean fit"
     at_least "$rp_fit" 95 || fail "replay fit $rp_fit % < 95 %"
     [[ $(tail -1 "$work/rp.out") == "mean fit: "*% ]] || fail "last line is not 'mean fit: X%'"
-    # --method best tries all three weightings.
+    [[ $(tail -2 "$work/rp.out" | head -1) == "mean RMSE: "* ]] || fail "line before last is not 'mean RMSE: X'"
+    grep -q "^scoring (causal): x0 steady, warm-up 0.5 s" "$work/rp.out" || fail "replay does not state its causal scoring"
+    grep -q "fit [0-9.]* %, correlation [0-9.]*, RMSE [0-9.e-]*, delay -\?[0-9]* ms$" "$work/rp.out" ||
+      fail "no per-file fit, correlation, RMSE and delay"
+    # The output-fitted score only when asked for, and labelled; the old name is refused.
+    "$replay" --model "$work/model.json" --format csv --log "$work/val.csv" --x0 oracle >"$work/or.out"
+    grep -q "^scoring: ORACLE, not a force-estimation result" "$work/or.out" || fail "oracle not labelled"
+    # --method best tries all three weightings, scored causally.
     "$identify" --log "$work/sys.csv" "${csv[@]}" --method best --order 2 >"$work/best.out"
-    for m in n4sid moesp cva; do grep -q "^$m: mean fit" "$work/best.out" || fail "no $m in best"; done
+    for m in n4sid moesp cva; do grep -q "^$m: mean causal fit" "$work/best.out" || fail "no $m in best"; done
     at_least "$(mean_fit "$work/best.out")" 95 || fail "best fit < 95 %"
-    echo "PASS: identify fit $id_fit %, replay fit $rp_fit %"
+    grep -q "oracle x0, zero-phase data" "$work/id.out" || fail "identify does not show the oracle score beside"
+    echo "PASS: identify fit $id_fit %, replay fit $rp_fit % (causal)"
     ;;
   errors)
     printf 'time,u1,u2,y\n0,1,2,3\n0.01,1,2,3\n0.02,2,1,3\n0.03,1,1,1\n0.04,2,2,2\n' >"$work/short.csv"
@@ -97,6 +118,11 @@ case $scenario in
     expect_error "unknown preset" "$replay" --model preset:roll --format csv --log "$work/sys.csv"
     expect_error "non-finite" "$replay" --model "$work/model.json" --format csv --log "$work/nan.csv"
     expect_error "too few samples" "$replay" --model "$work/model.json" --format csv --log "$work/short.csv"
+    expect_error "renamed 'oracle'" "$replay" --model "$work/model.json" --format csv --log "$work/sys.csv" --x0 estimate
+    expect_error "apply only to the output-fitted --x0 oracle score" "$replay" --model "$work/model.json" --format csv --log "$work/sys.csv" --offset median
+    expect_error "--x0 must be steady or zero here" "$identify" --log "$work/sys.csv" "${csv[@]}" --x0 oracle
+    make_integrator_csv "$work/int.csv" 1500 3
+    expect_error "near-integrating" "$identify" --log "$work/int.csv" --format csv --input u1 --output y --order 1
     # --drop-non-finite turns the NaN row into a dropped, reported row.
     "$identify" --log "$work/nan.csv" "${csv[@]}" --drop-non-finite >"$work/drop.out"
     grep -q "non-finite 1" "$work/drop.out" || fail "dropped NaN row not reported"

@@ -192,7 +192,7 @@ TEST_CASE("require_finite_scores: a diverging model or an undefined score is an 
   const model::DynamicStateSpace<> unstable(MatrixXd{{2.0}}, MatrixXd{{1.0}}, MatrixXd{{1.0}},
                                             MatrixXd{{0.0}}, 0.01);
   const files::ModelFile m{.state_space = unstable, .inputs = {{"u", ""}}, .outputs = {{"y", ""}}};
-  const wf::FileComparison c = wf::compare_log(m, log, wf::InitialStateMode::zero);
+  const wf::FileComparison c = wf::compare_log(m, log, {wf::InitialStateMode::zero});
   CHECK(c.fit[0] == -std::numeric_limits<double>::infinity());  // what replay printed, exit 0
   CHECK(contains(message_of([&] { wf::require_finite_scores(c, {"y"}); }),
                  "the simulated output is not finite"));
@@ -201,14 +201,14 @@ TEST_CASE("require_finite_scores: a diverging model or an undefined score is an 
                                            MatrixXd{{0.0}}, 0.01);
   const files::ModelFile zero{
       .state_space = nothing, .inputs = {{"u", ""}}, .outputs = {{"y", ""}}};
-  const wf::FileComparison z = wf::compare_log(zero, log, wf::InitialStateMode::zero);
+  const wf::FileComparison z = wf::compare_log(zero, log, {wf::InitialStateMode::zero});
   CHECK(contains(message_of([&] { wf::require_finite_scores(z, {"y"}); }),
                  "correlation of 'y' is undefined"));
   // A good model passes.
   const model::DynamicStateSpace<> gain(MatrixXd{{0.0}}, MatrixXd{{0.0}}, MatrixXd{{0.0}},
                                         MatrixXd{{2.0}}, 0.01);
   const files::ModelFile good{.state_space = gain, .inputs = {{"u", ""}}, .outputs = {{"y", ""}}};
-  const wf::FileComparison g = wf::compare_log(good, log, wf::InitialStateMode::zero);
+  const wf::FileComparison g = wf::compare_log(good, log, {wf::InitialStateMode::zero});
   CHECK(message_of([&] { wf::require_finite_scores(g, {"y"}); }) == "(no exception)");
   CHECK(g.fit[0] > 99.99);  // the CSV holds 6 decimals
 }

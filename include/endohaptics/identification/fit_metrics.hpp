@@ -1,7 +1,8 @@
 //! @file
 //! Goodness of fit of a model output: MATLAB's NRMSE fit, 100 (1 - ||y - yhat|| / ||y - mean y||)
-//! in %, per output column; Pearson correlation; RMSE (output units). `compare` simulates a model
-//! like MATLAB's compare (x0 by least squares or zero) and reports all three.
+//! in %, per output column; Pearson correlation; RMSE (output units); the delay of an estimate
+//! (lag of the cross-correlation peak, samples). `compare` simulates a model like MATLAB's compare
+//! (x0 by least squares or zero) and reports fit, correlation and RMSE.
 //! Each is computed on the columns divided by their largest magnitude, so any finite data works.
 //! Configuration time (validation tools): dynamic sizes, throws Error on mismatched data.
 #pragma once
@@ -96,6 +97,41 @@ inline double column_scale(const Eigen::MatrixXd& y, const Eigen::MatrixXd& y_ha
     r[i] = denominator > 0.0 ? a.dot(b) / denominator : std::numeric_limits<double>::quiet_NaN();
   }
   return r;
+}
+
+//! Delay of y_hat behind y per output, in samples: the lag L in [-max_lag, max_lag] that maximises
+//! the cross-correlation sum_k (y[k] - mean y) (y_hat[k + L] - mean y_hat) over the overlap,
+//! divided by the overlap length (so that long lags are not penalised for fewer terms).
+//! Positive: the estimate lags the truth. 0 when either column is constant. The smallest |L|
+//! wins a tie. O(N max_lag). Throws Error as `nrmse_fit` or when max_lag < 0.
+[[nodiscard]] inline Eigen::VectorXd cross_correlation_lag(const Eigen::MatrixXd& y,
+                                                           const Eigen::MatrixXd& y_hat,
+                                                           Eigen::Index max_lag) {
+  detail::fit::check_pair(y, y_hat, "cross_correlation_lag");
+  if (max_lag < 0) detail::subspace::fail("cross_correlation_lag: max_lag must be >= 0");
+  const Eigen::Index n = y.rows();
+  max_lag = std::min(max_lag, n - 1);
+  Eigen::VectorXd lag = Eigen::VectorXd::Zero(y.cols());
+  for (Eigen::Index i = 0; i < y.cols(); ++i) {
+    const double scale = detail::fit::column_scale(y, y_hat, i);
+    const Eigen::VectorXd a = (y.col(i) / scale).array() - (y.col(i) / scale).mean();
+    const Eigen::VectorXd b = (y_hat.col(i) / scale).array() - (y_hat.col(i) / scale).mean();
+    if (!(a.norm() > 0.0) || !(b.norm() > 0.0)) continue;
+    double best = -std::numeric_limits<double>::infinity();
+    for (Eigen::Index m = 0; m <= 2 * max_lag; ++m) {
+      // 0, 1, -1, 2, -2, ...: the smallest |L| wins a tie.
+      const Eigen::Index l = (m % 2 == 1) ? (m + 1) / 2 : -(m / 2);
+      const Eigen::Index overlap = n - (l < 0 ? -l : l);
+      const double r =
+          l >= 0 ? a.head(overlap).dot(b.tail(overlap)) : a.tail(overlap).dot(b.head(overlap));
+      const double value = r / static_cast<double>(overlap);
+      if (value > best) {
+        best = value;
+        lag[i] = static_cast<double>(l);
+      }
+    }
+  }
+  return lag;
 }
 
 //! How `compare` sets the initial state (MATLAB compareOptions InitialCondition).

@@ -131,13 +131,23 @@ inline std::vector<std::string_view> split(std::string_view text, char separator
   return std::nullopt;
 }
 
-//! Parses "estimate", "zero" or "stored". Throws Error otherwise.
+//! Parses "steady", "zero", "stored" or "oracle". "estimate" (the old name of oracle) is refused
+//! with a message: its numbers used the measured output and are not force-estimation results.
+//! Throws Error otherwise.
 [[nodiscard]] inline InitialStateMode initial_state_from_string(std::string_view name) {
-  if (name == "estimate") return InitialStateMode::estimate;
-  if (name == "zero") return InitialStateMode::zero;
-  if (name == "stored") return InitialStateMode::stored;
+  for (const InitialStateMode m : {InitialStateMode::steady, InitialStateMode::zero,
+                                   InitialStateMode::stored, InitialStateMode::oracle}) {
+    if (name == to_string(m)) return m;
+  }
+  if (name == "estimate") {
+    ENDOHAPTICS_THROW(Error(
+        "x0 mode 'estimate' was renamed 'oracle': it fits the initial state to the measured "
+        "output, which a sensorless estimator never has; use --x0 steady (the default: steady "
+        "state of the first input sample) or zero, or --x0 oracle to reproduce the old, "
+        "output-fitted score"));
+  }
   ENDOHAPTICS_THROW(
-      Error("unknown x0 mode '" + std::string(name) + "' (valid: estimate, zero, stored)"));
+      Error("unknown x0 mode '" + std::string(name) + "' (valid: steady, zero, stored, oracle)"));
 }
 
 //! Parses --deadzone: "auto", "none" or a half width for every input, or a comma-separated list

@@ -1,14 +1,17 @@
 //! @file
 //! One log on the uniform grid k Ts (worksheet 4.2.1): the named inputs and outputs of a log
-//! file (files/log_reader.hpp), resampled to Ts (s) and split at gaps, low-passed and with
-//! offsets removed as a Preprocessing says, with what the reader and the grid dropped. Signals
-//! keep their log units. Configuration time: allocates, throws endohaptics::Error naming the file.
+//! file (files/log_reader.hpp), resampled to Ts (s) and split at gaps, with what the reader and
+//! the grid dropped. For fitting (`Preparation::fit`): linear interpolation, zero-phase low-pass
+//! and offsets as a Preprocessing says. For scoring (`Preparation::score`, issue 15): inputs held
+//! (zero-order hold) and low-passed causally, velocities by backward difference, outputs as
+//! logged. Signals keep their log units. Configuration time: allocates, throws endohaptics::Error.
 #pragma once
 
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -20,6 +23,7 @@
 #include "endohaptics/files/log_reader.hpp"
 #include "endohaptics/files/log_report.hpp"
 #include "endohaptics/files/log_rows.hpp"
+#include "endohaptics/files/umn_mis_2018_log.hpp"
 #include "endohaptics/identification/signal.hpp"
 #include "endohaptics/identification/subspace.hpp"
 #include "endohaptics/workflow/error_context.hpp"
@@ -28,6 +32,19 @@
 namespace endohaptics::workflow {
 
 using namespace endohaptics::identification;  // the workflow composes the identification area
+
+//! What a prepared log is for.
+enum class Preparation : std::uint8_t {
+  //! Identification data: linear interpolation, zero-phase (filtfilt) low-pass, offsets and
+  //! detrend as the Preprocessing says. May look ahead and at the output: fitting is offline.
+  fit,
+  //! Scoring a force estimator (issue 15): what a controller could compute in real time. Inputs
+  //! on the grid by zero-order hold (the last logged sample at or before each grid time), the
+  //! low-pass applied forward only (Butterworth `sosfilt` started at the steady state of the first
+  //! sample), endowrist-2016 `velocity` by backward difference of `position`; no input offsets;
+  //! outputs as logged (linear interpolation onto the grid, no filter, offset or detrend).
+  score,
+};
 
 //! Which file format and which named signals to read.
 struct LogSelection {
@@ -40,15 +57,16 @@ struct LogSelection {
 
 //! One log on the grid k Ts: gap-free segments of inputs and outputs, and what was done.
 struct PreparedLog {
-  std::string source;                //!< file
-  files::LogReport report;           //!< what the reader dropped or repaired
-  std::vector<DataSet> segments;     //!< u: N x nu, y: N x ny per gap-free stretch
-  std::vector<double> start_time;    //!< s, time of row 0 of each segment (rebased log time)
-  double sample_time = 0.0;          //!< s
-  std::size_t gaps = 0;              //!< time steps > max_gap that split the log
-  std::size_t dropped_segments = 0;  //!< stretches shorter than min_segment
-  Eigen::VectorXd input_offsets;     //!< removed from each input, input units
-  Eigen::VectorXd output_offsets;    //!< removed from each output, output units
+  std::string source;              //!< file
+  files::LogReport report;         //!< what the reader dropped or repaired
+  std::vector<DataSet> segments;   //!< u: N x nu, y: N x ny per gap-free stretch
+  std::vector<double> start_time;  //!< s, time of row 0 of each segment (rebased log time)
+  double sample_time = 0.0;        //!< s
+  Preparation preparation = Preparation::fit;  //!< what it was prepared for
+  std::size_t gaps = 0;                        //!< time steps > max_gap that split the log
+  std::size_t dropped_segments = 0;            //!< stretches shorter than min_segment
+  Eigen::VectorXd input_offsets;               //!< removed from each input, input units
+  Eigen::VectorXd output_offsets;              //!< removed from each output, output units
 
   //! Grid samples over all segments.
   [[nodiscard]] Eigen::Index samples() const noexcept {
@@ -68,10 +86,34 @@ struct PreparedLog {
     o.sample_time = sel.csv_row_time;
     return files::read_csv(path, o);
   }
-  files::Endowrist2016Options o;
-  o.read = read;
-  return files::read_endowrist_2016(path, o);
+  return files::read_log(path, sel.format, read);
 }
+
+//! Signals of `format` that a robot controller has, for formats that log more than that (the
+//! UMN rig's jaw-side sensors); empty: no restriction. `motor_position` is left out although the
+//! controller has its increments: its zero differs between sessions (use motor_velocity).
+[[nodiscard]] inline std::vector<std::string> controller_signals(files::LogFormat format) {
+  if (format == files::LogFormat::umn_mis_2018) {
+    return {"current", "current_command", "motor_velocity"};
+  }
+  return {};
+}
+
+namespace detail {
+
+//! (x[k] - x[k-1]) / (t[k] - t[k-1]), 0 at the first sample and after a step > max_gap: what a
+//! controller computes from its encoder each period.
+inline Eigen::VectorXd backward_difference(const Eigen::VectorXd& time, const Eigen::VectorXd& x,
+                                           double max_gap) {
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(x.size());
+  for (Eigen::Index k = 1; k < x.size(); ++k) {
+    const double dt = time[k] - time[k - 1];
+    if (dt > 0.0 && (max_gap <= 0.0 || dt <= max_gap)) v[k] = (x[k] - x[k - 1]) / dt;
+  }
+  return v;
+}
+
+}  // namespace detail
 
 //! The default resampling period: the median time step of the log at `path` (s), rounded to six
 //! significant digits; for a CSV without time column sel.csv_row_time. Throws Error as the reader.
@@ -83,14 +125,81 @@ struct PreparedLog {
   return std::round(step * scale) / scale;
 }
 
+namespace detail {
+
+//! Preparation::score of `prepare_log` on the selected `signals` (inputs first, nu of them).
+inline PreparedLog prepare_for_scoring(const std::string& path, const files::Log& log,
+                                       Eigen::MatrixXd signals, Eigen::Index nu,
+                                       const LogSelection& sel, double ts, const Preprocessing& pre,
+                                       Eigen::Index min_samples) {
+  const double source_step = median_step(log.time);
+  const double max_gap = pre.max_gap > 0
+                             ? pre.max_gap
+                             : 5.0 * (std::isfinite(source_step) ? std::max(ts, source_step) : ts);
+  // The 2016 reader's velocity is the secant over both neighbours (it looks one sample ahead):
+  // a controller has the backward difference.
+  if (sel.format == files::LogFormat::endowrist_2016 && log.has("position")) {
+    const Eigen::VectorXd v = backward_difference(log.time, log.signal("position"), max_gap);
+    for (Eigen::Index c = 0; c < nu; ++c) {
+      if (sel.inputs[static_cast<std::size_t>(c)] == "velocity") signals.col(c) = v;
+    }
+  }
+  Segments segs = resample_uniform(log.time, signals, ts, ResampleOptions{max_gap, 2});
+  SosMatrix sos;
+  Eigen::Matrix<double, Eigen::Dynamic, 2> zi;
+  if (pre.cutoff > 0) {
+    sos = butterworth_lowpass(pre.filter_order, pre.cutoff, ts);
+    zi = sosfilt_zi(sos);
+  }
+  PreparedLog out;
+  out.source = path;
+  out.report = log.report;
+  out.sample_time = ts;
+  out.preparation = Preparation::score;
+  out.gaps = segs.gaps;
+  out.dropped_segments = segs.dropped_segments;
+  out.input_offsets = Eigen::VectorXd::Zero(nu);
+  out.output_offsets = Eigen::VectorXd::Zero(signals.cols() - nu);
+  for (UniformSegment& s : segs.segments) {
+    if (s.rows() < std::max<Eigen::Index>(pre.min_segment, 2)) {
+      ++out.dropped_segments;
+      continue;
+    }
+    // Inputs: zero-order hold of the last source sample at or before each grid time.
+    Eigen::Index src = s.first_source;
+    for (Eigen::Index g = 0; g < s.rows(); ++g) {
+      const double tg = s.start_time + static_cast<double>(g) * ts;
+      while (src < s.last_source && log.time[src + 1] <= tg + 1e-9 * ts) ++src;
+      s.data.row(g).head(nu) = signals.row(src).head(nu);
+    }
+    if (sos.rows() > 0) {
+      for (Eigen::Index c = 0; c < nu; ++c) {
+        Eigen::Matrix<double, Eigen::Dynamic, 2> state = zi * s.data(0, c);
+        s.data.col(c) = sosfilt(sos, s.data.col(c), state);
+      }
+    }
+    out.segments.push_back(DataSet{s.data.leftCols(nu), s.data.rightCols(s.data.cols() - nu)});
+    out.start_time.push_back(s.start_time);
+  }
+  if (out.samples() < min_samples) {
+    fail(path + ": too few samples: " + std::to_string(out.samples()) + " on the grid at ts = " +
+         format_number(ts) + " s in segments of >= " + std::to_string(pre.min_segment) +
+         ", at least " + std::to_string(min_samples) + " needed");
+  }
+  return out;
+}
+
+}  // namespace detail
+
 //! Reads `path`, selects the named signals, resamples to `ts` (split at gaps), filters and
-//! removes offsets as `pre` says. Throws Error naming the file: unreadable, unknown signal
-//! (listing the known ones), a signal named twice, non-finite values (unless drop_non_finite),
-//! fewer than `min_samples` or more than limits::max_grid_samples grid samples, bad options
-//! (`validate`).
+//! removes offsets as `pre` and `use` say. Throws Error naming the file: unreadable, unknown
+//! signal (listing the known ones), an input a controller does not have (controller_signals), a
+//! signal named twice, non-finite values (unless drop_non_finite), fewer than `min_samples` or
+//! more than limits::max_grid_samples grid samples, bad options (`validate`).
 [[nodiscard]] inline PreparedLog prepare_log(const std::string& path, const LogSelection& sel,
                                              double ts, const Preprocessing& pre,
-                                             Eigen::Index min_samples = 20) {
+                                             Eigen::Index min_samples = 20,
+                                             Preparation use = Preparation::fit) {
   namespace wf = detail;
   if (sel.inputs.empty()) wf::fail(path + ": no input signal named");
   if (sel.outputs.empty()) wf::fail(path + ": no output signal named");
@@ -105,6 +214,18 @@ struct PreparedLog {
       const auto role = [&](std::size_t at) { return at < sel.inputs.size() ? "input" : "output"; };
       wf::fail(path + ": signal '" + names[i] + "' is named twice (as " + role(k) + " and as " +
                role(i) + "): a model needs distinct input and output signals");
+    }
+  }
+  const std::vector<std::string> allowed = controller_signals(sel.format);
+  if (!allowed.empty()) {
+    for (const std::string& name : sel.inputs) {
+      if (std::find(allowed.begin(), allowed.end(), name) != allowed.end()) continue;
+      wf::fail(path + ": input '" + name + "' is not a signal a robot controller has (inputs of " +
+               "this format: " + wf::join(allowed) +
+               (name == "motor_position"
+                    ? "; motor_position's zero differs between sessions: use motor_velocity"
+                    : "") +
+               ")");
     }
   }
   const files::Log log = read_selected_format(path, sel);
@@ -124,7 +245,7 @@ struct PreparedLog {
       wf::fail(path + ": no signal named '" + name + "' (signals: " + wf::join(log.names) + ")");
     }
   }
-  const Eigen::MatrixXd signals = log.select(names);
+  Eigen::MatrixXd signals = log.select(names);
   const double span = log.time[log.rows() - 1] - log.time[0];
   const double grid = std::floor(span / ts + 1e-9) + 1.0;
   if (!(grid <= static_cast<double>(limits::max_grid_samples))) {
@@ -141,6 +262,12 @@ struct PreparedLog {
   }
   const auto nu = static_cast<Eigen::Index>(sel.inputs.size());
   const auto ny = static_cast<Eigen::Index>(sel.outputs.size());
+
+  if (use == Preparation::score) {
+    return wf::with_context(path, [&] {
+      return detail::prepare_for_scoring(path, log, signals, nu, sel, ts, pre, min_samples);
+    });
+  }
 
   PreprocessOptions po;
   po.sample_time = ts;

@@ -1,7 +1,8 @@
 //! @file
 //! Settings of the identify workflow (workflow/workflow.hpp): subspace weightings to try and the
 //! model order (worksheet 4.2.2), a dead zone per input (4.2.3; half widths in input units), the
-//! static-gain baseline, and how x0 is set for the per-file fits.
+//! static-gain baseline, how candidates are scored (causally: workflow/model_comparison.hpp) and
+//! which are refused (unstable or near-integrating: slowest time constant in s).
 #pragma once
 
 #include <cstdint>
@@ -27,17 +28,28 @@ struct WorkflowOptions {
   //! Subspace weightings to try; the one with the highest mean fit over the logs is kept
   //! (worksheet 4.2.2: "the best one is chosen depending on the average fit").
   std::vector<Weighting> candidates{Weighting::moesp};
-  bool static_gain = false;  //!< instead: least-squares y = D u + c, no dynamics (baseline)
-  int order = 0;             //!< model order; 0: automatic (select_order)
-  int max_order = 10;        //!< largest automatic order
-  int block_rows = 0;        //!< subspace horizon; 0: automatic
+  //! Also (or, with no `candidates`, only) the baseline: least-squares y = D u + c, no dynamics,
+  //! a candidate like the others (it is never refused: its constant is not a mode).
+  bool static_gain = false;
+  int order = 0;                          //!< model order; 0: automatic (select_order)
+  int max_order = 10;                     //!< largest automatic order
+  int block_rows = 0;                     //!< subspace horizon; 0: automatic
   std::vector<DeadzoneSetting> deadzone;  //!< per input; empty: none
-  int deadzone_grid = 21;                 //!< grid points of the dead-zone search
-  int deadzone_refine = 15;               //!< golden-section steps of the dead-zone search
-  InitialStateMode initial_state = InitialStateMode::estimate;  //!< for the per-file fits
-  //! Choose among stable candidates (spectral radius < 1) when there is one: an unstable force
-  //! model cannot run open loop in the teleoperation loop.
-  bool prefer_stable = true;
+  int deadzone_grid = 11;   //!< grid points of the dead-zone search, 0 .. half max |u|
+  int deadzone_refine = 6;  //!< golden-section steps around the best grid point
+  //! With order 0 (automatic): also try every order 1..max_order for the best method and dead
+  //! zone and keep the best causal score (else: select_order's choice only).
+  bool search_order = true;
+  //! The order search keeps the smallest order whose causal score is within this many
+  //! percentage points of the best order's (a higher order must earn its states).
+  double order_tolerance = 0.5;
+  //! How every candidate is scored on the scoring logs: the choice of method, order and dead
+  //! zone uses this score (causal by default: steady-state x0, warm-up excluded).
+  ScoringOptions scoring{};
+  //! Candidates whose slowest mode has a time constant -Ts / ln(spectral radius) above this (s)
+  //! are refused as near-integrating: their level would come from the initial state, not from the
+  //! inputs. 2 s is twice the longest warm-up. Unstable ones (spectral radius >= 1) always are.
+  double max_time_constant = 2.0;
 };
 
 }  // namespace endohaptics::workflow
