@@ -95,6 +95,11 @@ struct SafetyConfig {
   JointVector joint_upper = JointVector::Constant(1.028);  //!< rad, motor order
   StatePlausibility plausibility{};  //!< what a reported state may say (else: a fault)
 
+  //! `position` (rad, motor order) limited to [joint_lower, joint_upper], joint by joint.
+  [[nodiscard]] JointVector clamp_to_range(const JointVector& position) const noexcept {
+    return position.cwiseMax(joint_lower).cwiseMin(joint_upper);
+  }
+
   //! Throws Error naming the field, the value and the allowed range. `motors` (1..8): how many
   //! the link carries; the enable mask may only name those (bits 0..motors-1).
   void validate(int motors = protocol::endowrist_motors) const {

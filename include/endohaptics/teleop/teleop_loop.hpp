@@ -223,12 +223,9 @@ class TeleopLoop {
     } else {
       // The limiter moves towards the desired setpoint inside the joint range, so a stylus beyond
       // the range never parks the limiter outside it (it would stick at the edge on the way back).
-      r.rate_limited = limiter_.shape(
-          desired_.cwiseMax(config_.safety.joint_lower).cwiseMin(config_.safety.joint_upper), dt,
-          out.position);
+      r.rate_limited = limiter_.shape(config_.safety.clamp_to_range(desired_), dt, out.position);
     }
-    out.position =
-        out.position.cwiseMax(config_.safety.joint_lower).cwiseMin(config_.safety.joint_upper);
+    out.position = config_.safety.clamp_to_range(out.position);
     r.setpoint = out.position;
     r.enable_mask = out.enable_mask;
 
@@ -303,8 +300,7 @@ class TeleopLoop {
       // own watchdog: its active bit is clear), because that joint may have moved and its first
       // enabled setpoint must not jump back to an old one. A joint held enabled throughout
       // tracked the limiter's setpoint and keeps it (no step of its tracking error).
-      const MotorVector measured =
-          state_.position.cwiseMax(config_.safety.joint_lower).cwiseMin(config_.safety.joint_upper);
+      const MotorVector measured = config_.safety.clamp_to_range(state_.position);
       MotorVector from = limiter_.previous();
       const bool released_all = link_before == LinkState::waiting ||
                                 config_.safety.policy == SafeStatePolicy::disable_motors;
@@ -415,9 +411,7 @@ class TeleopLoop {
   void shutdown() noexcept {
     (void)device_->command_force(Eigen::Vector3d::Zero());
     Codec::Setpoint off;
-    off.position = limiter_.previous()
-                       .cwiseMax(config_.safety.joint_lower)
-                       .cwiseMin(config_.safety.joint_upper);
+    off.position = config_.safety.clamp_to_range(limiter_.previous());
     off.enable_mask = 0;
     typename Codec::SetpointBytes tx{};
     if (Codec::encode_setpoint(off, tx) == protocol::CodecStatus::ok) (void)transport_->send(tx);
