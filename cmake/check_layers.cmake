@@ -24,8 +24,11 @@ set(allowed_workflow core protocol model estimation identification files)
 # (the bridge, through files/bridge_config.hpp) does not compile identification; the conversions
 # from identification results are in files/identified_model_file.hpp. An entry with a slash
 # names one header (files/json_text.hpp: the bounded JSON reading, itself only core).
-set(restricted_headers "files/model_file.hpp")
-set(allowed_header_files/model_file.hpp core model files/json_text.hpp)
+# An offline header's function bodies, <area>/impl/<name>.ipp (core/separate_compilation.hpp), are
+# checked like headers of the area; model_file's include only model_file.hpp.
+set(restricted_headers "files/model_file.hpp" "files/impl/model_file.ipp")
+set(allowed_header_files/model_file.hpp core model files/json_text.hpp files/impl/model_file.ipp)
+set(allowed_header_files/impl/model_file.ipp files/model_file.hpp)
 # The real-time core: never reaches an offline header or library.
 set(realtime_areas core protocol model kinematics estimation transport teleop)
 set(offline_libraries "nlohmann/" "CLI/" "fmt/" "toml++/" "fstream" "iostream" "sstream")
@@ -33,7 +36,8 @@ set(offline_libraries "nlohmann/" "CLI/" "fmt/" "toml++/" "fstream" "iostream" "
 if(NOT INCLUDE_DIR)
   message(FATAL_ERROR "check_layers.cmake: pass -DINCLUDE_DIR=<directory holding endohaptics/>")
 endif()
-file(GLOB_RECURSE headers RELATIVE "${INCLUDE_DIR}/endohaptics" "${INCLUDE_DIR}/endohaptics/*.hpp")
+file(GLOB_RECURSE headers RELATIVE "${INCLUDE_DIR}/endohaptics" "${INCLUDE_DIR}/endohaptics/*.hpp"
+  "${INCLUDE_DIR}/endohaptics/*.ipp")
 if(NOT headers)
   message(FATAL_ERROR "check_layers.cmake: no headers under ${INCLUDE_DIR}/endohaptics")
 endif()

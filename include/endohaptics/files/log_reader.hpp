@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include "endohaptics/core/separate_compilation.hpp"
 
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/files/csv_log.hpp"
@@ -28,30 +29,14 @@ enum class LogFormat : std::uint8_t {
 
 //! Parses "endowrist-2016", "csv" or "umn-mis-2018". Throws Error naming the value and the
 //! valid ones.
-[[nodiscard]] inline LogFormat parse_log_format(std::string_view name) {
-  if (name == "endowrist-2016") return LogFormat::endowrist_2016;
-  if (name == "csv") return LogFormat::csv;
-  if (name == "umn-mis-2018") return LogFormat::umn_mis_2018;
-  ENDOHAPTICS_THROW(Error("unknown log format '" + std::string(name) +
-                          "' (valid: endowrist-2016, csv, umn-mis-2018)"));
-}
+[[nodiscard]] ENDOHAPTICS_DECL LogFormat parse_log_format(std::string_view name);
 
 //! Reads `path` in `format` with the shared policies `read`.
-[[nodiscard]] inline Log read_log(const std::string& path, LogFormat format,
-                                  const LogReadOptions& read = {}) {
-  if (format == LogFormat::endowrist_2016) {
-    Endowrist2016Options o;
-    o.read = read;
-    return read_endowrist_2016(path, o);
-  }
-  if (format == LogFormat::umn_mis_2018) {
-    UmnMis2018Options o;
-    o.read = read;
-    return read_umn_mis_2018(path, o);
-  }
-  CsvOptions o;
-  o.read = read;
-  return read_csv(path, o);
-}
+[[nodiscard]] ENDOHAPTICS_DECL Log read_log(const std::string& path, LogFormat format,
+                                            const LogReadOptions& read = {});
 
 }  // namespace endohaptics::files
+
+#if !defined(ENDOHAPTICS_SEPARATE_COMPILATION)
+#include "endohaptics/files/impl/log_reader.ipp"
+#endif

@@ -23,6 +23,7 @@
 #include <string_view>
 #include <type_traits>
 #include <vector>
+#include "endohaptics/core/separate_compilation.hpp"
 
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/files/json_text.hpp"
@@ -91,64 +92,11 @@ using endohaptics::detail::format_number;
 //! Throws unless the signal and map counts agree with the model's sizes and every number is
 //! finite (A, B, C, D and the sample time are checked by the StateSpace itself); `where`
 //! prefixes the message.
-inline void validate(const ModelFile& m, const std::string& where) {
-  const model::DynamicStateSpace<>& ss = m.state_space;
-  const auto nu = static_cast<std::size_t>(ss.input_size());
-  const auto ny = static_cast<std::size_t>(ss.output_size());
-  auto signals = [&](const char* field, const std::vector<SignalInfo>& v, std::size_t count,
-                     const char* what) {
-    if (v.size() != count) {
-      fail(where + ": field \"" + field + "\" has " + std::to_string(v.size()) +
-           " entries, the model has " + std::to_string(count) + " " + what);
-    }
-  };
-  signals("inputs", m.inputs, nu, "inputs (columns of B)");
-  signals("outputs", m.outputs, ny, "outputs (rows of C)");
-  for (Eigen::Index i = 0; i < ss.state().size(); ++i) {
-    if (!std::isfinite(ss.state()[i])) {
-      fail(where + ": field \"x0[" + std::to_string(i) + "]\" is not finite (" +
-           format_number(ss.state()[i]) + ")");
-    }
-  }
-  auto maps = [&](const char* field, const std::vector<StaticMap>& v, std::size_t count,
-                  const char* what) {
-    if (v.size() != count) {
-      fail(where + ": field \"" + field + "\" has " + std::to_string(v.size()) +
-           " entries, expected " + std::to_string(count) + " (" + what + ")");
-    }
-    for (std::size_t i = 0; i < v.size(); ++i) {
-      const std::string at = where + ": field \"" + field + "[" + std::to_string(i) + "]\"";
-      if (v[i].kind == StaticMapKind::none) continue;
-      if (!std::isfinite(v[i].lower) || !std::isfinite(v[i].upper)) {
-        fail(at + ": breakpoints must be finite, got [" + format_number(v[i].lower) + ", " +
-             format_number(v[i].upper) + "]");
-      }
-      if (!(v[i].lower <= v[i].upper)) {
-        fail(at + ": lower " + format_number(v[i].lower) + " is greater than upper " +
-             format_number(v[i].upper));
-      }
-    }
-  };
-  if (m.is_hammerstein_wiener()) {
-    maps("input_nonlinearity", m.input_nonlinearity, nu, "inputs");
-    maps("output_nonlinearity", m.output_nonlinearity, ny, "outputs");
-  }
-  for (double f : m.provenance.fit_percent) {
-    if (std::isnan(f)) fail(where + ": field \"provenance.fit_percent\" holds NaN");
-  }
-}
+ENDOHAPTICS_DECL void validate(const ModelFile& m, const std::string& where);
 
 using endohaptics::detail::with_context;
 
-inline json matrix_to_json(const Eigen::MatrixXd& M) {
-  json rows = json::array();
-  for (Eigen::Index i = 0; i < M.rows(); ++i) {
-    json row = json::array();
-    for (Eigen::Index j = 0; j < M.cols(); ++j) row.push_back(M(i, j));
-    rows.push_back(std::move(row));
-  }
-  return rows;
-}
+ENDOHAPTICS_DECL json matrix_to_json(const Eigen::MatrixXd& M);
 
 //! Reads field `key` of `object`; throws naming it when missing.
 inline const json& field(const json& object, const char* key, const std::string& where) {
@@ -157,296 +105,55 @@ inline const json& field(const json& object, const char* key, const std::string&
   return *it;
 }
 
-inline double number(const json& value, const std::string& where, const std::string& name) {
-  if (!value.is_number()) {
-    fail(where + ": field \"" + name + "\" is not a number (" + detail::json_text::show(value) +
-         ")");
-  }
-  return value.get<double>();
-}
+ENDOHAPTICS_DECL double number(const json& value, const std::string& where,
+                               const std::string& name);
 
-inline std::string text(const json& value, const std::string& where, const std::string& name) {
-  if (!value.is_string()) {
-    fail(where + ": field \"" + name + "\" is not a string (" + detail::json_text::show(value) +
-         ")");
-  }
-  return value.get<std::string>();
-}
+ENDOHAPTICS_DECL std::string text(const json& value, const std::string& where,
+                                  const std::string& name);
 
 //! An integer field in [min, max]; a value outside (e.g. 4294967298, which an int would wrap
 //! to 2) throws naming the field, the value and the range.
-inline int integer(const json& value, const std::string& where, const std::string& name,
-                   int min = std::numeric_limits<int>::min(),
-                   int max = std::numeric_limits<int>::max()) {
-  if (!value.is_number_integer()) {
-    fail(where + ": field \"" + name + "\" is not an integer (" + detail::json_text::show(value) +
-         ")");
-  }
-  bool in_range = false;
-  if (value.is_number_unsigned()) {
-    const auto v = value.get<std::uint64_t>();
-    in_range =
-        max >= 0 && v <= static_cast<std::uint64_t>(max) && static_cast<std::int64_t>(v) >= min;
-  } else {
-    const auto v = value.get<std::int64_t>();
-    in_range = v >= min && v <= max;
-  }
-  if (!in_range) {
-    fail(where + ": field \"" + name + "\" is " + detail::json_text::show(value) + ", outside [" +
-         std::to_string(min) + ", " + std::to_string(max) + "]");
-  }
-  return static_cast<int>(value.get<std::int64_t>());
-}
+ENDOHAPTICS_DECL int integer(const json& value, const std::string& where, const std::string& name,
+                             int min = std::numeric_limits<int>::min(),
+                             int max = std::numeric_limits<int>::max());
 
 //! A matrix stored as an array of `rows` rows of `cols` numbers.
-inline Eigen::MatrixXd matrix_from_json(const json& object, const char* key, Eigen::Index rows,
-                                        Eigen::Index cols, const char* row_name,
-                                        const char* col_name, const std::string& where) {
-  const json& value = field(object, key, where);
-  const std::string name(key);
-  if (!value.is_array()) fail(where + ": field \"" + name + "\" is not an array of rows");
-  if (static_cast<Eigen::Index>(value.size()) != rows) {
-    fail(where + ": field \"" + name + "\" has " + std::to_string(value.size()) +
-         " rows, expected " + std::to_string(rows) + " (" + row_name + ")");
-  }
-  // Every row's length first: the allocation below is then bounded by what the file holds (a
-  // file cannot ask for rows x cols doubles it does not contain).
-  for (Eigen::Index i = 0; i < rows; ++i) {
-    const json& row = value[static_cast<std::size_t>(i)];
-    if (!row.is_array() || static_cast<Eigen::Index>(row.size()) != cols) {
-      fail(where + ": field \"" + name + "[" + std::to_string(i) + "]\" has " +
-           (row.is_array() ? std::to_string(row.size()) : std::string("no")) +
-           " columns, expected " + std::to_string(cols) + " (" + col_name + ")");
-    }
-  }
-  Eigen::MatrixXd M(rows, cols);
-  for (Eigen::Index i = 0; i < rows; ++i) {
-    const json& row = value[static_cast<std::size_t>(i)];
-    const std::string row_field = name + "[" + std::to_string(i) + "]";
-    for (Eigen::Index j = 0; j < cols; ++j) {
-      const std::string entry = row_field + "[" + std::to_string(j) + "]";
-      M(i, j) = number(row[static_cast<std::size_t>(j)], where, entry);
-      if (!std::isfinite(M(i, j))) {
-        fail(where + ": field \"" + entry + "\" is not finite (" + format_number(M(i, j)) + ")");
-      }
-    }
-  }
-  return M;
-}
+ENDOHAPTICS_DECL Eigen::MatrixXd matrix_from_json(const json& object, const char* key,
+                                                  Eigen::Index rows, Eigen::Index cols,
+                                                  const char* row_name, const char* col_name,
+                                                  const std::string& where);
 
-inline std::vector<SignalInfo> signals_from_json(const json& object, const char* key,
-                                                 const std::string& where) {
-  const json& value = field(object, key, where);
-  if (!value.is_array()) fail(where + ": field \"" + key + "\" is not an array");
-  std::vector<SignalInfo> out;
-  for (std::size_t i = 0; i < value.size(); ++i) {
-    const std::string name = std::string(key) + "[" + std::to_string(i) + "]";
-    if (!value[i].is_object()) fail(where + ": field \"" + name + "\" is not an object");
-    out.push_back({text(field(value[i], "name", where + ": " + name), where, name + ".name"),
-                   text(field(value[i], "unit", where + ": " + name), where, name + ".unit")});
-  }
-  return out;
-}
+ENDOHAPTICS_DECL std::vector<SignalInfo> signals_from_json(const json& object, const char* key,
+                                                           const std::string& where);
 
-inline json map_to_json(const StaticMap& m) {
-  json j{{"type", model::to_string(m.kind)}};
-  if (m.kind != StaticMapKind::none) {
-    j["lower"] = m.lower;
-    j["upper"] = m.upper;
-  }
-  return j;
-}
+ENDOHAPTICS_DECL json map_to_json(const StaticMap& m);
 
-inline std::vector<StaticMap> maps_from_json(const json& object, const char* key,
-                                             const std::string& where) {
-  const json& value = field(object, key, where);
-  if (!value.is_array()) fail(where + ": field \"" + key + "\" is not an array");
-  std::vector<StaticMap> out;
-  for (std::size_t i = 0; i < value.size(); ++i) {
-    const std::string name = std::string(key) + "[" + std::to_string(i) + "]";
-    const std::string type =
-        text(field(value[i], "type", where + ": " + name), where, name + ".type");
-    const std::optional<StaticMapKind> kind = model::static_map_kind_from_string(type);
-    if (!kind) {
-      fail(where + ": field \"" + name + ".type\" is \"" + type +
-           "\", expected none, deadzone or saturation");
-    }
-    StaticMap m{*kind, 0.0, 0.0};
-    if (m.kind != StaticMapKind::none) {
-      m.lower = number(field(value[i], "lower", where + ": " + name), where, name + ".lower");
-      m.upper = number(field(value[i], "upper", where + ": " + name), where, name + ".upper");
-    }
-    out.push_back(m);
-  }
-  return out;
-}
+ENDOHAPTICS_DECL std::vector<StaticMap> maps_from_json(const json& object, const char* key,
+                                                       const std::string& where);
 
 }  // namespace detail::model_file
 
 //! Today's date in UTC, "YYYY-MM-DD" (for ModelProvenance::date).
-[[nodiscard]] inline std::string utc_date_today() {
-  const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
-  std::tm utc{};
-  gmtime_r(&now, &utc);
-  char buffer[16];
-  std::strftime(buffer, sizeof(buffer), "%Y-%m-%d", &utc);
-  return buffer;
-}
+[[nodiscard]] ENDOHAPTICS_DECL std::string utc_date_today();
 
 //! The model as JSON (format in docs/models/subspace.md). Throws Error naming the field when
 //! sizes disagree or a number is not finite (JSON has no NaN).
-[[nodiscard]] inline nlohmann::json to_json(const ModelFile& m) {
-  namespace mf = detail::model_file;
-  mf::validate(m, "to_json");
-  nlohmann::json j;
-  j["format"] = "endohaptics-model";
-  j["version"] = ModelFile::format_version;
-  j["kind"] = m.is_hammerstein_wiener() ? "hammerstein_wiener" : "state_space";
-  const model::DynamicStateSpace<>& ss = m.state_space;
-  j["sample_time_s"] = ss.sample_time();
-  j["states"] = ss.state_size();
-  for (const char* key : {"inputs", "outputs"}) {
-    nlohmann::json signals = nlohmann::json::array();
-    for (const SignalInfo& s : std::string_view(key) == "inputs" ? m.inputs : m.outputs) {
-      signals.push_back({{"name", s.name}, {"unit", s.unit}});
-    }
-    j[key] = std::move(signals);
-  }
-  j["A"] = mf::matrix_to_json(ss.A());
-  j["B"] = mf::matrix_to_json(ss.B());
-  j["C"] = mf::matrix_to_json(ss.C());
-  j["D"] = mf::matrix_to_json(ss.D());
-  j["x0"] = std::vector<double>(ss.state().data(), ss.state().data() + ss.state().size());
-  if (m.is_hammerstein_wiener()) {
-    j["input_nonlinearity"] = nlohmann::json::array();
-    for (const auto& map : m.input_nonlinearity)
-      j["input_nonlinearity"].push_back(mf::map_to_json(map));
-    j["output_nonlinearity"] = nlohmann::json::array();
-    for (const auto& map : m.output_nonlinearity) {
-      j["output_nonlinearity"].push_back(mf::map_to_json(map));
-    }
-  }
-  const ModelProvenance& p = m.provenance;
-  j["provenance"] = {{"method", p.method},
-                     {"order", p.order},
-                     {"block_rows", p.block_rows},
-                     {"files", p.files},
-                     {"fit_percent", p.fit_percent},
-                     {"date", p.date},
-                     {"notes", p.notes}};
-  return j;
-}
+[[nodiscard]] ENDOHAPTICS_DECL nlohmann::json to_json(const ModelFile& m);
 
 //! Parses and validates a model from JSON; `source` (e.g. the path) prefixes error messages.
 //! Throws Error naming the field and value: missing field, wrong type, wrong dimensions,
 //! non-number (e.g. null, which is how NaN is written), bad breakpoints, sample time <= 0,
 //! "states" outside [1, ModelFile::max_states], an integer field that does not fit an int.
-[[nodiscard]] inline ModelFile model_from_json(const nlohmann::json& j,
-                                               const std::string& source = "model") {
-  namespace mf = detail::model_file;
-  const std::string where = "model file " + source;
-  if (!j.is_object()) mf::fail(where + ": not a JSON object");
-  const std::string format = mf::text(mf::field(j, "format", where), where, "format");
-  if (format != "endohaptics-model") {
-    mf::fail(where + ": field \"format\" is \"" + format + "\", expected \"endohaptics-model\"");
-  }
-  const int version = mf::integer(mf::field(j, "version", where), where, "version");
-  if (version != ModelFile::format_version) {
-    mf::fail(where + ": field \"version\" is " + std::to_string(version) + ", expected " +
-             std::to_string(ModelFile::format_version));
-  }
-  const std::string kind = mf::text(mf::field(j, "kind", where), where, "kind");
-  if (kind != "state_space" && kind != "hammerstein_wiener") {
-    mf::fail(where + ": field \"kind\" is \"" + kind +
-             "\", expected \"state_space\" or \"hammerstein_wiener\"");
-  }
-  const double sample_time =
-      mf::number(mf::field(j, "sample_time_s", where), where, "sample_time_s");
-  if (!std::isfinite(sample_time) || !(sample_time > 0.0)) {
-    mf::fail(where + ": field \"sample_time_s\" must be finite and > 0, got " +
-             mf::format_number(sample_time));
-  }
-  const int n =
-      mf::integer(mf::field(j, "states", where), where, "states", 1, ModelFile::max_states);
-  std::vector<SignalInfo> inputs = mf::signals_from_json(j, "inputs", where);
-  std::vector<SignalInfo> outputs = mf::signals_from_json(j, "outputs", where);
-  if (outputs.empty()) mf::fail(where + ": field \"outputs\" must name at least one output");
-  const auto nu = static_cast<Eigen::Index>(inputs.size());
-  const auto ny = static_cast<Eigen::Index>(outputs.size());
-  const Eigen::MatrixXd A = mf::matrix_from_json(j, "A", n, n, "states", "states", where);
-  const Eigen::MatrixXd B = mf::matrix_from_json(j, "B", n, nu, "states", "inputs", where);
-  const Eigen::MatrixXd C = mf::matrix_from_json(j, "C", ny, n, "outputs", "states", where);
-  const Eigen::MatrixXd D = mf::matrix_from_json(j, "D", ny, nu, "outputs", "inputs", where);
-  const auto& x0 = mf::field(j, "x0", where);
-  if (!x0.is_array() || static_cast<int>(x0.size()) != n) {
-    mf::fail(where + ": field \"x0\" must be an array of " + std::to_string(n) +
-             " numbers (states), got " + detail::json_text::show(x0));
-  }
-  Eigen::VectorXd state(n);
-  for (int i = 0; i < n; ++i) {
-    state[i] = mf::number(x0[static_cast<std::size_t>(i)], where, "x0[" + std::to_string(i) + "]");
-  }
-  // Sizes and values are checked above, field by field; the StateSpace checks them again.
-  ModelFile m{.state_space = mf::with_context(
-                  where, [&] { return model::DynamicStateSpace<>(A, B, C, D, sample_time); }),
-              .inputs = std::move(inputs),
-              .outputs = std::move(outputs)};
-  m.state_space.reset(state);
-  if (kind == "hammerstein_wiener") {
-    m.input_nonlinearity = mf::maps_from_json(j, "input_nonlinearity", where);
-    m.output_nonlinearity = mf::maps_from_json(j, "output_nonlinearity", where);
-    if (m.input_nonlinearity.empty() && m.output_nonlinearity.empty()) {
-      mf::fail(where +
-               ": kind \"hammerstein_wiener\" needs input_nonlinearity or "
-               "output_nonlinearity entries");
-    }
-  }
-  const auto& p = mf::field(j, "provenance", where);
-  if (!p.is_object()) mf::fail(where + ": field \"provenance\" is not an object");
-  const std::string pw = where + ": provenance";
-  m.provenance.method = mf::text(mf::field(p, "method", pw), where, "provenance.method");
-  m.provenance.order = mf::integer(mf::field(p, "order", pw), where, "provenance.order");
-  m.provenance.block_rows =
-      mf::integer(mf::field(p, "block_rows", pw), where, "provenance.block_rows");
-  m.provenance.date = mf::text(mf::field(p, "date", pw), where, "provenance.date");
-  m.provenance.notes = mf::text(mf::field(p, "notes", pw), where, "provenance.notes");
-  const auto& files = mf::field(p, "files", pw);
-  const auto& fit = mf::field(p, "fit_percent", pw);
-  if (!files.is_array()) mf::fail(where + ": field \"provenance.files\" is not an array");
-  if (!fit.is_array()) mf::fail(where + ": field \"provenance.fit_percent\" is not an array");
-  for (std::size_t i = 0; i < files.size(); ++i) {
-    m.provenance.files.push_back(
-        mf::text(files[i], where, "provenance.files[" + std::to_string(i) + "]"));
-  }
-  for (std::size_t i = 0; i < fit.size(); ++i) {
-    m.provenance.fit_percent.push_back(
-        mf::number(fit[i], where, "provenance.fit_percent[" + std::to_string(i) + "]"));
-  }
-  mf::validate(m, where);
-  return m;
-}
+[[nodiscard]] ENDOHAPTICS_DECL ModelFile model_from_json(const nlohmann::json& j,
+                                                         const std::string& source = "model");
 
 //! Writes `model` to `path` as indented JSON. Throws Error on invalid content (as to_json) or
 //! when the file cannot be written.
-inline void save_model(const std::filesystem::path& path, const ModelFile& model) {
-  const nlohmann::json j = to_json(model);
-  std::ofstream out(path);
-  if (!out) detail::model_file::fail("save_model: cannot open " + path.string() + " for writing");
-  out << j.dump(2) << '\n';
-  out.close();  // flushes: a full disk shows here, not in the destructor
-  if (!out) detail::model_file::fail("save_model: writing " + path.string() + " failed");
-}
+ENDOHAPTICS_DECL void save_model(const std::filesystem::path& path, const ModelFile& model);
 
 //! Reads and validates the model file at `path`. Throws Error naming the path and, for bad
 //! content, the field and value (invalid JSON: the parser's message with the byte position).
-[[nodiscard]] inline ModelFile load_model(const std::filesystem::path& path) {
-  namespace jt = detail::json_text;
-  const std::string text = jt::read_bounded(path, model_file_max_bytes, "model file");
-  const nlohmann::json j = jt::parse_strict(
-      text, "model file " + path.string(),
-      {.max_depth = model_file_max_depth, .needed = "a model file needs 4", .comments = false});
-  return model_from_json(j, path.string());
-}
+[[nodiscard]] ENDOHAPTICS_DECL ModelFile load_model(const std::filesystem::path& path);
 
 //! A StateSpace of any sizes (x0 = its current state) with names, units and provenance (order
 //! filled in from the model; date today if empty). Throws Error when the signal counts differ
@@ -518,3 +225,7 @@ template <int Nx, int Nu, int Ny, typename Scalar = double,
 }
 
 }  // namespace endohaptics::files
+
+#if !defined(ENDOHAPTICS_SEPARATE_COMPILATION)
+#include "endohaptics/files/impl/model_file.ipp"
+#endif

@@ -20,6 +20,7 @@
 #include <type_traits>
 #include <utility>
 #include <vector>
+#include "endohaptics/core/separate_compilation.hpp"
 
 #include "endohaptics/core/error.hpp"
 
@@ -140,36 +141,21 @@ namespace detail {
 
 //! ": <the system's message>" for errno value `error`; for 0 (the stream's error flag was set by
 //! an earlier write, whose errno is gone) ": an earlier write failed".
-inline std::string reason(int error) {
-  return error != 0 ? std::string(": ") + std::strerror(error) : ": an earlier write failed";
-}
+ENDOHAPTICS_DECL std::string reason(int error);
 
 }  // namespace detail
 
 //! Flushes `out` and throws Error naming `what` (e.g. "--log /tmp/x.csv", "standard output")
 //! and the system's reason when anything written to it was lost (full disk, short write, closed
 //! pipe). The stream stays open.
-inline void require_written(std::FILE* out, std::string_view what) {
-  errno = 0;
-  const bool failed = std::fflush(out) != 0 || std::ferror(out) != 0;
-  if (failed) {
-    const int error = errno;
-    endohaptics::detail::fail("writing " + std::string(what) + " failed" + detail::reason(error));
-  }
-}
+ENDOHAPTICS_DECL void require_written(std::FILE* out, std::string_view what);
 
 //! Closes `out` and throws Error naming `what` when anything written to it was lost, as
 //! `require_written`, or when closing failed. `out` is closed either way.
-inline void close_written(std::FILE* out, std::string_view what) {
-  errno = 0;
-  const bool failed = std::fflush(out) != 0 || std::ferror(out) != 0;
-  const int error = errno;
-  const bool close_failed = std::fclose(out) != 0;
-  if (failed || close_failed) {
-    const int error_number = error != 0 ? error : errno;
-    endohaptics::detail::fail("writing " + std::string(what) + " failed" +
-                              detail::reason(error_number));
-  }
-}
+ENDOHAPTICS_DECL void close_written(std::FILE* out, std::string_view what);
 
 }  // namespace endohaptics::workflow
+
+#if !defined(ENDOHAPTICS_SEPARATE_COMPILATION)
+#include "endohaptics/workflow/impl/command_line.ipp"
+#endif

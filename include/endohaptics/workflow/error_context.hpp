@@ -6,6 +6,7 @@
 
 #include <string>
 #include <vector>
+#include "endohaptics/core/separate_compilation.hpp"
 
 #include "endohaptics/core/error.hpp"
 
@@ -17,14 +18,14 @@ using endohaptics::detail::fail;
 
 using endohaptics::detail::format_number;
 
-inline std::string join(const std::vector<std::string>& names) {
-  std::string out;
-  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
+ENDOHAPTICS_DECL std::string join(const std::vector<std::string>& names);
 
 using endohaptics::detail::with_context;
 
 }  // namespace detail
 
 }  // namespace endohaptics::workflow
+
+#if !defined(ENDOHAPTICS_SEPARATE_COMPILATION)
+#include "endohaptics/workflow/impl/error_context.ipp"
+#endif

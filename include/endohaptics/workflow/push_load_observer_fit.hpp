@@ -13,6 +13,7 @@
 #include <span>
 #include <string>
 #include <vector>
+#include "endohaptics/core/separate_compilation.hpp"
 
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/estimation/push_load_observer.hpp"
@@ -35,140 +36,23 @@ struct LoadObserverFit {
 };
 
 //! The causal output of `model` (from its reset state) on one experiment.
-[[nodiscard]] inline Eigen::VectorXd simulate_load_observer(
-    const estimation::PushLoadObserver<double>& model, const LoadObserverData& d) {
-  estimation::PushLoadObserver<double> m = model;
-  m.reset();
-  Eigen::VectorXd y(d.current.size());
-  for (Eigen::Index k = 0; k < d.current.size(); ++k) {
-    const estimation::JointSignals<double> s{d.position[k], 0.0, d.current[k], 0.0};
-    if (m.advance(s) != model::StepStatus::ok) {
-      ENDOHAPTICS_THROW(Error("simulate_load_observer: non-finite signal or result at sample " +
-                              std::to_string(k)));
-    }
-    y[k] = m.force(s);
-  }
-  return y;
-}
+[[nodiscard]] ENDOHAPTICS_DECL Eigen::VectorXd simulate_load_observer(
+    const estimation::PushLoadObserver<double>& model, const LoadObserverData& d);
 
 //! RMSE of `model` on each experiment after `warmup` s (causal: state from reset, no load used).
-[[nodiscard]] inline std::vector<double> load_observer_rmse(
+[[nodiscard]] ENDOHAPTICS_DECL std::vector<double> load_observer_rmse(
     const estimation::PushLoadObserver<double>& model, std::span<const LoadObserverData> data,
-    double warmup) {
-  const auto skip = static_cast<Eigen::Index>(std::ceil(warmup / model.sample_time()));
-  std::vector<double> out;
-  for (const auto& d : data) {
-    const Eigen::VectorXd y_hat = simulate_load_observer(model, d);
-    const auto n = d.load.size() - skip;
-    out.push_back(
-        std::sqrt((d.load.tail(n) - y_hat.tail(n)).squaredNorm() / static_cast<double>(n)));
-  }
-  return out;
-}
+    double warmup);
 
 //! Fits c_p, d_p, b_p, R_p, the initial load (the training mean) and e0, e1 (see the file
 //! comment); the filters, thresholds, push sign, Q and P0 come from `prior`. Throws Error on
 //! empty or mismatched data, too few push samples, or a singular fit.
-[[nodiscard]] inline LoadObserverFit fit_push_load_observer(
+[[nodiscard]] ENDOHAPTICS_DECL LoadObserverFit fit_push_load_observer(
     std::span<const LoadObserverData> data,
-    const estimation::PushLoadObserverParameters<double>& prior, double warmup = 1.0) {
-  if (data.empty()) ENDOHAPTICS_THROW(Error("fit_push_load_observer: no data"));
-  prior.validate();
-  const auto skip = static_cast<Eigen::Index>(std::ceil(warmup / prior.sample_time));
-  for (std::size_t e = 0; e < data.size(); ++e) {
-    const auto& d = data[e];
-    if (d.position.size() != d.current.size() || d.load.size() != d.current.size() ||
-        d.current.size() <= skip + 1) {
-      ENDOHAPTICS_THROW(Error("fit_push_load_observer: experiment " + std::to_string(e) +
-                              ": current, position and load must have the same length, longer "
-                              "than the warm-up"));
-    }
-  }
-  // (a) The push regime and the filtered signals do not depend on the fitted values.
-  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-  double load_sum = 0.0, weight_sum = 0.0;
-  std::size_t push = 0, total = 0;
-  struct Sample {
-    double i_f, v, y;
-    double w;
-  };
-  std::vector<Sample> pushing;
-  for (const auto& d : data) {
-    estimation::PushLoadObserver<double> m(prior);
-    const double w = 1.0 / static_cast<double>(d.current.size() - skip);
-    for (Eigen::Index k = 0; k < d.current.size(); ++k) {
-      const estimation::JointSignals<double> s{d.position[k], 0.0, d.current[k], 0.0};
-      if (m.advance(s) != model::StepStatus::ok) {
-        ENDOHAPTICS_THROW(
-            Error("fit_push_load_observer: non-finite signal at sample " + std::to_string(k)));
-      }
-      if (k < skip) continue;
-      ++total;
-      load_sum += w * d.load[k];
-      weight_sum += w;
-      if (m.regime() > 0) {
-        ++push;
-        const Eigen::Vector3d row(d.load[k], 1.0, m.filtered_velocity());
-        normal += w * row * row.transpose();
-        rhs += w * row * m.filtered_current();
-        pushing.push_back({m.filtered_current(), m.filtered_velocity(), d.load[k], w});
-      }
-    }
-  }
-  if (push < 10) {
-    ENDOHAPTICS_THROW(Error("fit_push_load_observer: " + std::to_string(push) +
-                            " samples in the push regime: the motor never pushes against the "
-                            "load on these data (check push_sign)"));
-  }
-  const Eigen::Vector3d theta = (normal + 1e-9 * Eigen::Matrix3d::Identity()).ldlt().solve(rhs);
-  if (!theta.allFinite() || theta[0] == 0.0) {
-    ENDOHAPTICS_THROW(Error("fit_push_load_observer: the push-regime fit is singular"));
-  }
-  double residual = 0.0, residual_weight = 0.0;
-  for (const auto& p : pushing) {
-    const double r = p.i_f - theta[0] * p.y - theta[1] - theta[2] * p.v;
-    residual += p.w * r * r;
-    residual_weight += p.w;
-  }
-  LoadObserverFit fit;
-  auto& q = fit.parameters = prior;
-  q.current_per_load = theta[0];
-  q.current_offset = theta[1];
-  q.current_per_velocity = theta[2];
-  q.measurement_variance = std::fmax(residual / residual_weight, 1e-12);
-  q.initial_load = load_sum / weight_sum;
-  q.output_offset = 0.0;
-  q.output_slope = 0.0;
-  // (b) The load-side friction map on the causal run.
-  Eigen::Matrix2d n2 = Eigen::Matrix2d::Zero();
-  Eigen::Vector2d r2 = Eigen::Vector2d::Zero();
-  for (const auto& d : data) {
-    estimation::PushLoadObserver<double> m(q);
-    const double w = 1.0 / static_cast<double>(d.current.size() - skip);
-    for (Eigen::Index k = 0; k < d.current.size(); ++k) {
-      const estimation::JointSignals<double> s{d.position[k], 0.0, d.current[k], 0.0};
-      (void)m.advance(s);
-      if (k < skip) continue;
-      const double tau = m.force(s);  // e0 = e1 = 0: the load estimate itself
-      const double g = (1.0 - m.regime()) / 2.0;
-      const Eigen::Vector2d row(g, g * tau);
-      n2 += w * row * row.transpose();
-      r2 += w * row * (d.load[k] - tau);
-    }
-  }
-  const Eigen::Vector2d e = (n2 + 1e-12 * Eigen::Matrix2d::Identity()).ldlt().solve(r2);
-  if (e.allFinite()) {
-    q.output_offset = e[0];
-    q.output_slope = e[1];
-  }
-  q.validate();
-  fit.push_fraction = static_cast<double>(push) / static_cast<double>(total);
-  fit.rmse = load_observer_rmse(estimation::PushLoadObserver<double>(q), data, warmup);
-  double sum = 0.0;
-  for (const double r : fit.rmse) sum += r;
-  fit.mean_rmse = sum / static_cast<double>(fit.rmse.size());
-  return fit;
-}
+    const estimation::PushLoadObserverParameters<double>& prior, double warmup = 1.0);
 
 }  // namespace endohaptics::workflow
+
+#if !defined(ENDOHAPTICS_SEPARATE_COMPILATION)
+#include "endohaptics/workflow/impl/push_load_observer_fit.ipp"
+#endif

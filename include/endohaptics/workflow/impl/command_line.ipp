@@ -1,0 +1,40 @@
+//! @file
+//! Function bodies of workflow/command_line.hpp: included at its end (header-only, the default), or
+//! compiled once with ENDOHAPTICS_SEPARATE_COMPILATION (core/separate_compilation.hpp).
+#pragma once
+
+#include "endohaptics/workflow/command_line.hpp"
+
+namespace endohaptics::workflow {
+namespace detail {
+
+ENDOHAPTICS_DECL std::string reason(int error) {
+  return error != 0 ? std::string(": ") + std::strerror(error) : ": an earlier write failed";
+}
+}  // namespace detail
+}  // namespace endohaptics::workflow
+
+namespace endohaptics::workflow {
+
+ENDOHAPTICS_DECL void require_written(std::FILE* out, std::string_view what) {
+  errno = 0;
+  const bool failed = std::fflush(out) != 0 || std::ferror(out) != 0;
+  if (failed) {
+    const int error = errno;
+    endohaptics::detail::fail("writing " + std::string(what) + " failed" + detail::reason(error));
+  }
+}
+
+ENDOHAPTICS_DECL void close_written(std::FILE* out, std::string_view what) {
+  errno = 0;
+  const bool failed = std::fflush(out) != 0 || std::ferror(out) != 0;
+  const int error = errno;
+  const bool close_failed = std::fclose(out) != 0;
+  if (failed || close_failed) {
+    const int error_number = error != 0 ? error : errno;
+    endohaptics::detail::fail("writing " + std::string(what) + " failed" +
+                              detail::reason(error_number));
+  }
+}
+
+}  // namespace endohaptics::workflow

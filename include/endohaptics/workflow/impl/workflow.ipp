@@ -1,0 +1,325 @@
+//! @file
+//! Function bodies of workflow/workflow.hpp: included at its end (header-only, the default), or
+//! compiled once with ENDOHAPTICS_SEPARATE_COMPILATION (core/separate_compilation.hpp).
+#pragma once
+
+#include "endohaptics/workflow/workflow.hpp"
+
+namespace endohaptics::workflow {
+
+ENDOHAPTICS_DECL double slowest_time_constant(const model::DynamicStateSpace<>& linear) {
+  if (linear.state_size() == 0) return 0.0;
+  const double rho = linear.spectral_radius();
+  if (!(rho < 1.0)) return std::numeric_limits<double>::infinity();
+  if (!(rho > 0.0)) return 0.0;
+  return -linear.sample_time() / std::log(rho);
+}
+
+ENDOHAPTICS_DECL std::string refusal(const CandidateModel& c, double max_time_constant) {
+  if (c.method.starts_with("static")) return {};
+  if (!(c.spectral_radius < 1.0)) {
+    return "unstable (spectral radius " + detail::format_number(c.spectral_radius) + ")";
+  }
+  if (c.time_constant > max_time_constant) {
+    return "near-integrating (slowest time constant " + detail::format_number(c.time_constant) +
+           " s > " + detail::format_number(max_time_constant) + " s; spectral radius " +
+           detail::format_number(c.spectral_radius) + ")";
+  }
+  return {};
+}
+
+ENDOHAPTICS_DECL std::size_t best_candidate(const std::vector<CandidateModel>& candidates) {
+  if (candidates.empty()) detail::fail("best_candidate: no candidates");
+  std::size_t best = candidates.size();
+  std::string why;
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    if (!candidates[i].refused.empty()) {
+      why += (why.empty() ? "" : "; ") + candidates[i].method + ": " + candidates[i].refused;
+      continue;
+    }
+    if (best == candidates.size() || candidates[i].mean_fit > candidates[best].mean_fit) best = i;
+  }
+  if (best == candidates.size()) detail::fail("identify: every candidate was refused: " + why);
+  return best;
+}
+}  // namespace endohaptics::workflow
+
+namespace endohaptics::workflow {
+namespace detail {
+
+ENDOHAPTICS_DECL double ranking_score(const CandidateModel& c) {
+  if (!c.refused.empty() || !std::isfinite(c.mean_fit)) {
+    return -std::numeric_limits<double>::infinity();
+  }
+  return c.mean_fit;
+}
+}  // namespace detail
+}  // namespace endohaptics::workflow
+
+namespace endohaptics::workflow {
+
+ENDOHAPTICS_DECL WorkflowResult identify_logs(const std::vector<PreparedLog>& fit_logs,
+                                              const std::vector<PreparedLog>& score_logs,
+                                              const std::vector<files::SignalInfo>& inputs,
+                                              const std::vector<files::SignalInfo>& outputs,
+                                              const WorkflowOptions& options) {
+  namespace wf = detail;
+  if (fit_logs.empty()) wf::fail("identify: no logs");
+  if (score_logs.size() != fit_logs.size()) {
+    wf::fail("identify: " + std::to_string(fit_logs.size()) + " logs to fit but " +
+             std::to_string(score_logs.size()) + " to score");
+  }
+  const auto nu = inputs.size();
+  std::vector<DataSet> data;
+  std::vector<std::string> files;
+  for (const PreparedLog& log : fit_logs) {
+    files.push_back(log.source);
+    for (const DataSet& d : log.segments) data.push_back(d);
+  }
+  if (data.empty()) wf::fail("identify: the logs have no usable segments");
+  const double ts = fit_logs.front().sample_time;
+  std::vector<DeadzoneSetting> dz = options.deadzone;
+  if (dz.empty()) dz.assign(nu, DeadzoneSetting{});
+  if (dz.size() != nu) {
+    wf::fail("identify: " + std::to_string(dz.size()) + " dead-zone settings for " +
+             std::to_string(nu) + " inputs");
+  }
+  const bool any_fit = std::any_of(dz.begin(), dz.end(), [](const DeadzoneSetting& s) {
+    return s.mode == DeadzoneSetting::Mode::fit;
+  });
+  const bool any_map = std::any_of(dz.begin(), dz.end(), [](const DeadzoneSetting& s) {
+    return s.mode != DeadzoneSetting::Mode::none;
+  });
+  if (options.deadzone_grid < 2 || options.deadzone_refine < 0) {
+    wf::fail("identify: the dead-zone search needs >= 2 grid points and >= 0 refinements");
+  }
+  // Search range of each fitted dead zone: [0, half the largest |u_j|] (4.2.3 friction is well
+  // inside it).
+  std::vector<double> limit(nu, 0.0);
+  for (const DataSet& d : data) {
+    for (std::size_t j = 0; j < nu; ++j) {
+      limit[j] =
+          std::max(limit[j], 0.5 * d.u.col(static_cast<Eigen::Index>(j)).cwiseAbs().maxCoeff());
+    }
+  }
+
+  WorkflowResult result;
+  SubspaceOptions so;
+  so.order = options.order;
+  so.max_order = options.max_order;
+  so.block_rows = options.block_rows;
+  so.sample_time = ts;
+
+  const auto maps_for = [&](const std::vector<double>& widths) {
+    std::vector<StaticMap> maps(nu);
+    for (std::size_t j = 0; j < nu; ++j) {
+      if (dz[j].mode == DeadzoneSetting::Mode::none) continue;
+      const double w = dz[j].mode == DeadzoneSetting::Mode::fixed ? dz[j].width : widths[j];
+      maps[j] = {StaticMapKind::deadzone, -w, w};
+    }
+    return maps;
+  };
+  // Fits the linear block on the mapped data and scores the candidate causally.
+  const auto evaluate = [&](const std::string& method, const SubspaceOptions& opts,
+                            const std::vector<StaticMap>& maps) {
+    ++result.evaluations;
+    std::vector<DataSet> mapped;
+    mapped.reserve(data.size());
+    for (const DataSet& d : data) mapped.push_back({apply_maps(maps, d.u), d.y});
+    SubspaceModel linear = method.starts_with("static")
+                               ? fit_static_gain(std::span<const DataSet>(mapped), ts)
+                               : identify(std::span<const DataSet>(mapped), opts);
+    files::ModelProvenance p;
+    p.method = method;
+    p.files = files;
+    CandidateModel c{.method = method,
+                     .model = files::make_model_file(linear, inputs, outputs, p),
+                     .linear = std::move(linear)};
+    if (any_map) {
+      c.model.input_nonlinearity = maps;
+      c.model.output_nonlinearity.assign(outputs.size(), StaticMap{});
+    }
+    c.spectral_radius = c.linear.state_space.spectral_radius();
+    c.time_constant = slowest_time_constant(c.model.state_space);
+    c.refused = refusal(c, options.max_time_constant);
+    double sum = 0.0;
+    std::vector<double> per_output(outputs.size(), 0.0);
+    for (const PreparedLog& log : score_logs) {
+      c.files.push_back(compare_log(c.model, log, options.scoring));
+      sum += c.files.back().mean_fit();
+      for (std::size_t i = 0; i < outputs.size(); ++i) {
+        per_output[i] += c.files.back().fit[static_cast<Eigen::Index>(i)] /
+                         static_cast<double>(score_logs.size());
+      }
+    }
+    c.mean_fit = sum / static_cast<double>(score_logs.size());
+    c.model.provenance.fit_percent = per_output;
+    return c;
+  };
+  // One candidate, or none when its fit fails (e.g. dead zones that leave the subspace fit an
+  // unstable model whose B, D, x0 regression overflows): the search goes on without it, and the
+  // last failure is kept for the message if no candidate fits at all.
+  std::string last_failure;
+  const auto try_evaluate =
+      [&](const std::string& method, const SubspaceOptions& opts,
+          const std::vector<StaticMap>& maps) -> std::optional<CandidateModel> {
+#if defined(__cpp_exceptions)
+    try {
+      return evaluate(method, opts, maps);
+    } catch (const Error& e) {
+      last_failure = e.what();
+      return std::nullopt;
+    }
+#else
+    return evaluate(method, opts, maps);
+#endif
+  };
+  // The best dead zones for one method: a grid over each fitted input's range, then golden-
+  // section steps around the best grid point; one input after the other (coordinate search).
+  const auto search_deadzones = [&](const std::string& method, const SubspaceOptions& opts) {
+    std::vector<double> widths(nu, 0.0);
+    std::optional<CandidateModel> best = try_evaluate(method, opts, maps_for(widths));
+    if (!any_fit) {
+      if (!best) wf::fail(last_failure);
+      return std::move(*best);
+    }
+    for (std::size_t j = 0; j < nu; ++j) {
+      if (dz[j].mode != DeadzoneSetting::Mode::fit || !(limit[j] > 0.0)) continue;
+      const auto try_width = [&](double w) {
+        std::vector<double> trial = widths;
+        trial[j] = w;
+        std::optional<CandidateModel> c = try_evaluate(method, opts, maps_for(trial));
+        if (!c) return -std::numeric_limits<double>::infinity();
+        const double score = wf::ranking_score(*c);
+        if (!best || score > wf::ranking_score(*best)) {
+          best = std::move(c);
+          widths = trial;
+        }
+        return score;
+      };
+      const int n = options.deadzone_grid;
+      const double step = limit[j] / static_cast<double>(n - 1);
+      for (int g = 1; g < n; ++g) try_width(step * g);  // g = 0 is the start point
+      // Golden section on [best - step, best + step], scoring each probe.
+      double a = std::max(0.0, widths[j] - step);
+      double b = std::min(limit[j], widths[j] + step);
+      constexpr double r = 0.6180339887498949;
+      for (int k = 0; k < options.deadzone_refine && b - a > 1e-12; ++k) {
+        const double x1 = b - r * (b - a);
+        const double x2 = a + r * (b - a);
+        const double f1 = try_width(x1);
+        const double f2 = try_width(x2);
+        if (f1 >= f2) {
+          b = x2;
+        } else {
+          a = x1;
+        }
+      }
+    }
+    if (!best) wf::fail(last_failure);
+    best->method += " + dead zone";
+    return std::move(*best);
+  };
+
+  if (options.candidates.empty() && !options.static_gain) {
+    wf::fail("identify: no subspace method to try");
+  }
+  const std::size_t tries = options.candidates.size() + (options.static_gain ? 1 : 0);
+  for (const Weighting w : options.candidates) {
+    so.weighting = w;
+    const std::string method(to_string(w));
+    // One of several weightings may fail (e.g. a model so unstable that the B, D, x0
+    // regression overflows): record it and go on with the others.
+    const auto attempt = [&] { result.candidates.push_back(search_deadzones(method, so)); };
+#if defined(__cpp_exceptions)
+    if (tries > 1) {
+      try {
+        attempt();
+      } catch (const Error& e) {
+        result.failures.push_back(method + ": " + e.what());
+      }
+      continue;
+    }
+#endif
+    wf::with_context(method, attempt);
+  }
+  const std::size_t subspace_candidates = result.candidates.size();
+  // Order search: the best subspace method and dead zone at every order, ranked by the causal
+  // score; the smallest order within options.order_tolerance of the best admissible score
+  // replaces that candidate (parsimony: a higher order must earn its states). Also when that
+  // candidate was refused: another order may be admissible.
+  if (subspace_candidates > 0 && options.order == 0 && options.search_order) {
+    std::size_t top = 0;
+    for (std::size_t i = 1; i < subspace_candidates; ++i) {
+      if (wf::ranking_score(result.candidates[i]) > wf::ranking_score(result.candidates[top]))
+        top = i;
+    }
+    CandidateModel& base = result.candidates[top];
+    SubspaceOptions opts = so;
+    opts.weighting = base.linear.weighting;
+    const std::vector<StaticMap> maps = base.model.input_nonlinearity.empty()
+                                            ? std::vector<StaticMap>(nu)
+                                            : base.model.input_nonlinearity;
+    std::vector<CandidateModel> by_order;
+    for (int n = 1; n <= options.max_order; ++n) {
+      if (n == base.linear.order) {
+        result.order_search.push_back({n, base.mean_fit, base.spectral_radius, base.refused});
+        by_order.push_back(base);
+        continue;
+      }
+      opts.order = n;
+#if defined(__cpp_exceptions)
+      try {
+#endif
+        CandidateModel c = evaluate(base.method, opts, maps);
+        result.order_search.push_back({n, c.mean_fit, c.spectral_radius, c.refused});
+        by_order.push_back(std::move(c));
+#if defined(__cpp_exceptions)
+      } catch (const Error& e) {
+        result.order_search.push_back(
+            {n, -std::numeric_limits<double>::infinity(), 0.0, std::string("failed: ") + e.what()});
+      }
+#endif
+    }
+    double best_score = -std::numeric_limits<double>::infinity();
+    for (const CandidateModel& c : by_order) {
+      best_score = std::max(best_score, wf::ranking_score(c));
+    }
+    if (std::isfinite(best_score)) {        // else: every order refused, base stays (refused)
+      for (CandidateModel& c : by_order) {  // in increasing order
+        if (wf::ranking_score(c) < best_score - options.order_tolerance) continue;
+        if (c.linear.order != base.linear.order) {
+          c.order_searched = true;
+          base = std::move(c);
+        }
+        break;
+      }
+    }
+  }
+  // The static baseline as a candidate of its own (with the same dead-zone search).
+  if (options.static_gain) {
+    const auto attempt = [&] { result.candidates.push_back(search_deadzones("static", so)); };
+#if defined(__cpp_exceptions)
+    if (tries > 1) {
+      try {
+        attempt();
+      } catch (const Error& e) {
+        result.failures.push_back(std::string("static: ") + e.what());
+      }
+    } else {
+      attempt();
+    }
+#else
+    attempt();
+#endif
+  }
+  if (result.candidates.empty()) {
+    std::string all;
+    for (const auto& f : result.failures) all += (all.empty() ? "" : "; ") + f;
+    wf::fail("identify: every method failed: " + all);
+  }
+  result.best = best_candidate(result.candidates);
+  return result;
+}
+
+}  // namespace endohaptics::workflow
