@@ -3,7 +3,8 @@
 // in another thread. Pacing quality at 1 kHz side by side with the machine's bare
 // clock_nanosleep pacing (the floor any loop on this machine sits on), and the rate with
 // `--rate max` (period 0). Figures are user counters: rate_hz, loss_pct, p99_period_err_us,
-// max_period_err_us, deadline_misses. Arg: ticks per run.
+// max_period_err_us, deadline_misses. Arg: ticks per run. The `_v2` variants run the same loop
+// over protocol v2 (SecureTransport on both sides, docs/protocol.md) in the same run.
 #include <benchmark/benchmark.h>
 
 #include <sched.h>
@@ -13,15 +14,19 @@
 #include <endohaptics/estimation/force_estimator.hpp>
 #include <endohaptics/estimation/paced_estimator.hpp>
 #include <endohaptics/kinematics/cylindrical_mapper.hpp>
+#include <endohaptics/protocol/secure_session.hpp>
 #include <endohaptics/sim/sbrio_emulator.hpp>
 #include <endohaptics/sim/scripted_operator.hpp>
 #include <endohaptics/sim/simulated_rig.hpp>
 #include <endohaptics/teleop/realtime.hpp>
 #include <endohaptics/teleop/teleop_loop.hpp>
+#include <endohaptics/transport/secure_transport.hpp>
 #include <endohaptics/transport/udp_server_transport.hpp>
 #include <endohaptics/transport/udp_transport.hpp>
 #include <memory>
+#include <optional>
 #include <thread>
+#include <type_traits>
 
 namespace {
 
@@ -29,15 +34,30 @@ namespace transport = endohaptics::transport;
 namespace sim = endohaptics::sim;
 namespace tp = endohaptics::teleop;
 namespace est = endohaptics::estimation;
+namespace protocol = endohaptics::protocol;
 using std::chrono::nanoseconds;
+using ServerV2 =
+    transport::SecureTransport<transport::UdpServerTransport, protocol::SecureResponder<4>>;
+using ClientV2 = transport::SecureTransport<transport::UdpTransport, protocol::SecureInitiator<4>>;
 
-// The emulated sbRIO in its own thread, on 127.0.0.1, any free port.
+// The benchmark key (a fixed pattern; the programs load theirs from a file).
+protocol::SecureKey bench_key() {
+  std::array<std::byte, protocol::SecureKey::size> k{};
+  for (std::size_t i = 0; i < k.size(); ++i) k[i] = std::byte{static_cast<std::uint8_t>(3 * i)};
+  return protocol::SecureKey(k);
+}
+
+// The emulated sbRIO in its own thread, on 127.0.0.1, any free port; over protocol v2 when
+// `V2`.
+template <bool V2>
 class EmulatorThread {
  public:
+  using Link = std::conditional_t<V2, ServerV2, transport::UdpServerTransport>;
   explicit EmulatorThread(int fifo_priority = 0)
       : server_({.bind_address = "127.0.0.1", .port = 0}),
+        link_(make_link()),
         rig_(sim::endowrist_2016_rig<4>(sim::Environment::tissue)),
-        emulator_(server_, rig_, clock_),
+        emulator_(*link_, rig_, clock_),
         thread_([this, fifo_priority] {
           (void)tp::apply_realtime({.fifo_priority = fifo_priority, .timer_slack_ns = 1});
           while (!stop_.load(std::memory_order_relaxed)) {
@@ -51,10 +71,20 @@ class EmulatorThread {
   [[nodiscard]] std::uint16_t port() const { return server_.local_endpoint().port(); }
 
  private:
+  Link* make_link() {
+    if constexpr (V2) {
+      return &v2_.emplace(server_,
+                          protocol::SecureResponder<4>(bench_key(), protocol::random_session_id()));
+    } else {
+      return &server_;
+    }
+  }
   transport::UdpServerTransport server_;
+  std::optional<ServerV2> v2_;
+  Link* link_;
   endohaptics::SteadyClock clock_;
   sim::SimulatedRig<4> rig_;
-  sim::SbrioEmulator<transport::UdpServerTransport, sim::SimulatedRig<4>> emulator_;
+  sim::SbrioEmulator<Link, sim::SimulatedRig<4>> emulator_;
   std::atomic<bool> stop_{false};
   std::thread thread_;
 };
@@ -69,16 +99,29 @@ void report(benchmark::State& st, const tp::LoopStats& s) {
 }
 
 // fifo: SCHED_FIFO for the loop (80) and the emulator (70) when permitted (root); the
-// `fifo_applied` counter says whether it was.
+// `fifo_applied` counter says whether it was. V2: protocol v2 on both sides.
+template <bool V2 = false>
 void run_loop(benchmark::State& st, nanoseconds period, nanoseconds busy_tail, bool fifo = false) {
   const auto ticks = static_cast<std::uint64_t>(st.range(0));
   const auto rt = tp::apply_realtime({.fifo_priority = fifo ? 80 : 0, .timer_slack_ns = 1});
   for (auto _ : st) {
     st.PauseTiming();
-    auto emulator = std::make_unique<EmulatorThread>(rt.fifo ? 70 : 0);
-    transport::UdpTransport transport({.local_address = "127.0.0.1",
-                                       .remote_address = "127.0.0.1",
-                                       .remote_port = emulator->port()});
+    auto emulator = std::make_unique<EmulatorThread<V2>>(rt.fifo ? 70 : 0);
+    transport::UdpTransport udp({.local_address = "127.0.0.1",
+                                 .remote_address = "127.0.0.1",
+                                 .remote_port = emulator->port()});
+    std::optional<ClientV2> v2;
+    if constexpr (V2) {
+      v2.emplace(udp, protocol::SecureInitiator<4>(bench_key(), protocol::random_session_id()));
+    }
+    auto& transport = [&]() -> auto& {
+      if constexpr (V2) {
+        return *v2;
+      } else {
+        return udp;
+      }
+    }
+    ();
     endohaptics::SteadyClock clock;
     sim::ScriptedOperator<endohaptics::SteadyClock> hand(clock);
     est::ForceEstimator<est::rate::Decimate> estimator;
@@ -123,6 +166,12 @@ void BM_Loopback_1kHz_fifo_busy_tail_200us(benchmark::State& st) {
   run_loop(st, std::chrono::milliseconds(1), std::chrono::microseconds(200), true);
 }
 void BM_Loopback_max_rate(benchmark::State& st) { run_loop(st, nanoseconds(0), nanoseconds(0)); }
+void BM_Loopback_max_rate_v2(benchmark::State& st) {
+  run_loop<true>(st, nanoseconds(0), nanoseconds(0));
+}
+void BM_Loopback_1kHz_v2(benchmark::State& st) {
+  run_loop<true>(st, std::chrono::milliseconds(1), nanoseconds(0));
+}
 
 // The floor: a bare absolute-deadline clock_nanosleep loop at 1 kHz on the same machine, its
 // period error measured the same way (LoopStats).
@@ -161,7 +210,17 @@ BENCHMARK(BM_Loopback_1kHz_fifo_busy_tail_200us)
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+BENCHMARK(BM_Loopback_1kHz_v2)
+    ->Arg(3000)
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_Loopback_max_rate)
+    ->Arg(60000)
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_Loopback_max_rate_v2)
     ->Arg(60000)
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond)

@@ -1,8 +1,13 @@
 // PacketCodec (binary float32 big-endian, worksheet 3.2.2) against the 2016 JSON message it
-// replaced (listing 3.1), on the same 4-motor state, in the same run.
+// replaced (listing 3.1), on the same 4-motor state, in the same run; and protocol v2
+// (SecureCodec: header + 2016 packet + keyed BLAKE2b-128 tag, issue 16) against the 2016 decode.
 #include <benchmark/benchmark.h>
 
+#include <array>
+#include <cstdint>
 #include <endohaptics/protocol/packet_codec.hpp>
+#include <endohaptics/protocol/replay_window.hpp>
+#include <endohaptics/protocol/secure_codec.hpp>
 #include <string>
 
 #include "legacy_json_codec.hpp"
@@ -93,5 +98,125 @@ void BM_Baseline2016_json_encode_state(benchmark::State& st) {
   st.counters["bytes"] = static_cast<double>(size);
 }
 BENCHMARK(BM_Baseline2016_json_encode_state);
+
+// ---- protocol v2 (docs/protocol.md) ----
+using Secure = endohaptics::protocol::SecureCodec<4>;
+using endohaptics::protocol::PacketType;
+using endohaptics::protocol::SecureHeader;
+using endohaptics::protocol::SecureKey;
+using endohaptics::protocol::SecureStatus;
+
+SecureKey bench_key() {
+  std::array<std::byte, SecureKey::size> k{};
+  for (std::size_t i = 0; i < k.size(); ++i) k[i] = std::byte{static_cast<std::uint8_t>(i)};
+  return SecureKey(k);
+}
+
+// Seal a state (2016 encode + header + tag), a new sequence number each time.
+void BM_SecureCodec_encode_state(benchmark::State& st) {
+  const SecureKey key = bench_key();
+  const Codec::State state = listing_state();
+  std::array<std::byte, Secure::state_packet_size> bytes{};
+  SecureHeader h{PacketType::state, 0xFEDCBA9876543210ull, 0, 0x0123456789ABCDEFull, 1};
+  for (auto _ : st) {
+    ++h.sequence;
+    benchmark::DoNotOptimize(state);
+    const SecureStatus status = Secure::encode_state(key, h, state, bytes);
+    benchmark::DoNotOptimize(status);
+    benchmark::DoNotOptimize(bytes);
+  }
+  st.counters["bytes"] = static_cast<double>(bytes.size());
+}
+BENCHMARK(BM_SecureCodec_encode_state);
+
+void BM_SecureCodec_encode_setpoint(benchmark::State& st) {
+  const SecureKey key = bench_key();
+  Codec::Setpoint setpoint;
+  setpoint.position << -0.7, 0.3, 1.2, -1.2;
+  setpoint.enable_mask = 0x0F;
+  std::array<std::byte, Secure::setpoint_packet_size> bytes{};
+  SecureHeader h{PacketType::setpoint, 0x0123456789ABCDEFull, 0, 0xFEDCBA9876543210ull, 1};
+  for (auto _ : st) {
+    ++h.sequence;
+    benchmark::DoNotOptimize(setpoint);
+    const SecureStatus status = Secure::encode_setpoint(key, h, setpoint, bytes);
+    benchmark::DoNotOptimize(status);
+    benchmark::DoNotOptimize(bytes);
+  }
+  st.counters["bytes"] = static_cast<double>(bytes.size());
+}
+BENCHMARK(BM_SecureCodec_encode_setpoint);
+
+// Verify the tag (constant-time compare), then the 2016 decode: what a receiver does per packet
+// before the replay window (BM_ReplayWindow_check_accept).
+void BM_SecureCodec_verify_decode_state(benchmark::State& st) {
+  const SecureKey key = bench_key();
+  std::array<std::byte, Secure::state_packet_size> bytes{};
+  const SecureHeader h{PacketType::state, 0xFEDCBA9876543210ull, 1, 0x0123456789ABCDEFull, 1};
+  if (Secure::encode_state(key, h, listing_state(), bytes) != SecureStatus::ok) {
+    st.SkipWithError("encode");
+  }
+  SecureHeader header;
+  Codec::State out;
+  for (auto _ : st) {
+    benchmark::DoNotOptimize(bytes);
+    const SecureStatus status = Secure::decode_state(key, bytes, header, out);
+    benchmark::DoNotOptimize(status);
+    benchmark::DoNotOptimize(out);
+  }
+  st.counters["bytes"] = static_cast<double>(bytes.size());
+}
+BENCHMARK(BM_SecureCodec_verify_decode_state);
+
+void BM_SecureCodec_verify_decode_setpoint(benchmark::State& st) {
+  const SecureKey key = bench_key();
+  Codec::Setpoint setpoint;
+  setpoint.position << -0.7, 0.3, 1.2, -1.2;
+  setpoint.enable_mask = 0x0F;
+  std::array<std::byte, Secure::setpoint_packet_size> bytes{};
+  const SecureHeader h{PacketType::setpoint, 0x0123456789ABCDEFull, 1, 0, 0};
+  if (Secure::encode_setpoint(key, h, setpoint, bytes) != SecureStatus::ok) {
+    st.SkipWithError("encode");
+  }
+  SecureHeader header;
+  Codec::Setpoint out;
+  for (auto _ : st) {
+    benchmark::DoNotOptimize(bytes);
+    const SecureStatus status = Secure::decode_setpoint(key, bytes, header, out);
+    benchmark::DoNotOptimize(status);
+    benchmark::DoNotOptimize(out);
+  }
+  st.counters["bytes"] = static_cast<double>(bytes.size());
+}
+BENCHMARK(BM_SecureCodec_verify_decode_setpoint);
+
+// A forged state is refused after one tag computation, like a valid one.
+void BM_SecureCodec_reject_forged_state(benchmark::State& st) {
+  const SecureKey key = bench_key();
+  std::array<std::byte, Secure::state_packet_size> bytes{};
+  const SecureHeader h{PacketType::state, 1, 1, 2, 1};
+  if (Secure::encode_state(key, h, listing_state(), bytes) != SecureStatus::ok) {
+    st.SkipWithError("encode");
+  }
+  bytes[40] ^= std::byte{1};
+  SecureHeader header;
+  Codec::State out;
+  for (auto _ : st) {
+    benchmark::DoNotOptimize(bytes);
+    const SecureStatus status = Secure::decode_state(key, bytes, header, out);
+    benchmark::DoNotOptimize(status);
+  }
+}
+BENCHMARK(BM_SecureCodec_reject_forged_state);
+
+void BM_ReplayWindow_check_accept(benchmark::State& st) {
+  endohaptics::protocol::ReplayWindow window;
+  std::uint64_t sequence = 0;
+  for (auto _ : st) {
+    sequence += 1 + (sequence & 1u);  // in order with gaps: the window slides every time
+    benchmark::DoNotOptimize(window.check_and_accept(sequence));
+  }
+}
+BENCHMARK(BM_ReplayWindow_check_accept);
 
 }  // namespace

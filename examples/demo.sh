@@ -19,12 +19,18 @@ rm -f "$out"/*.csv "$out"/*.png "$out"/*.json "$out"/*.out
 
 emulator=""
 trap '[[ -n $emulator ]] && kill "$emulator" 2>/dev/null || true' EXIT
+# Protocol v2 (docs/protocol.md): one fresh key for this demo, shared by the emulator and the
+# bridge, in a private temporary directory.
+keydir=$(mktemp -d)
+trap '[[ -n $emulator ]] && kill "$emulator" 2>/dev/null || true; rm -rf "$keydir"' EXIT
+key="$keydir/link.key"
+"$bin/endohaptics-bridge" --generate-key "$key" >/dev/null
 
 # run NAME [bridge options...]: one emulator + bridge session; NAME.truth.csv, NAME.ticks.csv.
 run() {
   local name=$1 port=""
   shift
-  "$bin/endohaptics-sbrio-emulator" --bind 127.0.0.1 --port 0 --environment tissue \
+  "$bin/endohaptics-sbrio-emulator" --bind 127.0.0.1 --port 0 --environment tissue --key "$key" \
     --truth-log "$out/$name.truth.csv" --quiet >"$out/$name.emulator.out" 2>&1 &
   emulator=$!
   for _ in $(seq 100); do
@@ -33,7 +39,7 @@ run() {
     sleep 0.05
   done
   [[ -n $port ]] || { cat "$out/$name.emulator.out"; echo "the emulator did not start" >&2; exit 1; }
-  "$bin/endohaptics-bridge" --sbrio "127.0.0.1:$port" --rate 1000 --duration "$seconds" \
+  "$bin/endohaptics-bridge" --sbrio "127.0.0.1:$port" --key "$key" --rate 1000 --duration "$seconds" \
     --log "$out/$name.ticks.csv" "$@" >"$out/$name.bridge.out"
   kill -INT "$emulator"
   wait "$emulator" || true

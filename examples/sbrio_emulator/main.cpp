@@ -9,13 +9,18 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <endohaptics/protocol/key_file.hpp>
+#include <endohaptics/protocol/secure_session.hpp>
+#include <endohaptics/sim/delay_line.hpp>
 #include <endohaptics/sim/sbrio_emulator.hpp>
 #include <endohaptics/sim/simulated_rig.hpp>
 #include <endohaptics/teleop/realtime.hpp>
+#include <endohaptics/transport/secure_transport.hpp>
 #include <endohaptics/transport/udp_server_transport.hpp>
 #include <endohaptics/workflow/command_line.hpp>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -24,6 +29,7 @@
 namespace sim = endohaptics::sim;
 namespace transport = endohaptics::transport;
 namespace tp = endohaptics::teleop;
+namespace protocol = endohaptics::protocol;
 
 namespace {
 
@@ -36,6 +42,139 @@ struct TruthLog {
     if (file != nullptr) std::fclose(file);
   }
 };
+
+// Options the emulator's run needs.
+struct RunOptions {
+  std::string truth_path;
+  double truth_period_ms = 1.0;
+  double duration = 0.0;
+  double watchdog_ms = 100.0;
+  int motors = 4;
+  std::string environment;
+  bool quiet = false;
+  double delay_ms = 0.0;   // --delay: on the send path (answers), docs/passivity.md
+  double jitter_ms = 0.0;  // --jitter
+  double loss = 0.0;       // --loss
+};
+
+// Serves setpoints through `transport` (v2 SecureTransport, or the UDP socket itself) until the
+// duration or a signal; `udp` is the socket underneath.
+template <typename Transport>
+int run(Transport& transport, transport::UdpServerTransport& udp, sim::SimulatedRig<4>& rig,
+        endohaptics::SteadyClock& clock, const sim::EmulatorConfig& config,
+        const RunOptions& opts) {
+  const auto& [truth_path, truth_period_ms, duration, watchdog_ms, motors, environment, quiet,
+               delay_ms, jitter_ms, loss] = opts;
+  // Every answer goes through a delay line with loss (pass-through with all three at 0).
+  using Delayed = sim::DelayedSendTransport<Transport, endohaptics::SteadyClock>;
+  const auto ms = [](double v) {
+    return std::chrono::nanoseconds(static_cast<std::int64_t>(v * 1e6 + 0.5));
+  };
+  auto delayed = std::make_unique<Delayed>(
+      transport, clock, sim::DelaySettings{ms(delay_ms), ms(jitter_ms)}, loss, 1);
+  sim::SbrioEmulator emulator(*delayed, rig, clock, config);
+  TruthLog truth;
+  if (!truth_path.empty()) {
+    truth.file = std::fopen(truth_path.c_str(), "w");
+    if (truth.file == nullptr) {
+      fmt::print(stderr, "error: cannot write the truth log '{}'\n", truth_path);
+      return 1;
+    }
+    std::fputs(
+        "time,enable_mask,active_mask,setpoint0,setpoint1,setpoint2,setpoint3,"
+        "position0,position1,position2,position3,velocity0,velocity1,velocity2,velocity3,"
+        "current0,current1,current2,current3,force0,force1,force2,force3,"
+        "reported_position0,reported_position1,reported_position2,reported_position3,"
+        "reported_velocity0,reported_velocity1,reported_velocity2,reported_velocity3,"
+        "reported_current0,reported_current1,reported_current2,reported_current3\n",
+        truth.file);
+  }
+  // Line buffering so a supervising script sees the port as soon as it is bound.
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
+  const auto endpoint = udp.local_endpoint();
+  fmt::print("sbrio-emulator: listening on {}:{} ({} motors, environment {}, watchdog {} ms)\n",
+             endpoint.address().to_string(), endpoint.port(), motors, environment, watchdog_ms);
+  if (delay_ms > 0 || jitter_ms > 0 || loss > 0) {
+    fmt::print("sbrio-emulator: answers delayed {} ms + [0, {}] ms jitter, {:.0f} % lost\n",
+               delay_ms, jitter_ms, 100 * loss);
+  }
+
+  const auto start = clock.now();
+  const auto truth_period = std::chrono::nanoseconds(static_cast<long>(truth_period_ms * 1e6));
+  auto next_row = start;
+  auto next_report = start + std::chrono::seconds(1);
+  bool was_tripped = false;
+  while (!g_stop.load()) {
+    const auto now = clock.now();
+    if (duration > 0 && now - start >= std::chrono::duration<double>(duration)) break;
+    (void)emulator.poll(std::chrono::milliseconds(1));
+    if (emulator.watchdog_tripped() != was_tripped) {
+      was_tripped = emulator.watchdog_tripped();
+      if (!quiet) {
+        fmt::print("sbrio-emulator: {}\n", was_tripped
+                                               ? "watchdog: no packets, motors disabled"
+                                               : "packets again, motors follow their setpoints");
+      }
+    }
+    const auto t = emulator.time();
+    if (truth.file != nullptr && t >= next_row) {
+      next_row = t + truth_period;
+      const auto& tr = rig.truth();
+      const auto& sp = emulator.setpoint();
+      const auto state = rig.state();
+      auto row = fmt::format("{:.9f},{},{}", std::chrono::duration<double>(t).count(),
+                             sp.enable_mask, state.active_mask);
+      for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", sp.position[i]);
+      for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", tr.joint_position[i]);
+      for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", tr.motor_velocity[i]);
+      for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", tr.motor_current[i]);
+      // force: the true external force along +setpoint (RigTruth::external_force), the
+      // convention of the estimate in the bridge's tick log.
+      for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", tr.external_force[i]);
+      // What the sbRIO reports (encoder, its velocity, its filtered current): the inputs a
+      // force model sees, next to the truth it should reproduce.
+      for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", state.position[i]);
+      for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", state.velocity[i]);
+      for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", state.current[i]);
+      row += '\n';
+      std::fputs(row.c_str(), truth.file);
+    }
+    if (!quiet && t >= next_report) {
+      next_report += std::chrono::seconds(1);
+      const auto& c = emulator.counters();
+      fmt::print("sbrio-emulator: {} packets answered, {} rejected, clamp force {:.2f} N\n",
+                 c.answered, c.rejected, rig.truth().contact_force[2]);
+    }
+  }
+  const auto& c = emulator.counters();
+  if constexpr (requires { transport.counters(); }) {
+    fmt::print("sbrio-emulator: protocol v2 setpoints: {}\n",
+               protocol::describe(transport.counters()));
+  } else {
+    fmt::print(
+        "sbrio-emulator: protocol 2016: {} datagrams from other senders than the pinned "
+        "peer ignored\n",
+        udp.foreign_datagrams());
+  }
+  fmt::print(
+      "sbrio-emulator: done after {:.1f} s: {} setpoint packets, {} answered, {} rejected "
+      "(wrong size {}, non-finite {}, bad mask {}), {} stale dropped, {} transport errors, {} "
+      "watchdog trips\n",
+      std::chrono::duration<double>(clock.now() - start).count(), c.received, c.answered,
+      c.rejected, c.rejected_size, c.rejected_non_finite, c.rejected_mask, c.stale_dropped,
+      c.transport_errors, c.watchdog_trips);
+  if (delay_ms > 0 || jitter_ms > 0 || loss > 0) {
+    fmt::print("sbrio-emulator: send path: {} answers lost, {} refused by a full delay line\n",
+               delayed->lost(), delayed->overflowed());
+  }
+  // No false success: a truth log that could not be written (full disk) fails the run.
+  if (truth.file != nullptr) {
+    std::FILE* file = std::exchange(truth.file, nullptr);
+    endohaptics::workflow::close_written(file, "the truth log '" + truth_path + "'");
+  }
+  endohaptics::workflow::require_written(stdout, "standard output");
+  return 0;
+}
 
 }  // namespace
 
@@ -50,6 +189,10 @@ int main(int argc, char** argv) {
   double duration = 0.0;
   double watchdog_ms = 100.0;
   bool quiet = false;
+  double delay_ms = 0.0, jitter_ms = 0.0, loss = 0.0;
+  std::string wire = "2";  // --protocol: "2" (v2, authenticated) or "2016" (legacy)
+  std::string key_path;
+  std::string generate_key;
   const std::map<std::string, sim::Environment> environments{
       {"free", sim::Environment::free_space},
       {"loadcell", sim::Environment::load_cell},
@@ -78,103 +221,63 @@ int main(int argc, char** argv) {
       ->check(examples::number_in(1.0, 10000.0))
       ->capture_default_str();
   app.add_flag("--quiet", quiet, "print only the final summary");
+  app.add_option("--delay", delay_ms, "ms every answer is held on the send path (one way)")
+      ->check(examples::number_in(0.0, 5000.0))
+      ->capture_default_str();
+  app.add_option("--jitter", jitter_ms, "ms of extra uniform delay per answer, [0, jitter]")
+      ->check(examples::number_in(0.0, 5000.0))
+      ->capture_default_str();
+  app.add_option("--loss", loss, "probability an answer is lost on the send path")
+      ->check(examples::number_in(0.0, 1.0))
+      ->capture_default_str();
+  app.add_option("--protocol", wire,
+                 "wire protocol: 2 (authenticated, needs --key) or 2016 (unauthenticated; the "
+                 "first peer's address and port are pinned)")
+      ->check(CLI::IsMember({"2", "2016"}))
+      ->capture_default_str();
+  app.add_option("--key", key_path, "protocol v2: the 32-byte key file (mode 0600)");
+  app.add_option("--generate-key", generate_key,
+                 "write a new random key file (mode 0600; refuses an existing file) and exit");
   CLI11_PARSE(app, argc, argv);
 
   try {
+    if (!generate_key.empty()) {
+      protocol::generate_key_file(generate_key);
+      fmt::print("sbrio-emulator: wrote a new key to {} (32 bytes, mode 0600)\n", generate_key);
+      return 0;
+    }
+    if (wire != "2016" && key_path.empty()) {
+      throw endohaptics::Error(
+          "protocol v2 needs --key FILE (the key the bridge holds; make one with --generate-key "
+          "FILE), or --protocol 2016 for the unauthenticated 2016 wire");
+    }
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
     (void)endohaptics::teleop::apply_realtime({.timer_slack_ns = 1});  // prompt poll timeouts
-    transport::UdpServerTransport transport(transport::UdpServerConfig{bind, port});
+    transport::UdpServerConfig udp{bind, port};
+    udp.pin_first_peer = wire == "2016";  // v2 authenticates instead
+    transport::UdpServerTransport udp_transport(udp);
     endohaptics::SteadyClock clock;
     sim::SimulatedRig<4> rig(sim::endowrist_2016_rig<4>(environments.at(environment)));
     sim::EmulatorConfig config;
     config.watchdog_timeout = std::chrono::microseconds(static_cast<long>(watchdog_ms * 1e3));
-    sim::SbrioEmulator emulator(transport, rig, clock, config);
-
-    TruthLog truth;
-    if (!truth_path.empty()) {
-      truth.file = std::fopen(truth_path.c_str(), "w");
-      if (truth.file == nullptr) {
-        fmt::print(stderr, "error: cannot write the truth log '{}'\n", truth_path);
-        return 1;
-      }
-      std::fputs(
-          "time,enable_mask,active_mask,setpoint0,setpoint1,setpoint2,setpoint3,"
-          "position0,position1,position2,position3,velocity0,velocity1,velocity2,velocity3,"
-          "current0,current1,current2,current3,force0,force1,force2,force3,"
-          "reported_position0,reported_position1,reported_position2,reported_position3,"
-          "reported_velocity0,reported_velocity1,reported_velocity2,reported_velocity3,"
-          "reported_current0,reported_current1,reported_current2,reported_current3\n",
-          truth.file);
+    // v2: a PC session silent for the watchdog time is dropped (the motors are off by then).
+    std::optional<
+        transport::SecureTransport<transport::UdpServerTransport, protocol::SecureResponder<4>>>
+        secure;
+    if (wire == "2016") {
+      fmt::print(
+          "sbrio-emulator: WARNING: --protocol 2016: unauthenticated; setpoints are obeyed from "
+          "the first sender only (address and port pinned), others are counted\n");
+    } else {
+      secure.emplace(udp_transport, protocol::SecureResponder<4>(protocol::load_key_file(key_path),
+                                                                 protocol::random_session_id(),
+                                                                 config.watchdog_timeout));
     }
-    // Line buffering so a supervising script sees the port as soon as it is bound.
-    std::setvbuf(stdout, nullptr, _IOLBF, 0);
-    const auto endpoint = transport.local_endpoint();
-    fmt::print("sbrio-emulator: listening on {}:{} ({} motors, environment {}, watchdog {} ms)\n",
-               endpoint.address().to_string(), endpoint.port(), motors, environment, watchdog_ms);
-
-    const auto start = clock.now();
-    const auto truth_period = std::chrono::nanoseconds(static_cast<long>(truth_period_ms * 1e6));
-    auto next_row = start;
-    auto next_report = start + std::chrono::seconds(1);
-    bool was_tripped = false;
-    while (!g_stop.load()) {
-      const auto now = clock.now();
-      if (duration > 0 && now - start >= std::chrono::duration<double>(duration)) break;
-      (void)emulator.poll(std::chrono::milliseconds(1));
-      if (emulator.watchdog_tripped() != was_tripped) {
-        was_tripped = emulator.watchdog_tripped();
-        if (!quiet) {
-          fmt::print("sbrio-emulator: {}\n", was_tripped
-                                                 ? "watchdog: no packets, motors disabled"
-                                                 : "packets again, motors follow their setpoints");
-        }
-      }
-      const auto t = emulator.time();
-      if (truth.file != nullptr && t >= next_row) {
-        next_row = t + truth_period;
-        const auto& tr = rig.truth();
-        const auto& sp = emulator.setpoint();
-        const auto state = rig.state();
-        auto row = fmt::format("{:.9f},{},{}", std::chrono::duration<double>(t).count(),
-                               sp.enable_mask, state.active_mask);
-        for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", sp.position[i]);
-        for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", tr.joint_position[i]);
-        for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", tr.motor_velocity[i]);
-        for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", tr.motor_current[i]);
-        // force: the true external force along +setpoint (RigTruth::external_force), the
-        // convention of the estimate in the bridge's tick log.
-        for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", tr.external_force[i]);
-        // What the sbRIO reports (encoder, its velocity, its filtered current): the inputs a
-        // force model sees, next to the truth it should reproduce.
-        for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", state.position[i]);
-        for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", state.velocity[i]);
-        for (int i = 0; i < 4; ++i) row += fmt::format(",{:.7g}", state.current[i]);
-        row += '\n';
-        std::fputs(row.c_str(), truth.file);
-      }
-      if (!quiet && t >= next_report) {
-        next_report += std::chrono::seconds(1);
-        const auto& c = emulator.counters();
-        fmt::print("sbrio-emulator: {} packets answered, {} rejected, clamp force {:.2f} N\n",
-                   c.answered, c.rejected, rig.truth().contact_force[2]);
-      }
-    }
-    const auto& c = emulator.counters();
-    fmt::print(
-        "sbrio-emulator: done after {:.1f} s: {} setpoint packets, {} answered, {} rejected "
-        "(wrong size {}, non-finite {}, bad mask {}), {} stale dropped, {} transport errors, {} "
-        "watchdog trips\n",
-        std::chrono::duration<double>(clock.now() - start).count(), c.received, c.answered,
-        c.rejected, c.rejected_size, c.rejected_non_finite, c.rejected_mask, c.stale_dropped,
-        c.transport_errors, c.watchdog_trips);
-    // No false success: a truth log that could not be written (full disk) fails the run.
-    if (truth.file != nullptr) {
-      std::FILE* file = std::exchange(truth.file, nullptr);
-      endohaptics::workflow::close_written(file, "the truth log '" + truth_path + "'");
-    }
-    endohaptics::workflow::require_written(stdout, "standard output");
-    return 0;
+    const RunOptions opts{truth_path,  truth_period_ms, duration, watchdog_ms, motors,
+                          environment, quiet,           delay_ms, jitter_ms,   loss};
+    return secure ? run(*secure, udp_transport, rig, clock, config, opts)
+                  : run(udp_transport, udp_transport, rig, clock, config, opts);
   } catch (const std::exception& e) {
     fmt::print(stderr, "error: {}\n", e.what());
     return 1;

@@ -2,7 +2,8 @@
 # Issue 14, items 4 and 5: every program's numbers parse whole and inside their stated range or
 # the program exits non-zero naming the option; a run whose result is not finite, or whose output
 # could not be written (/dev/full), exits non-zero with a message. Each case failed before.
-# Usage: cli_strict.sh BIN_DIR numbers|results|outputs   (prints PASS: ... on success)
+# Usage: cli_strict.sh BIN_DIR numbers|results|outputs|keys   (prints PASS: ... on success)
+# keys: protocol v2 key files and --protocol 2016 (issue 16).
 set -euo pipefail
 bin=$1
 scenario=$2
@@ -122,10 +123,40 @@ case $scenario in
     expect_error "writing standard output failed" "${to_full[@]}" "$replay" --model "$work/model.json" --format csv --log "$work/sys.csv"
     # The bridge runs without an sbRIO (the link stays down, every tick is logged); a short run
     # writes less than stdio's buffer, a longer one fails in the writer thread: both fail.
-    expect_error "writing the log '/dev/full' failed" "$bridge" --sbrio 127.0.0.1:9 --duration 0.01 --log /dev/full
-    expect_error "'/dev/full'" "$bridge" --sbrio 127.0.0.1:9 --duration 0.3 --log /dev/full
-    expect_error "writing the truth log '/dev/full' failed" "$emulator" --bind 127.0.0.1 --port 0 --duration 0.2 --quiet --truth-log /dev/full
+    expect_error "writing the log '/dev/full' failed" "$bridge" --sbrio 127.0.0.1:9 --duration 0.01 --log /dev/full --protocol 2016
+    expect_error "'/dev/full'" "$bridge" --sbrio 127.0.0.1:9 --duration 0.3 --log /dev/full --protocol 2016
+    expect_error "writing the truth log '/dev/full' failed" "$emulator" --bind 127.0.0.1 --port 0 --duration 0.2 --quiet --truth-log /dev/full --protocol 2016
     echo "PASS: every unwritable output exits non-zero naming it"
+    ;;
+  keys)
+    # Protocol v2 key files (issue 16): written 0600 from the random source, never overwritten,
+    # never printed; refused when group or others may read them, or of the wrong length.
+    for prog in "$bridge" "$emulator"; do
+      name=$(basename "$prog")
+      "$prog" --generate-key "$work/$name.key" >"$work/out" 2>&1 || fail "$name --generate-key: $(cat "$work/out")"
+      [[ $(stat -c %a "$work/$name.key") == 600 ]] || fail "$name: key mode $(stat -c %a "$work/$name.key")"
+      [[ $(stat -c %s "$work/$name.key") == 32 ]] || fail "$name: key of $(stat -c %s "$work/$name.key") bytes"
+      hex=$(od -An -tx1 "$work/$name.key" | tr -d ' \n')
+      ! grep -q -i -F "${hex:0:16}" "$work/out" || fail "$name printed its key"
+      expect_error "exists already; refusing to overwrite a key" "$prog" --generate-key "$work/$name.key"
+      cp -p "$work/$name.key" "$work/$name.open.key"
+      chmod 640 "$work/$name.open.key"
+      expect_error "lets group or others read or write the key; run: chmod 600" "$prog" --key "$work/$name.open.key" --duration 0.1
+      head -c 31 "$work/$name.key" >"$work/$name.short.key"
+      chmod 600 "$work/$name.short.key"
+      expect_error "must hold exactly 32 bytes, holds 31" "$prog" --key "$work/$name.short.key" --duration 0.1
+      expect_error "protocol v2 needs --key FILE" "$prog" --duration 0.1
+    done
+    [[ $(cmp -s "$work/endohaptics-bridge.key" "$work/endohaptics-sbrio-emulator.key"; echo $?) == 1 ]] ||
+      fail "two generated keys are equal"
+    # --protocol 2016 runs, and says that it is unauthenticated.
+    "$emulator" --bind 127.0.0.1 --port 0 --duration 0.1 --quiet --protocol 2016 >"$work/out" 2>&1 ||
+      fail "emulator --protocol 2016: $(cat "$work/out")"
+    grep -q "WARNING: --protocol 2016: unauthenticated" "$work/out" || fail "no warning: $(cat "$work/out")"
+    "$bridge" --sbrio 127.0.0.1:9 --duration 0.05 --protocol 2016 >"$work/out" 2>&1 ||
+      fail "bridge --protocol 2016: $(cat "$work/out")"
+    grep -q "WARNING: --protocol 2016: unauthenticated" "$work/out" || fail "no warning: $(cat "$work/out")"
+    echo "PASS: key files: generated 0600, never overwritten or printed; group-readable, short and missing keys refused; 2016 warns"
     ;;
   *)
     fail "unknown scenario $scenario"

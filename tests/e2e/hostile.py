@@ -5,11 +5,14 @@
     hostile.py BIN_DIR all       run every case (a table for docs/safety.md)
     hostile.py BIN_DIR CASE --report   print the row without asserting (for "before" tables)
 
-Bridge cases: a fake sbRIO (this script, UDP on 127.0.0.1) answers endohaptics-bridge's setpoints
-with hostile state packets; every setpoint that reaches the wire and every row of the bridge's
-tick log is checked against the envelope (setpoints inside the joint range, stylus force inside
-the device limit), plus the bridge's counters and exit status. Emulator cases: a fake bridge floods
-and steers endohaptics-sbrio-emulator while a real bridge runs. Wire format: docs/protocol.md.
+The suite is about the 2016 wire (issue 14): both programs run with --protocol 2016 here;
+protocol v2 has its own attack suite (tests/e2e/attack_v2.py). Bridge cases: a fake sbRIO (this
+script, UDP on 127.0.0.1) answers endohaptics-bridge's setpoints with hostile state packets;
+every setpoint that reaches the wire and every row of the bridge's tick log is checked against
+the envelope (setpoints inside the joint range, stylus force inside the device limit), plus the
+bridge's counters and exit status. Emulator cases: a fake bridge floods and steers
+endohaptics-sbrio-emulator while a real bridge runs (with --protocol 2016 the emulator pins its
+first peer: whichever of the two senders it heard first). Wire format: docs/protocol.md.
 """
 import math
 import os
@@ -207,7 +210,7 @@ def run_bridge_case(bin_dir, name, report):
         log = os.path.join(work, "ticks.csv")
         proc = subprocess.run(
             [os.path.join(bin_dir, "endohaptics-bridge"), "--sbrio", f"127.0.0.1:{fake.port}",
-             "--duration", "1.0", "--rate", "1000", "--log", log],
+             "--duration", "1.0", "--rate", "1000", "--log", log, "--protocol", "2016"],
             capture_output=True, text=True, timeout=30)
         fake.stop = True
         fake.join()
@@ -307,7 +310,8 @@ def run_emulator_case(bin_dir, name, report):
         with open(em_out, "w") as f:
             em = subprocess.Popen(
                 [os.path.join(bin_dir, "endohaptics-sbrio-emulator"), "--bind", "127.0.0.1",
-                 "--port", "0", "--truth-log", truth, "--quiet"], stdout=f, stderr=subprocess.STDOUT)
+                 "--port", "0", "--truth-log", truth, "--quiet", "--protocol", "2016"],
+                stdout=f, stderr=subprocess.STDOUT)
         try:
             port = wait_port(em, em_out)
             stop = threading.Event()
@@ -316,7 +320,8 @@ def run_emulator_case(bin_dir, name, report):
             t.start()
             bridge = subprocess.run(
                 [os.path.join(bin_dir, "endohaptics-bridge"), "--sbrio", f"127.0.0.1:{port}",
-                 "--duration", "1.0", "--rate", "1000"], capture_output=True, text=True, timeout=30)
+                 "--duration", "1.0", "--rate", "1000", "--protocol", "2016"],
+                capture_output=True, text=True, timeout=30)
             stop.set()
             t.join()
         finally:

@@ -12,10 +12,13 @@ cleanup() {
 }
 trap cleanup EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
+# Protocol v2: one fresh key (mode 0600) for both programs.
+key="$work/link.key"
+"$bin/endohaptics-bridge" --generate-key "$key" >/dev/null || fail "cannot generate a key"
 
 # Starts the emulator on $1 (0: any port) and sets emulator_pid and port.
 start_emulator() {
-  "$bin/endohaptics-sbrio-emulator" --bind 127.0.0.1 --port "$1" --quiet >"$work/emulator.$1.out" 2>&1 &
+  "$bin/endohaptics-sbrio-emulator" --bind 127.0.0.1 --port "$1" --key "$key" --quiet >"$work/emulator.$1.out" 2>&1 &
   emulator_pid=$!
   for _ in $(seq 100); do
     port=$(sed -n 's/.*listening on 127.0.0.1:\([0-9]*\).*/\1/p' "$work/emulator.$1.out")
@@ -31,7 +34,7 @@ summary_value() { sed -n "s/.*summary .*$1=\([0-9.]*\).*/\1/p" "$2"; }
 case $scenario in
   steady)
     start_emulator 0
-    "$bin/endohaptics-bridge" --sbrio "127.0.0.1:$port" --duration 2 >"$work/bridge.out" 2>&1 ||
+    "$bin/endohaptics-bridge" --sbrio "127.0.0.1:$port" --key "$key" --duration 2 >"$work/bridge.out" 2>&1 ||
       fail "bridge exited with $?: $(cat "$work/bridge.out")"
     cat "$work/bridge.out"
     complete=$(summary_value complete "$work/bridge.out")
@@ -46,7 +49,7 @@ case $scenario in
   kill-restart)
     start_emulator 0
     first_port=$port
-    "$bin/endohaptics-bridge" --sbrio "127.0.0.1:$port" --duration 4 --log "$work/ticks.csv" \
+    "$bin/endohaptics-bridge" --sbrio "127.0.0.1:$port" --key "$key" --duration 4 --log "$work/ticks.csv" \
       >"$work/bridge.out" 2>&1 &
     bridge_pid=$!
     sleep 1.3

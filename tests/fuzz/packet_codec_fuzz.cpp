@@ -1,5 +1,5 @@
-// Fuzz target for the PacketCodec decoders. With clang it links libFuzzer (-fsanitize=fuzzer);
-// otherwise standalone_driver.cpp feeds it seeded random and mutated packets.
+// Fuzz target for the PacketCodec decoders (the 2016 wire). With clang it links libFuzzer
+// (-fsanitize=fuzzer); otherwise corpus_replay_driver.cpp replays the seed corpus.
 #include <endohaptics/protocol/packet_codec.hpp>
 
 #include <cstdint>

@@ -1,8 +1,15 @@
 // Built against an installed endohaptics: includes the umbrella header and round-trips a packet,
-// then (component model_files) round-trips the appendix C yaw model through its JSON form.
+// then (component model_files) round-trips the appendix C yaw model through its JSON form, and
+// (component secure_protocol, when the consumer links it: ENDOHAPTICS_CONSUMER_SECURE_PROTOCOL)
+// seals and opens a protocol v2 setpoint (libsodium).
 #include <endohaptics/endohaptics.hpp>
 #include <endohaptics/files/model_file.hpp>
+#if defined(ENDOHAPTICS_CONSUMER_SECURE_PROTOCOL)
+#include <endohaptics/protocol/secure_codec.hpp>
+#endif
 
+#include <array>
+#include <cstddef>
 #include <cstdio>
 
 int main() {
@@ -25,5 +32,24 @@ int main() {
       files::model_from_json(files::to_json(file)).state_space);
   if (!loaded.A().isApprox(yaw.A())) return 1;
   std::printf("consumer: model file JSON round trip ok\n");
+
+#if defined(ENDOHAPTICS_CONSUMER_SECURE_PROTOCOL)
+  namespace protocol = endohaptics::protocol;
+  using Secure = protocol::SecureCodec<4>;
+  std::array<std::byte, protocol::SecureKey::size> key_bytes{};
+  key_bytes[0] = std::byte{1};
+  const protocol::SecureKey key(key_bytes);
+  const protocol::SecureHeader header{protocol::PacketType::setpoint, 7, 1, 0, 0};
+  std::array<std::byte, Secure::setpoint_packet_size> sealed{};
+  if (Secure::encode_setpoint(key, header, setpoint, sealed) != protocol::SecureStatus::ok)
+    return 1;
+  protocol::SecureHeader opened;
+  Codec::Setpoint again;
+  if (Secure::decode_setpoint(key, sealed, opened, again) != protocol::SecureStatus::ok) return 1;
+  sealed[20] ^= std::byte{1};
+  if (Secure::decode_setpoint(key, sealed, opened, again) != protocol::SecureStatus::forged)
+    return 1;
+  std::printf("consumer: protocol v2 seal, open and forgery check ok\n");
+#endif
   return 0;
 }

@@ -28,6 +28,10 @@ struct UdpServerConfig {
   std::uint16_t port = 61556;            //!< 0: any free port (see local_endpoint())
   //! Datagrams one receive reads at most (1..max_drain_limit); the rest wait for the next call.
   std::size_t max_drain = default_max_drain;
+  //! Answer only the sender of the first accepted datagram from then on; datagrams from any other
+  //! address or port are read, counted (foreign_datagrams()) and never offered to the filter. For
+  //! the unauthenticated 2016 protocol, where the source is the only check there is.
+  bool pin_first_peer = false;
 };
 
 //! Server (sbRIO) side of the UDP link: bound, unconnected socket that replies to the sender of
@@ -38,7 +42,8 @@ class UdpServerTransport {
   //! value of an invalid max_drain.
   explicit UdpServerTransport(const UdpServerConfig& config)
       : socket_(io_),
-        max_drain_(detail::checked_max_drain(config.max_drain, "UdpServerTransport")) {
+        max_drain_(detail::checked_max_drain(config.max_drain, "UdpServerTransport")),
+        pin_(config.pin_first_peer) {
     namespace ip = boost::asio::ip;
     boost::system::error_code ec;
     const ip::address local = ip::make_address(config.bind_address, ec);
@@ -90,8 +95,10 @@ class UdpServerTransport {
   ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds timeout,
                         F& filter) noexcept {
     sockaddr_storage from{};
-    const ReceiveResult r = detail::receive_newest(socket_.native_handle(), buffer, timeout, &from,
-                                                   max_drain_, scratch_, filter);
+    const bool pinned = pin_ && peer_size_ != 0;
+    const ReceiveResult r =
+        detail::receive_newest(socket_.native_handle(), buffer, timeout, &from, max_drain_,
+                               scratch_, filter, pinned ? &peer_ : nullptr, &foreign_);
     if (r.status == TransportStatus::ok) {
       peer_ = from;
       peer_size_ = from.ss_family == AF_INET6 ? sizeof(sockaddr_in6) : sizeof(sockaddr_in);
@@ -110,6 +117,9 @@ class UdpServerTransport {
   //! Datagrams one receive reads at most.
   [[nodiscard]] std::size_t max_drain() const noexcept { return max_drain_; }
 
+  //! Datagrams from other senders than the pinned peer (UdpServerConfig::pin_first_peer).
+  [[nodiscard]] std::size_t foreign_datagrams() const noexcept { return foreign_; }
+
  private:
   boost::asio::io_context io_;
   boost::asio::ip::udp::socket socket_;
@@ -117,6 +127,8 @@ class UdpServerTransport {
   std::array<std::byte, detail::max_datagram_bytes> scratch_{};
   sockaddr_storage peer_{};
   socklen_t peer_size_ = 0;
+  bool pin_ = false;
+  std::size_t foreign_ = 0;
 };
 
 static_assert(FilteringTransport<UdpServerTransport>);

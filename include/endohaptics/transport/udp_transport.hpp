@@ -4,6 +4,7 @@
 //! only the newest datagram is returned (the sbRIO's queue-of-one, worksheet 3.1.3). POSIX only.
 #pragma once
 
+#include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
 
@@ -15,6 +16,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstdint>
+#include <cstring>
 #include <ctime>
 #include <span>
 #include <string>
@@ -47,13 +49,34 @@ inline TransportStatus wait_readable(int fd, std::chrono::nanoseconds timeout) n
 //! packet of the protocol is < 100 bytes).
 inline constexpr std::size_t max_datagram_bytes = 2048;
 
+//! True when `a` and `b` are the same IPv4/IPv6 address and port.
+inline bool same_sender(const sockaddr_storage& a, const sockaddr_storage& b) noexcept {
+  if (a.ss_family != b.ss_family) return false;
+  if (a.ss_family == AF_INET) {
+    const auto& x = reinterpret_cast<const sockaddr_in&>(a);  // NOLINT: socket API
+    const auto& y = reinterpret_cast<const sockaddr_in&>(b);  // NOLINT: socket API
+    return x.sin_port == y.sin_port && x.sin_addr.s_addr == y.sin_addr.s_addr;
+  }
+  if (a.ss_family == AF_INET6) {
+    const auto& x = reinterpret_cast<const sockaddr_in6&>(a);  // NOLINT: socket API
+    const auto& y = reinterpret_cast<const sockaddr_in6&>(b);  // NOLINT: socket API
+    return x.sin6_port == y.sin6_port &&
+           std::memcmp(&x.sin6_addr, &y.sin6_addr, sizeof(x.sin6_addr)) == 0;
+  }
+  return false;
+}
+
 //! Waits up to `timeout`, then drains `fd`, reading at most `max_drain` (>= 1) datagrams into
 //! `scratch`, and keeps in `buffer` the newest one `filter` accepts; the rest stay queued. With
-//! `from` != nullptr, that datagram's sender is written there (unconnected sockets).
+//! `from` != nullptr, that datagram's sender is written there (unconnected sockets). With `pin`
+//! != nullptr (and `from`), datagrams from any other sender are read, counted in `*foreign` and
+//! never offered to `filter`.
 template <typename F>
 ReceiveResult receive_newest(int fd, std::span<std::byte> buffer, std::chrono::nanoseconds timeout,
                              sockaddr_storage* from, std::size_t max_drain,
-                             std::span<std::byte, max_datagram_bytes> scratch, F& filter) noexcept {
+                             std::span<std::byte, max_datagram_bytes> scratch, F& filter,
+                             const sockaddr_storage* pin = nullptr,
+                             std::size_t* foreign = nullptr) noexcept {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   NewestAccepted<F> drain(buffer, filter);
   TransportStatus none = TransportStatus::timeout;  // readable but nothing (e.g. bad checksum)
@@ -83,6 +106,10 @@ ReceiveResult receive_newest(int fd, std::span<std::byte> buffer, std::chrono::n
         break;
       }
       ++reads;
+      if (pin != nullptr && from != nullptr && !same_sender(*pin, sender)) {
+        if (foreign != nullptr) ++*foreign;
+        continue;
+      }
       // MSG_TRUNC: n is the real length, also of a datagram longer than the scratch.
       if (drain.offer(scratch, static_cast<std::size_t>(n))) {
         accepted = true;

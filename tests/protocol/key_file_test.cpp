@@ -1,0 +1,119 @@
+#include "endohaptics/protocol/key_file.hpp"
+
+#include <doctest/doctest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+namespace protocol_key_file_test {
+
+namespace {
+
+using endohaptics::Error;
+using endohaptics::protocol::generate_key_file;
+using endohaptics::protocol::load_key_file;
+
+// A fresh private directory, removed with what is in it.
+struct TempDir {
+  std::string path;
+  TempDir() {
+    char templ[] = "/tmp/endohaptics-key-test-XXXXXX";
+    const char* made = ::mkdtemp(templ);
+    REQUIRE(made != nullptr);
+    path = made;
+  }
+  ~TempDir() {
+    const std::string cmd = "rm -rf '" + path + "'";
+    (void)std::system(cmd.c_str());
+  }
+  std::string file(const char* name) const { return path + "/" + name; }
+};
+
+void write_file(const std::string& path, const std::string& content, mode_t mode) {
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  REQUIRE(f != nullptr);
+  REQUIRE(std::fwrite(content.data(), 1, content.size(), f) == content.size());
+  REQUIRE(std::fclose(f) == 0);
+  REQUIRE(::chmod(path.c_str(), mode) == 0);
+}
+
+}  // namespace
+
+TEST_CASE("key file: generated with mode 0600, 32 bytes, loadable, never overwritten") {
+  TempDir dir;
+  const std::string path = dir.file("bridge.key");
+  generate_key_file(path);
+  struct stat st {};
+  REQUIRE(::stat(path.c_str(), &st) == 0);
+  CHECK((st.st_mode & 07777) == 0600);
+  CHECK(st.st_size == 32);
+  (void)load_key_file(path);
+  CHECK_THROWS_WITH_AS(generate_key_file(path), doctest::Contains("refusing to overwrite"), Error);
+  // Two keys differ (random source).
+  const std::string other = dir.file("other.key");
+  generate_key_file(other);
+  std::array<char, 32> a{}, b{};
+  std::FILE* fa = std::fopen(path.c_str(), "rb");
+  std::FILE* fb = std::fopen(other.c_str(), "rb");
+  REQUIRE((fa != nullptr && fb != nullptr));
+  REQUIRE(std::fread(a.data(), 1, a.size(), fa) == 32);
+  REQUIRE(std::fread(b.data(), 1, b.size(), fb) == 32);
+  std::fclose(fa);
+  std::fclose(fb);
+  CHECK(a != b);
+}
+
+TEST_CASE("key file: generating through a symbolic link or into a missing directory fails") {
+  TempDir dir;
+  const std::string target = dir.file("target");
+  const std::string link = dir.file("link.key");
+  REQUIRE(::symlink(target.c_str(), link.c_str()) == 0);
+  CHECK_THROWS_AS(generate_key_file(link), Error);
+  CHECK(::access(target.c_str(), F_OK) != 0);  // nothing written behind the link
+  CHECK_THROWS_WITH_AS(generate_key_file(dir.file("missing/dir.key")),
+                       doctest::Contains("cannot create"), Error);
+}
+
+TEST_CASE("key file: refused when group or others may read it") {
+  TempDir dir;
+  const std::string path = dir.file("open.key");
+  write_file(path, std::string(32, 'k'), 0640);
+  CHECK_THROWS_WITH_AS(load_key_file(path), doctest::Contains("chmod 600"), Error);
+  REQUIRE(::chmod(path.c_str(), 0604) == 0);
+  CHECK_THROWS_WITH_AS(load_key_file(path), doctest::Contains("mode 0604"), Error);
+  REQUIRE(::chmod(path.c_str(), 0400) == 0);
+  (void)load_key_file(path);
+}
+
+TEST_CASE("key file: wrong length, missing file and directory are refused, naming the file") {
+  TempDir dir;
+  const std::string short_key = dir.file("short.key");
+  write_file(short_key, std::string(31, 'k'), 0600);
+  CHECK_THROWS_WITH_AS(load_key_file(short_key), doctest::Contains("holds 31"), Error);
+  const std::string long_key = dir.file("long.key");
+  write_file(long_key, std::string(33, 'k') + "\n", 0600);
+  CHECK_THROWS_WITH_AS(load_key_file(long_key), doctest::Contains("exactly 32 bytes"), Error);
+  CHECK_THROWS_WITH_AS(load_key_file(dir.file("absent.key")), doctest::Contains("absent.key"),
+                       Error);
+  REQUIRE(::chmod(dir.path.c_str(), 0700) == 0);
+  CHECK_THROWS_WITH_AS(load_key_file(dir.path), doctest::Contains("not a file"), Error);
+}
+
+TEST_CASE("key file: error messages never contain the key") {
+  TempDir dir;
+  const std::string path = dir.file("secret.key");
+  const std::string secret = "SECRETSECRETSECRETSECRETSECRET!!";
+  write_file(path, secret, 0644);
+  try {
+    (void)load_key_file(path);
+    FAIL("a world-readable key was loaded");
+  } catch (const Error& e) {
+    CHECK(std::string(e.what()).find("SECRET") == std::string::npos);
+  }
+}
+
+}  // namespace protocol_key_file_test
