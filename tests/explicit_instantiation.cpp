@@ -104,6 +104,10 @@ template class eh::teleop::SetpointRateLimiter<4>;
 template class eh::sim::SimulatedRig<1, float>;
 template class eh::sim::SimulatedRig<4>;
 template class eh::sim::ScriptedOperator<eh::ManualClock>;
+template class eh::sim::HapticDeviceModel<eh::ManualClock>;
+template class eh::sim::DelayLine<>;
+template class eh::sim::DelayedSendTransport<eh::transport::InMemoryTransport<128, 16>,
+                                             eh::ManualClock>;
 template class eh::sim::SbrioEmulator<eh::transport::InMemoryTransport<128, 16>,
                                       eh::sim::SimulatedRig<4>, eh::ManualClock>;
 template class eh::estimation::PacedEstimator<eh::teleop::NoForceEstimator, eh::ManualClock>;

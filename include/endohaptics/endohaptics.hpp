@@ -3,7 +3,9 @@
 //! to keep compile times down. The JSON headers (files/model_file.hpp,
 //! files/identified_model_file.hpp, files/bridge_config.hpp, the workflow/ headers) are not
 //! included: they need nlohmann-json, which the target endohaptics::model_files brings
-//! (find_package(endohaptics COMPONENTS model_files)).
+//! (find_package(endohaptics COMPONENTS model_files)). Nor are the protocol v2 headers
+//! (protocol/secure_codec.hpp, secure_session.hpp, key_file.hpp, transport/secure_transport.hpp):
+//! they need libsodium (find_package(endohaptics COMPONENTS secure_protocol)).
 #pragma once
 
 #include "endohaptics/core/clock.hpp"
@@ -43,12 +45,16 @@
 #include "endohaptics/model/static_map.hpp"
 #include "endohaptics/model/static_nonlinearity.hpp"
 #include "endohaptics/protocol/packet_codec.hpp"
+#include "endohaptics/sim/closed_loop.hpp"
+#include "endohaptics/sim/delay_line.hpp"
 #include "endohaptics/sim/force_accuracy.hpp"
+#include "endohaptics/sim/haptic_device_model.hpp"
 #include "endohaptics/sim/sbrio_emulator.hpp"
 #include "endohaptics/sim/scripted_operator.hpp"
 #include "endohaptics/sim/simulated_rig.hpp"
 #include "endohaptics/teleop/haptic_device.hpp"
 #include "endohaptics/teleop/loop_stats.hpp"
+#include "endohaptics/teleop/passivity.hpp"
 #include "endohaptics/teleop/realtime.hpp"
 #include "endohaptics/teleop/safety.hpp"
 #include "endohaptics/teleop/teleop_loop.hpp"

@@ -98,14 +98,15 @@ TEST_CASE("columns are found by name whatever their order, and a missing one is 
 }
 
 TEST_CASE("malformed lines are dropped and counted, or refused with strict") {
-  const std::string text = header() + "\n" +
-                           "1,0,1,0,15,15,0.0001,1,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0\n"
-                           "\n"  // blank: skipped, not counted
-                           "1.001,0,1,0,15,15,0.0001,1,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,"
-                           "0,0,x\n"
-                           "1.002,0,1,0,15,15,0.0001,1,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,"
-                           "0,0,nan\r\n"
-                           "1.003,0,1,15\n";  // cut short: the bridge was killed mid-row
+  const std::string text =
+      header() + "\n" +
+      "1,0,1,0,15,15,0.0001,1,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0\n"
+      "\n"  // blank: skipped, not counted
+      "1.001,0,1,0,15,15,0.0001,1,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,"
+      "0,0,x\n"
+      "1.002,0,1,0,15,15,0.0001,1,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,"
+      "0,0,nan\r\n"
+      "1.003,0,1,15\n";  // cut short: the bridge was killed mid-row
   const files::TickLog log = parse(text);
   CHECK(log.rows() == 2);
   CHECK(log.dropped == 2);
@@ -113,12 +114,12 @@ TEST_CASE("malformed lines are dropped and counted, or refused with strict") {
   CHECK(log.issues[0].line == 4);
   CHECK(log.issues[0].what == "column 'stylus_fz': not a number: 'x'");
   CHECK(log.issues[1].line == 6);
-  CHECK(log.issues[1].what == "4 fields, the header has 31");
+  CHECK(log.issues[1].what == "4 fields, the header has 35");
   CHECK(std::isnan(log.column("stylus_fz")[1]));  // what the recorder writes for NaN
   CHECK(log.report() ==
         "ticks.csv: 2 malformed lines dropped\n"
         "  line 4: column 'stylus_fz': not a number: 'x'\n"
-        "  line 6: 4 fields, the header has 31\n");
+        "  line 6: 4 fields, the header has 35\n");
 
   files::TickLogOptions strict;
   strict.strict = true;

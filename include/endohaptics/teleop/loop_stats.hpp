@@ -13,6 +13,7 @@
 #include <limits>
 #include <string>
 
+#include "endohaptics/teleop/passivity.hpp"
 #include "endohaptics/teleop/state_plausibility.hpp"
 
 namespace endohaptics::teleop {
@@ -187,6 +188,30 @@ struct LoopSnapshot {
   }
 };
 
+//! The passivity layer over a run (PassivityMode::tdpa; all zero with it off). Energies in J.
+struct PassivityStats {
+  std::uint64_t ticks = 0;            //!< ticks recorded with the layer on
+  std::uint64_t operator_active = 0;  //!< ticks the operator-side controller changed the force
+  std::uint64_t robot_active = 0;     //!< ticks the robot-side controller changed the setpoint
+  double min_energy = 0.0;            //!< J, lowest value of the observer (< 0: generated)
+  double dissipated_operator = 0.0;   //!< J, removed by the operator-side controller
+  double dissipated_robot = 0.0;      //!< J, removed by the robot-side controller
+  double max_damping = 0.0;           //!< N s/m at the tool, largest operator-side damping
+  double max_drift = 0.0;             //!< rad, largest |desired - sent| setpoint difference
+
+  //! Adds one tick's figures.
+  void add(const PassivityFigures& f) noexcept {
+    ++ticks;
+    if (f.operator_active) ++operator_active;
+    if (f.robot_active) ++robot_active;
+    min_energy = std::min(min_energy, f.energy);
+    dissipated_operator = f.dissipated_operator;
+    dissipated_robot = f.dissipated_robot;
+    max_damping = std::max(max_damping, f.damping);
+    max_drift = std::max(max_drift, f.drift);
+  }
+};
+
 //! Loop statistics: the worksheet's table 3.1 and more. One `record_*` per tick, all noexcept.
 class LoopStats {
  public:
@@ -255,6 +280,11 @@ class LoopStats {
 
   //! Time spent computing in the tick (everything except waiting), for the compute budget.
   void record_compute(std::chrono::nanoseconds compute) noexcept { compute_.add(compute); }
+
+  //! The passivity layer's figures of a tick (call only with the layer on).
+  void record_passivity(const PassivityFigures& figures) noexcept { passivity_.add(figures); }
+  //! The passivity layer over the run (ticks 0: the layer was off).
+  [[nodiscard]] const PassivityStats& passivity() const noexcept { return passivity_; }
 
   //! Ticks recorded.
   [[nodiscard]] std::uint64_t ticks() const noexcept { return ticks_; }
@@ -364,7 +394,21 @@ class LoopStats {
         static_cast<unsigned long long>(rejected_.wrong_size),
         static_cast<unsigned long long>(rejected_.non_finite),
         static_cast<unsigned long long>(rejected_.bad_mask));
-    return std::string(buf, n > 0 ? static_cast<std::size_t>(std::min<int>(n, sizeof buf - 1)) : 0);
+    std::string table(buf, n > 0 ? static_cast<std::size_t>(std::min<int>(n, sizeof buf - 1)) : 0);
+    if (passivity_.ticks > 0) {
+      const int m = std::snprintf(
+          buf, sizeof buf,
+          "passivity   min energy %.3g J; dissipated operator %.3g J, robot %.3g J; controller "
+          "active on %llu (operator) and %llu (robot) of %llu ticks; max damping %.3g N s/m, "
+          "drift %.3g rad\n",
+          passivity_.min_energy, passivity_.dissipated_operator, passivity_.dissipated_robot,
+          static_cast<unsigned long long>(passivity_.operator_active),
+          static_cast<unsigned long long>(passivity_.robot_active),
+          static_cast<unsigned long long>(passivity_.ticks), passivity_.max_damping,
+          passivity_.max_drift);
+      table.append(buf, m > 0 ? static_cast<std::size_t>(std::min<int>(m, sizeof buf - 1)) : 0);
+    }
+    return table;
   }
 
  private:
@@ -387,6 +431,7 @@ class LoopStats {
   DurationStats<> period_error_;
   DurationStats<> round_trip_;
   DurationStats<> compute_;
+  PassivityStats passivity_{};
 };
 
 }  // namespace endohaptics::teleop

@@ -18,6 +18,7 @@
 #include "endohaptics/protocol/packet_codec.hpp"
 #include "endohaptics/teleop/haptic_device.hpp"
 #include "endohaptics/teleop/loop_stats.hpp"
+#include "endohaptics/teleop/passivity.hpp"
 #include "endohaptics/teleop/safety.hpp"
 #include "endohaptics/teleop/state_plausibility.hpp"
 #include "endohaptics/transport/transport.hpp"
@@ -100,6 +101,7 @@ struct [[nodiscard]] TickResult {
   Eigen::Vector3d stylus_force = Eigen::Vector3d::Zero();  //!< N, what the device was told
   std::chrono::nanoseconds round_trip{0};  //!< ns from send to receive return; 0 if not sent
   RejectedDatagrams rejected{};            //!< datagrams this tick's drain refused, by cause
+  PassivityFigures passivity{};            //!< the passivity layer's energies (zero with it off)
 
   //! True when `status` is TickStatus::ok.
   [[nodiscard]] bool ok() const noexcept { return status == TickStatus::ok; }
@@ -110,7 +112,8 @@ struct TeleopLoopConfig {
   //! Nominal period; 0 runs ticks back to back (as fast as the link allows).
   std::chrono::nanoseconds period = std::chrono::milliseconds(1);
   std::chrono::nanoseconds receive_timeout = std::chrono::milliseconds(1);  //!< 2016: 1 ms
-  SafetyConfig safety{};  //!< watchdog, safe state, ramp and limits
+  SafetyConfig safety{};        //!< watchdog, safe state, ramp and limits
+  PassivityConfig passivity{};  //!< stability under delay and loss (off by default; passivity.hpp)
 
   //! Longest silence before the safe state: (misses + 1) x the longest tick (validate()).
   static constexpr std::chrono::nanoseconds max_watchdog_time = std::chrono::milliseconds(500);
@@ -136,6 +139,7 @@ struct TeleopLoopConfig {
                               std::to_string(receive_timeout.count())));
     }
     safety.validate(protocol::endowrist_motors);
+    passivity.validate();
     // The watchdog declares the link lost after max_consecutive_misses + 1 missed ticks of at
     // most max(period, receive_timeout) each: that must stay within max_watchdog_time.
     const auto tick = std::max(period, receive_timeout);
@@ -173,6 +177,7 @@ class TeleopLoop {
         ramp_(config.safety.force_ramp_time),
         limiter_(config.safety.max_setpoint_rate),
         stats_(config.period),
+        passivity_(config.passivity),
         max_dt_(config.max_tick_dt()) {}
 
   //! One cycle. Never throws, never allocates; the result says what happened.
@@ -205,6 +210,8 @@ class TeleopLoop {
 
     // 2. Setpoint to send: safe state, rate limit, enable mask, and last the joint range: no
     //    stylus, mapper or reported state can put a setpoint outside it.
+    const MotorVector desired = config_.safety.clamp_to_range(desired_);
+    if (have_desired_) passivity_.track_desired(desired);
     const LinkState link_before = watchdog_.state();
     const bool device_ok = r.device != DeviceStatus::error;
     Codec::Setpoint out;
@@ -223,9 +230,20 @@ class TeleopLoop {
     } else {
       // The limiter moves towards the desired setpoint inside the joint range, so a stylus beyond
       // the range never parks the limiter outside it (it would stick at the edge on the way back).
-      r.rate_limited = limiter_.shape(config_.safety.clamp_to_range(desired_), dt, out.position);
+      r.rate_limited = limiter_.shape(desired, dt, out.position);
+      // Robot-side passivity controller: the step the channel's energy allows (the limiter
+      // resumes from what is sent, so what it held back is given back when energy allows).
+      MotorVector gated;
+      if (passivity_.controlling() &&
+          passivity_.shape_setpoint(config_.safety.clamp_to_range(out.position), motor_force_,
+                                    gated)) {
+        out.position = config_.safety.clamp_to_range(gated);
+        limiter_.initialize(out.position);
+        r.passivity.robot_active = true;
+      }
     }
     out.position = config_.safety.clamp_to_range(out.position);
+    passivity_.commit(out.position);
     r.setpoint = out.position;
     r.enable_mask = out.enable_mask;
 
@@ -310,6 +328,7 @@ class TeleopLoop {
       }
       limiter_.initialize(from);
       estimator_->reset();
+      passivity_.reset(limiter_.previous());
     }
     r.link = link;
     r.consecutive_misses = watchdog_.consecutive_misses();
@@ -324,6 +343,7 @@ class TeleopLoop {
         r.estimator_rejected = true;
         motor_force_.setZero();
       }
+      passivity_.observe_robot(state_.position, motor_force_);
     }
     r.motor_force = motor_force_;
 
@@ -333,7 +353,10 @@ class TeleopLoop {
                                       link == LinkState::recovering);
     if (render) {
       r.force_scale = ramp_.advance(dt);
-      const auto fm = mapper_->map_force(motor_force_, force);
+      // Operator-side passivity controller: damping on the force to render.
+      MotorVector rendered;
+      r.passivity.operator_active = passivity_.shape_force(motor_force_, dt, rendered);
+      const auto fm = mapper_->map_force(rendered, force);
       if (!fm.ok()) force.setZero();
       r.force_limited = fm.limited;
       if constexpr (requires { fm.channel_limited_mask; }) {
@@ -342,6 +365,7 @@ class TeleopLoop {
       force *= r.force_scale;
     } else {
       ramp_.hold_at_zero();
+      passivity_.render_nothing();
     }
     const double norm = force.norm();
     if (!std::isfinite(norm)) {
@@ -367,6 +391,14 @@ class TeleopLoop {
       r.status = TickStatus::degraded;
     } else {
       r.status = TickStatus::ok;
+    }
+    if (passivity_.enabled()) {
+      const bool operator_active = r.passivity.operator_active;
+      const bool robot_active = r.passivity.robot_active;
+      r.passivity = passivity_.figures();
+      r.passivity.operator_active = operator_active;
+      r.passivity.robot_active = robot_active;
+      stats_.record_passivity(r.passivity);
     }
     stats_.record_compute(clock_->now() - start - r.round_trip);
     return r;
@@ -406,6 +438,8 @@ class TeleopLoop {
   [[nodiscard]] const Watchdog& watchdog() const noexcept { return watchdog_; }
   //! The validated configuration.
   [[nodiscard]] const Config& config() const noexcept { return config_; }
+  //! The passivity layer (observers and controllers; inactive with PassivityMode::off).
+  [[nodiscard]] const TimeDomainPassivity& passivity() const noexcept { return passivity_; }
 
   //! Orderly stop: zero force on the device and one setpoint with all motors disabled.
   void shutdown() noexcept {
@@ -428,6 +462,7 @@ class TeleopLoop {
   ForceRamp ramp_;
   SetpointRateLimiter<loop_motors> limiter_;
   LoopStats stats_;
+  TimeDomainPassivity passivity_;
   MotorVector desired_ = MotorVector::Zero();
   bool have_desired_ = false;
   // The receive filter: a datagram is a candidate only if it decodes; refusals counted by cause.

@@ -25,13 +25,19 @@ namespace endohaptics::teleop {
 //! The tick log's columns in the order `TickRecorder::drain` writes them: the one definition of
 //! the header line (`TickRecorder::write_header`) and of the names readers look columns up by.
 //! status, link and state_fault are the numeric values of TickStatus, LinkState and StateFault.
-inline constexpr std::array<std::string_view, 8 + 5 * loop_motors + 3> tick_log_columns = {
-    "time",         "status",       "link",         "state_fault",  "enable_mask", "active_mask",
-    "round_trip",   "force_scale",  "setpoint0",    "setpoint1",    "setpoint2",   "setpoint3",
-    "position0",    "position1",    "position2",    "position3",    "velocity0",   "velocity1",
-    "velocity2",    "velocity3",    "current0",     "current1",     "current2",    "current3",
-    "motor_force0", "motor_force1", "motor_force2", "motor_force3", "stylus_fx",   "stylus_fy",
-    "stylus_fz"};
+//! The passivity_* columns are TickResult::passivity (PassivityFigures; zero with it off).
+// clang-format off
+inline constexpr std::array<std::string_view, 8 + 5 * loop_motors + 4 + 3> tick_log_columns = {
+    "time", "status", "link", "state_fault", "enable_mask", "active_mask", "round_trip",
+    "force_scale",
+    "setpoint0", "setpoint1", "setpoint2", "setpoint3",
+    "position0", "position1", "position2", "position3",
+    "velocity0", "velocity1", "velocity2", "velocity3",
+    "current0", "current1", "current2", "current3",
+    "motor_force0", "motor_force1", "motor_force2", "motor_force3",
+    "passivity_energy", "passivity_damping", "passivity_force_gain", "passivity_drift",
+    "stylus_fx", "stylus_fy", "stylus_fz"};
+// clang-format on
 
 //! One CSV row: what a tick sent, received, estimated and rendered.
 struct TickRecord {
@@ -48,6 +54,10 @@ struct TickRecord {
   MotorVector velocity = MotorVector::Zero();     //!< rad/s
   MotorVector current = MotorVector::Zero();      //!< A
   MotorVector motor_force = MotorVector::Zero();  //!< estimate, motor order (N; roll N m)
+  double passivity_energy = 0.0;      //!< J, the passivity observer (PassivityFigures::energy)
+  double passivity_damping = 0.0;     //!< N s/m, the operator-side controller's damping
+  double passivity_force_gain = 1.0;  //!< the operator-side controller's force scale, 0..1
+  double passivity_drift = 0.0;       //!< rad, setpoint held back by the robot-side controller
   Eigen::Vector3d stylus_force = Eigen::Vector3d::Zero();  //!< N
 
   //! The record of tick result `r`, stamped `now` (the loop clock's time).
@@ -66,6 +76,10 @@ struct TickRecord {
     rec.velocity = r.measured.velocity;
     rec.current = r.measured.current;
     rec.motor_force = r.motor_force;
+    rec.passivity_energy = r.passivity.energy;
+    rec.passivity_damping = r.passivity.damping;
+    rec.passivity_force_gain = r.passivity.force_gain;
+    rec.passivity_drift = r.passivity.drift;
     rec.stylus_force = r.stylus_force;
     return rec;
   }
@@ -114,6 +128,8 @@ class TickRecorder {
            {&r.setpoint, &r.position, &r.velocity, &r.current, &r.motor_force}) {
         for (int i = 0; i < loop_motors; ++i) written = std::fprintf(out, ",%.7g", (*v)[i]);
       }
+      written = std::fprintf(out, ",%.7g,%.5g,%.5g,%.5g", r.passivity_energy, r.passivity_damping,
+                             r.passivity_force_gain, r.passivity_drift);
       written = std::fprintf(out, ",%.6g,%.6g,%.6g\n", r.stylus_force.x(), r.stylus_force.y(),
                              r.stylus_force.z());
       if (written < 0) ENDOHAPTICS_THROW(Error("TickRecorder: cannot write the tick log"));
