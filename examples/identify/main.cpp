@@ -3,7 +3,10 @@
 // identifies with N4SID/MOESP/CVA (or all three), optionally with input dead zones, and chooses
 // method, dead zones and order by the causal score (x0 from the inputs, warm-up excluded, inputs
 // filtered forward only, output as logged), refusing unstable and near-integrating models.
-// Each format has recommended defaults (workflow/format_defaults.hpp). Writes a JSON model.
+// Joint force models (--method stall_hold, push_load_observer: workflow/joint_models.hpp) are
+// further families; with several, the family is chosen by an inner cross-validation on the
+// training files (workflow::choose_family). Each format has recommended defaults
+// (workflow/format_defaults.hpp). Writes a JSON model.
 // Workflow: endohaptics/workflow/workflow.hpp; results: docs/identification_results.md.
 #include <fmt/format.h>
 
@@ -13,6 +16,7 @@
 #include <endohaptics/workflow/format_defaults.hpp>
 #include <endohaptics/workflow/workflow.hpp>
 #include <exception>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -52,7 +56,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   auto* method_opt = app.add_option(
       "--method", method,
-      "n4sid, moesp, cva, best (all three, highest causal score) or static [format]");
+      "n4sid, moesp, cva, best (all three, highest causal score), static, stall_hold or "
+      "push_load_observer, or a comma list of them (every family fitted, the best by an inner "
+      "cross-validation on the training files chosen) [format]");
   auto* deadzone_opt = app.add_option(
       "--deadzone", deadzone,
       "input dead zone: auto, none or half width (or one per input, comma-separated) [format]");
@@ -126,8 +132,11 @@ int main(int argc, char** argv) {
     if (order != "auto") options.order = wf::parse_number(order, "--order", 1, limits::max_order);
     // A comma list: n4sid, moesp, cva, best (= the three) and static, all scored alike.
     options.candidates.clear();
+    std::vector<files::ModelKind> joint_kinds;
     for (std::string_view m : wf::detail::split(method, ',')) {
-      if (m == "best") {
+      if (const auto kind = wf::joint_model_kind(m)) {
+        joint_kinds.push_back(*kind);
+      } else if (m == "best") {
         for (const auto w : {id::Weighting::n4sid, id::Weighting::moesp, id::Weighting::cva}) {
           options.candidates.push_back(w);
         }
@@ -138,6 +147,21 @@ int main(int argc, char** argv) {
       }
     }
     options.deadzone = wf::parse_deadzone(deadzone, sel.inputs.size());
+    // The joint models take (current, velocity) -> one output; from the format's defaults they
+    // are left out (with a note) for other signal lists, asked for by --method they are an error.
+    if (!joint_kinds.empty() && (sel.inputs.size() != 2 || sel.outputs.size() != 1)) {
+      if (method_opt->count() > 0) {
+        throw endohaptics::Error("--method " + method +
+                                 ": stall_hold and push_load_observer need 2 inputs (current, "
+                                 "velocity) and 1 output");
+      }
+      fmt::print(
+          "note: the format's joint models ({}) need 2 inputs (current, velocity) and 1 "
+          "output: not fitted\n",
+          method);
+      joint_kinds.clear();
+    }
+    const bool subspace_family = !options.candidates.empty() || options.static_gain;
     scoring.initial_state = wf::initial_state_from_string(x0);
     if (!wf::is_causal(scoring.initial_state) ||
         scoring.initial_state == wf::InitialStateMode::stored) {
@@ -152,11 +176,27 @@ int main(int argc, char** argv) {
     const bool ts_given = ts_opt->count() > 0;
     sel.csv_row_time = ts_given ? ts : 1.0;
     if (!(ts > 0.0)) ts = wf::default_sample_time(logs.front(), sel);
-    std::vector<wf::PreparedLog> prepared, scored;
+    // The joint models' grid: given --ts, else the format's, else the subspace grid; no
+    // low-pass beyond their own filters.
+    const double joint_ts =
+        ts_given || !(defaults.joint_sample_time > 0.0) ? ts : defaults.joint_sample_time;
+    wf::Preprocessing joint_pre = pre;
+    joint_pre.cutoff = 0.0;
+    joint_pre.output_offset = wf::OffsetMode::none;
+    joint_pre.input_offset = wf::OffsetMode::none;
+    joint_pre.detrend = false;
+    std::vector<wf::PreparedLog> prepared, scored, joint;
     for (const auto& path : logs) {
-      prepared.push_back(wf::prepare_log(path, sel, ts, pre));
-      scored.push_back(wf::prepare_log(path, sel, ts, pre, 20, wf::Preparation::score));
-      fmt::print("{}", wf::summary(prepared.back()));
+      if (subspace_family) {
+        prepared.push_back(wf::prepare_log(path, sel, ts, pre));
+        scored.push_back(wf::prepare_log(path, sel, ts, pre, 20, wf::Preparation::score));
+        fmt::print("{}", wf::summary(prepared.back()));
+      }
+      if (!joint_kinds.empty()) {
+        joint.push_back(
+            wf::prepare_log(path, sel, joint_ts, joint_pre, 20, wf::Preparation::score));
+        if (!subspace_family || joint_ts != ts) fmt::print("{}", wf::summary(joint.back()));
+      }
     }
     fmt::print("preprocessing for the fit: {}\n", wf::describe(pre));
     fmt::print(
@@ -179,8 +219,20 @@ int main(int argc, char** argv) {
     };
     const auto in_info = units(sel.inputs);
     const auto out_info = units(sel.outputs);
-    const wf::WorkflowResult result =
-        wf::identify_logs(prepared, scored, in_info, out_info, options);
+    std::optional<wf::WorkflowResult> subspace;
+    if (subspace_family && joint_kinds.empty()) {
+      subspace = wf::identify_logs(prepared, scored, in_info, out_info, options);
+    } else if (subspace_family) {
+      // With joint models to fall back on, a subspace family that cannot be fitted (every
+      // candidate refused) is reported and left out, not fatal.
+      try {
+        subspace = wf::identify_logs(prepared, scored, in_info, out_info, options);
+      } catch (const endohaptics::Error& e) {
+        fmt::print("subspace family left out: {}\n", e.what());
+      }
+    }
+    const wf::WorkflowResult empty_result{};
+    const wf::WorkflowResult& result = subspace ? *subspace : empty_result;
 
     for (const wf::CandidateModel& c : result.candidates) {
       if (!c.method.starts_with("static")) {
@@ -214,43 +266,91 @@ int main(int argc, char** argv) {
     }
     fmt::print("models fitted and scored: {}\n", result.evaluations);
     for (const std::string& f : result.failures) fmt::print("failed: {}\n", f);
-    const wf::CandidateModel& best = result.chosen();
-    if (!best.method.starts_with("static") && (best.linear.input_scale.array() != 1.0).any()) {
+    if (subspace) {
+      const wf::CandidateModel& best = result.chosen();
+      if (!best.method.starts_with("static") && (best.linear.input_scale.array() != 1.0).any()) {
+        fmt::print(
+            "scaling: each column divided by its RMS for the fit (inputs {:.4g}, outputs "
+            "{:.4g}); the model is in the logs' units\n",
+            fmt::join(best.linear.input_scale.begin(), best.linear.input_scale.end(), " "),
+            fmt::join(best.linear.output_scale.begin(), best.linear.output_scale.end(), " "));
+      }
       fmt::print(
-          "scaling: each column divided by its RMS for the fit (inputs {:.4g}, outputs "
-          "{:.4g}); the model is in the logs' units\n",
-          fmt::join(best.linear.input_scale.begin(), best.linear.input_scale.end(), " "),
-          fmt::join(best.linear.output_scale.begin(), best.linear.output_scale.end(), " "));
+          "subspace family: {} (order {}, spectral radius {:.5f}), mean causal fit {:.2f} %\n",
+          best.method, best.model.state_space.state_size(), best.spectral_radius, best.mean_fit);
     }
-    fmt::print("chosen: {} (order {}, spectral radius {:.5f})\n", best.method,
-               best.model.state_space.state_size(), best.spectral_radius);
-    double rmse_sum = 0.0;
-    for (std::size_t k = 0; k < best.files.size(); ++k) {
-      const wf::FileComparison& f = best.files[k];
-      // The old, output-fitted score beside the causal one, labelled.
-      const wf::FileComparison oracle = wf::compare_log(
-          best.model, prepared[k], {wf::InitialStateMode::oracle, 0.0, scoring.max_lag});
+    // The family: by the inner cross-validation on the training files when there are several.
+    const wf::ModelChoice choice =
+        wf::choose_family(subspace ? &*subspace : nullptr, joint_kinds, prepared, scored, joint,
+                          in_info, out_info, options);
+    if (choice.families.size() > 1) {
+      fmt::print(
+          "family choice ({}): causal score of each family fitted on the other training files"
+          "{}\n",
+          choice.folds.empty()
+              ? "one training file: the training score"
+              : fmt::format("inner cross-validation, {} folds", choice.folds.size()),
+          subspace ? " (the subspace family refitted with its structure chosen on all of them)"
+                   : "");
+      for (const wf::FamilyScore& f : choice.families) {
+        fmt::print(
+            "family {}: mean causal fit {:.2f} %, mean RMSE {:.4g} {} (per fold: {:.1f}){}\n",
+            f.family, f.mean_fit, f.mean_rmse, out_info.front().unit, fmt::join(f.fold_fit, " "),
+            f.failure.empty() ? std::string() : " FAILED on a fold: " + f.failure);
+      }
+    }
+    const bool joint_chosen = choice.model.is_joint_model();
+    fmt::print("chosen: {}{}\n", choice.family,
+               choice.families.size() > 1 ? " (the highest mean causal fit of the families above)"
+               : joint_chosen             ? " (the only family asked for)"
+                                          : "");
+    if (joint_chosen) {
+      fmt::print(
+          "{}\nits grid: Ts {} s, inputs {} (current) and {} (velocity), no low-pass "
+          "beyond its own filters; the state starts from the model's reset (filters at the "
+          "first sample)\n",
+          choice.joint_summary, choice.model.state_space.sample_time(), sel.inputs[0],
+          sel.inputs[1]);
+    } else {
+      fmt::print("chosen model: order {}, spectral radius {:.5f}\n",
+                 choice.model.state_space.state_size(), result.chosen().spectral_radius);
+    }
+    double rmse_sum = 0.0, fit_sum = 0.0;
+    for (std::size_t k = 0; k < choice.files.size(); ++k) {
+      const wf::FileComparison& f = choice.files[k];
+      // The old, output-fitted score beside the causal one, labelled (linear models only).
+      std::string oracle_text = "no oracle score: a joint model has no linear state";
+      if (!joint_chosen) {
+        const wf::FileComparison oracle = wf::compare_log(
+            choice.model, prepared[k], {wf::InitialStateMode::oracle, 0.0, scoring.max_lag});
+        oracle_text = fmt::format("oracle x0, zero-phase data: {:.2f} %", oracle.fit[0]);
+      }
       for (Eigen::Index i = 0; i < f.fit.size(); ++i) {
         fmt::print(
             "fit {}: {} causal {:.2f} %, correlation {:.4f}, RMSE {:.4g} {}, delay {:.0f} ms "
-            "(oracle x0, zero-phase data: {:.2f} %)\n",
+            "({})\n",
             f.source, sel.outputs[static_cast<std::size_t>(i)], f.fit[i], f.correlation[i],
             f.rmse[i], out_info[static_cast<std::size_t>(i)].unit, 1000.0 * f.delay[i],
-            oracle.fit[i]);
+            oracle_text);
       }
       rmse_sum += f.mean_rmse();
+      fit_sum += f.mean_fit();
     }
     // No false success: a fit that is not finite (a diverging model, a constant output) fails.
-    for (const wf::FileComparison& f : best.files) wf::require_finite_scores(f, sel.outputs);
-    fmt::print("mean RMSE: {:.4g} {}\n", rmse_sum / static_cast<double>(best.files.size()),
-               out_info.front().unit);
-    fmt::print("mean fit: {:.2f}%\n", best.mean_fit);
+    for (const wf::FileComparison& f : choice.files) wf::require_finite_scores(f, sel.outputs);
+    const auto n_files = static_cast<double>(choice.files.size());
+    const std::string& unit = out_info.front().unit;
+    fmt::print("mean RMSE: {:.4g}{}{}\n", rmse_sum / n_files, unit.empty() ? "" : " ", unit);
+    fmt::print("mean fit: {:.2f}%\n", fit_sum / n_files);
     if (!out_path.empty()) {
-      files::ModelFile model = best.model;
-      model.provenance.notes = "preprocessing: " + wf::describe(pre) +
-                               "\nfit_percent: mean causal fit over the identification logs, x0 " +
-                               x0 + ", warm-up " + fmt::format("{}", scoring.warmup) +
-                               " s\ntool: endohaptics-identify";
+      files::ModelFile model = choice.model;
+      model.provenance.notes =
+          "preprocessing: " + wf::describe(joint_chosen ? joint_pre : pre) +
+          "\nfit_percent: mean causal fit over the identification logs, " +
+          (joint_chosen ? std::string("state from the model's reset") : "x0 " + x0) + ", warm-up " +
+          fmt::format("{}", scoring.warmup) + " s\nchosen: " + choice.family +
+          (choice.families.size() > 1 ? " by inner cross-validation on the training files" : "") +
+          "\ntool: endohaptics-identify";
       files::save_model(out_path, model);
       fmt::print("model written to {}\n", out_path);
     }

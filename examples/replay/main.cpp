@@ -159,11 +159,29 @@ int main(int argc, char** argv) {
           "apply only to the output-fitted --x0 oracle score; the causal score compares the "
           "output as logged");
     }
+    if (model.is_joint_model() && !causal) {
+      throw endohaptics::Error(
+          "--x0 oracle: " + name + " is a " + std::string(files::to_string(model.kind())) +
+          " model: it has no linear state to fit to the output (it starts from its reset "
+          "state, filters at the first sample); replay scores it causally (leave out --x0)");
+    }
     if (!causal) scoring.warmup = 0.0;  // MATLAB compare: every sample
-    fmt::print("{}: {} states, {} -> {}, Ts {} s, {}\n", name, model.state_space.state_size(),
-               fmt::join(model_in, ", "), fmt::join(model_out, ", "),
-               model.state_space.sample_time(), model.provenance.method);
-    if (causal) {
+    if (model.is_joint_model()) {
+      fmt::print("{}: kind {}, {} -> {}, Ts {} s, {}\n", name, files::to_string(model.kind()),
+                 fmt::join(model_in, ", "), fmt::join(model_out, ", "),
+                 model.state_space.sample_time(), model.provenance.method);
+    } else {
+      fmt::print("{}: {} states, {} -> {}, Ts {} s, {}\n", name, model.state_space.state_size(),
+                 fmt::join(model_in, ", "), fmt::join(model_out, ", "),
+                 model.state_space.sample_time(), model.provenance.method);
+    }
+    if (causal && model.is_joint_model()) {
+      fmt::print(
+          "scoring (causal): the model's state from its reset (filters started at the first "
+          "sample; --x0 does not apply), warm-up {} s per segment excluded, inputs held "
+          "(lowpass_hz={}), output as logged (no offset, filter or detrend)\n",
+          scoring.warmup, pre.cutoff);
+    } else if (causal) {
       fmt::print(
           "scoring (causal): x0 {}, warm-up {} s per segment excluded, inputs held and low-passed "
           "forward only (lowpass_hz={} filter_order={}, {}), output as logged (no offset, filter "

@@ -14,10 +14,15 @@
 #include <endohaptics/estimation/paced_estimator.hpp>
 #include <endohaptics/files/bridge_config.hpp>
 #include <endohaptics/kinematics/cylindrical_mapper.hpp>
+#include <endohaptics/protocol/key_file.hpp>
+#include <endohaptics/protocol/secure_session.hpp>
+#include <endohaptics/sim/haptic_device_model.hpp>
 #include <endohaptics/sim/scripted_operator.hpp>
+#include <endohaptics/sim/simulated_rig.hpp>
 #include <endohaptics/teleop/realtime.hpp>
 #include <endohaptics/teleop/teleop_loop.hpp>
 #include <endohaptics/teleop/tick_recorder.hpp>
+#include <endohaptics/transport/secure_transport.hpp>
 #include <endohaptics/transport/udp_transport.hpp>
 #include <endohaptics/workflow/command_line.hpp>
 #include <memory>
@@ -34,6 +39,7 @@ namespace tp = endohaptics::teleop;
 namespace est = endohaptics::estimation;
 namespace transport = endohaptics::transport;
 namespace files = endohaptics::files;
+namespace protocol = endohaptics::protocol;
 using std::chrono::nanoseconds;
 
 namespace {
@@ -46,12 +52,18 @@ struct Options {
   std::string rate = "1000";
   double duration = 0.0;
   std::string device = "sim";
+  std::string passivity = "off";      // --passivity: off or tdpa (docs/passivity.md)
+  double passivity_round_trip = 0.0;  // ms, --passivity-round-trip
   std::string config_path;
   std::string log_path;
   bool stats = false;
   int fifo_priority = 0;
   int cpu = -1;
   double busy_wait_us = 0.0;
+  std::string protocol = "2";  // "2": v2 (authenticated, docs/protocol.md); "2016": legacy
+  std::string key_path;        // v2: the pre-shared key file
+  std::string generate_key;    // write a new key file and exit
+  int max_answer_lag = 0;      // v2: a state may answer a setpoint this many older than the newest
 };
 
 // The end of one second of the loop: a ~100-byte copy made on the loop thread (no allocation,
@@ -62,7 +74,8 @@ struct Window {
   std::uint64_t link_losses = 0;
   std::uint64_t recoveries = 0;
   tp::LinkState link = tp::LinkState::waiting;
-  double clamp_force = 0.0;  // N, the estimate for clamp 1 at the end of the window
+  double clamp_force = 0.0;       // N, the estimate for clamp 1 at the end of the window
+  protocol::SecureCounters v2{};  // v2 datagrams accepted and refused by cause, so far
 };
 
 // Ranges of the numeric options (stated in --help; examples::number_in refuses the rest).
@@ -80,21 +93,27 @@ std::pair<std::string, std::uint16_t> parse_endpoint(const std::string& s) {
   return {s.substr(0, colon), port};
 }
 
-template <typename Device>
-int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& opt,
-               const files::BridgeConfig& cfg) {
-  const auto [host, port] = parse_endpoint(opt.sbrio);
-  transport::UdpConfig udp;
-  udp.remote_address = host;
-  udp.remote_port = port;
-  udp.local_address = host.find(':') != std::string::npos ? "::" : "0.0.0.0";
-  transport::UdpTransport transport(udp);
+// The v2 counters of `transport` (none for the 2016 protocol).
+template <typename Transport>
+protocol::SecureCounters v2_counters(const Transport& transport) {
+  if constexpr (requires { transport.counters(); }) {
+    return transport.counters();
+  } else {
+    return {};
+  }
+}
 
+template <typename Transport, typename Device>
+int run_loop(Transport& transport, Device& device, endohaptics::SteadyClock& clock,
+             const Options& opt, const files::BridgeConfig& cfg, const std::string& host,
+             std::uint16_t port) {
   // The 2016 models run at their own rates (rate::Decimate) on a 1 kHz grid; PacedEstimator
   // keeps that grid whatever the loop rate (--rate max) and through lost packets.
-  auto settings = cfg.estimator;
+  // The clamp model file may be of any kind the library runs (files::ClampForceModel).
+  const files::BridgeForceModels models = files::bridge_force_models(cfg);
+  auto settings = files::bridge_estimator_settings(cfg, models);
   settings.loop_period = 1e-3;
-  est::ForceEstimator<est::rate::Decimate> estimator(files::bridge_force_models(cfg), settings);
+  files::BridgeForceEstimator estimator(models, settings);
   est::PacedEstimator paced(estimator, clock, std::chrono::milliseconds(1));
   endohaptics::kinematics::CylindricalMapper<> mapper(cfg.mapping);
 
@@ -105,6 +124,27 @@ int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& o
     const double hz =
         endohaptics::workflow::parse_number(opt.rate, "--rate", min_rate_hz, max_rate_hz);
     loop_config.period = nanoseconds(static_cast<std::int64_t>(1e9 / hz + 0.5));
+  }
+  if (opt.passivity == "tdpa") {  // the robot port is booked one round trip late, in ticks
+    loop_config.passivity.mode = tp::PassivityMode::tdpa;
+    const double period_ms =
+        std::chrono::duration<double, std::milli>(loop_config.max_tick_dt()).count();
+    loop_config.passivity.round_trip_ticks =
+        static_cast<int>(std::lround(opt.passivity_round_trip / period_ms));
+    // Book only the joint force the mapping renders unclipped (eq. 5.8: a clamp's share of the
+    // radial channel is half its force), so the observer's operator port is the force felt.
+    const auto& m = cfg.mapping;
+    for (int slot = 0; slot < tp::loop_motors; ++slot) {
+      const auto joint = m.motor_order[static_cast<std::size_t>(slot)];
+      const int channel = joint == endohaptics::protocol::Motor::roll    ? 1
+                          : joint == endohaptics::protocol::Motor::pitch ? 2
+                                                                         : 0;
+      const double share = channel == 0 ? 2.0 : 1.0;
+      if (m.force_scale[channel] > 0.0) {
+        loop_config.passivity.force_limit[slot] =
+            share * m.channel_limit[channel] / m.force_scale[channel];
+      }
+    }
   }
   tp::TeleopLoop loop(transport, device, paced, mapper, clock, loop_config);
 
@@ -125,16 +165,19 @@ int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& o
   std::thread writer([&] {
     for (const auto& m : tp::leave_realtime()) fmt::print("bridge: log writer: {}\n", m);
     tp::LoopSnapshot previous;
-    auto print_window = [&previous](const Window& w) {
+    auto print_window = [&previous, &opt](const Window& w) {
       const tp::LoopWindow s = w.stats.since(previous);
       previous = w.stats;
       fmt::print(
           "bridge: t {:5.1f} s  rate {:7.1f} Hz  period err mean {:6.1f} us  deadline misses {}"
           "  round trip {:6.1f} us  loss {:6.3f} %  decode errors {}  state faults {}  rejected {}"
-          "  link {}  (lost {}, recovered {})  clamp1 {:+.2f} N\n",
+          "  link {}  (lost {}, recovered {})  clamp1 {:+.2f} N{}\n",
           w.t, s.rate, s.period_error_mean * 1e6, s.deadline_misses, s.round_trip_mean * 1e6,
           s.loss_percent, s.decode_errors, s.state_faults, s.rejected, to_string(w.link),
-          w.link_losses, w.recoveries, w.clamp_force);
+          w.link_losses, w.recoveries, w.clamp_force,
+          opt.protocol == "2016" ? std::string()
+                                 : "  v2 rejected " + std::to_string(w.v2.rejected()) +
+                                       " (forged " + std::to_string(w.v2.forged) + ")");
     };
     for (;;) {
       const bool last = done.load();
@@ -182,6 +225,7 @@ int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& o
                w.recoveries = loop.watchdog().recoveries();
                w.link = r.link;
                w.clamp_force = r.motor_force[2];
+               w.v2 = v2_counters(transport);
                (void)windows.push(w);
              }
            },
@@ -217,10 +261,43 @@ int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& o
       "rejected={} stale_dropped={} link_losses={} recoveries={}\n",
       s.ticks(), s.received(), complete, s.decode_errors(), s.state_faults(), s.rejected().total(),
       s.stale_dropped(), loop.watchdog().link_losses(), loop.watchdog().recoveries());
+  if (opt.protocol != "2016") {
+    fmt::print("bridge: protocol v2 states: {}\n", protocol::describe(v2_counters(transport)));
+  }
   // No false success: a log that could not be written (full disk) fails the run.
   if (!log_error.empty()) throw endohaptics::Error(log_error);
   endohaptics::workflow::require_written(stdout, "standard output");
   return 0;
+}
+
+// The link: v2 (SecureTransport over UDP, key from --key) or the unauthenticated 2016 wire.
+template <typename Device>
+int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& opt,
+               const files::BridgeConfig& cfg) {
+  const auto [host, port] = parse_endpoint(opt.sbrio);
+  transport::UdpConfig udp;
+  udp.remote_address = host;
+  udp.remote_port = port;
+  udp.local_address = host.find(':') != std::string::npos ? "::" : "0.0.0.0";
+  if (opt.protocol == "2016") {
+    fmt::print(
+        "bridge: WARNING: --protocol 2016: unauthenticated; anyone who can send UDP to this "
+        "host can spoof the robot's state (docs/protocol.md)\n");
+    transport::UdpTransport transport(udp);
+    return run_loop(transport, device, clock, opt, cfg, host, port);
+  }
+  if (opt.key_path.empty()) {
+    throw endohaptics::Error(
+        "protocol v2 needs --key FILE (the key the sbRIO holds; make one with --generate-key "
+        "FILE), or --protocol 2016 for the unauthenticated 2016 wire");
+  }
+  const protocol::SecureKey key = protocol::load_key_file(opt.key_path);
+  transport::UdpTransport udp_transport(udp);
+  transport::SecureTransport secure(
+      udp_transport, protocol::SecureInitiator<4>(key, protocol::random_session_id(),
+                                                  static_cast<std::uint64_t>(opt.max_answer_lag)));
+  fmt::print("bridge: protocol v2 (authenticated, key {})\n", opt.key_path);
+  return run_loop(secure, device, clock, opt, cfg, host, port);
 }
 
 }  // namespace
@@ -235,8 +312,18 @@ int main(int argc, char** argv) {
   app.add_option("--duration", opt.duration, "seconds to run (0: until SIGINT)")
       ->check(examples::number_in(0.0, max_duration_s))
       ->capture_default_str();
-  app.add_option("--device", opt.device, "haptic device: sim (scripted operator) or openhaptics")
-      ->check(CLI::IsMember({"sim", "openhaptics"}))
+  app.add_option("--device", opt.device,
+                 "haptic device: sim (scripted operator), arm-model (the table 5.1 arm holding a "
+                 "simulated stylus, pressing clamp 1 into the emulator's contact and holding) or "
+                 "openhaptics")
+      ->check(CLI::IsMember({"sim", "arm-model", "openhaptics"}))
+      ->capture_default_str();
+  app.add_option("--passivity", opt.passivity, "time-domain passivity: off or tdpa")
+      ->check(CLI::IsMember({"off", "tdpa"}))
+      ->capture_default_str();
+  app.add_option("--passivity-round-trip", opt.passivity_round_trip,
+                 "ms, the link's round trip, for --passivity tdpa")
+      ->check(examples::number_in(0.0, 1000.0))
       ->capture_default_str();
   app.add_option("--config", opt.config_path, "JSON: mapping, safety, estimator, operator, loop")
       ->check(CLI::ExistingFile);
@@ -249,9 +336,27 @@ int main(int argc, char** argv) {
   app.add_option("--busy-wait-us", opt.busy_wait_us,
                  "spin the last microseconds of each period (lower jitter, one busy core)")
       ->check(examples::number_in(0.0, 1000.0));
+  app.add_option("--protocol", opt.protocol,
+                 "wire protocol: 2 (authenticated, needs --key) or 2016 (unauthenticated)")
+      ->check(CLI::IsMember({"2", "2016"}))
+      ->capture_default_str();
+  app.add_option("--key", opt.key_path, "protocol v2: the 32-byte key file (mode 0600)");
+  app.add_option("--max-answer-lag", opt.max_answer_lag,
+                 "protocol v2: accept a state answering a setpoint up to N older than the newest "
+                 "(0: only the newest; raise it on a link slower than one period, e.g. the "
+                 "emulator's --delay)")
+      ->check(examples::number_in(0, 1000))
+      ->capture_default_str();
+  app.add_option("--generate-key", opt.generate_key,
+                 "write a new random key file (mode 0600; refuses an existing file) and exit");
   CLI11_PARSE(app, argc, argv);
 
   try {
+    if (!opt.generate_key.empty()) {
+      protocol::generate_key_file(opt.generate_key);
+      fmt::print("bridge: wrote a new key to {} (32 bytes, mode 0600)\n", opt.generate_key);
+      return 0;
+    }
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
     const files::BridgeConfig cfg = opt.config_path.empty()
@@ -261,6 +366,21 @@ int main(int argc, char** argv) {
     if (opt.device == "sim") {
       endohaptics::sim::ScriptedOperator<endohaptics::SteadyClock> device(clock,
                                                                           cfg.operator_script);
+      return run_bridge(device, clock, opt, cfg);
+    }
+    if (opt.device == "arm-model") {
+      // From the rest pose straight in along -x (closing the clamps, eq. 5.9) to 25 mm of stylus
+      // beyond where clamp 1 meets the emulator's default contact, then hold.
+      const auto rig =
+          endohaptics::sim::endowrist_2016_rig<4>(endohaptics::sim::Environment::tissue);
+      const auto& contact = rig.joints[2].contact;
+      const auto& m = cfg.mapping;
+      const double target = std::clamp(
+          contact.contact_position + contact.direction * m.a_clamp * 0.025, m.lower[2], m.upper[2]);
+      endohaptics::sim::PressScript script;
+      script.start = endohaptics::kinematics::rest_position<double>(m);
+      script.travel = Eigen::Vector3d((m.b_clamp - target) / m.a_clamp - script.start.x(), 0, 0);
+      endohaptics::sim::HapticDeviceModel<endohaptics::SteadyClock> device(clock, script);
       return run_bridge(device, clock, opt, cfg);
     }
 #ifdef ENDOHAPTICS_HAVE_OPENHAPTICS

@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # Command-line tests of endohaptics-identify and endohaptics-replay on a synthetic CSV from a
 # known 2nd-order, 2-input system, their causal scoring (issue 15) and their error handling.
-# Usage: identify_cli.sh BIN_DIR recover|errors|plot   (each prints PASS: ... on success)
+# Usage: identify_cli.sh BIN_DIR recover|errors|plot|joint   (each prints PASS: ... on success)
+# joint: the joint force models of issue 15 (--method stall_hold, push_load_observer) on
+# synthetic clamp hits: chosen by the inner cross-validation, written as kind "stall_hold",
+# replayed causally, --x0 oracle refused.
 set -euo pipefail
 bin=$1
 scenario=$2
@@ -39,6 +42,28 @@ make_integrator_csv() {
       h--
       printf "%.4f,%.6f,%.6f\n", k * 0.01, u, y
       y += 0.02 * u
+    }
+  }' >"$1"
+}
+# Clamp hits at 10 ms (awk seeded): the jaw moves in (velocity 0.07 rad/s, current ramping to
+# -depth A), stalls (current relaxing), moves out (+0.4 A of friction); the force is a stall-hold
+# (dead zone 0.2 A, held at |v| <= 0.05 rad/s, 30 ms velocity filter, 0.3 s lag, gain -7.5 N/A)
+# plus 1 % noise. $1: file, $2: hits, $3: seed.
+make_hits_csv() {
+  awk -v hits="$2" -v seed="$3" 'BEGIN {
+    srand(seed); vf = 0; held = 0; lag = 0
+    print "time,current,velocity,force"
+    for (h = 0; h < hits; h++) {
+      depth = 0.5 + 0.5 * rand()
+      for (k = 0; k < 300; k++) {
+        if (k < 100) { v = 0.07; i = -depth * k / 100 }
+        else if (k < 200) { v = 0; i = -depth * exp(-(k - 100) / 20) }
+        else { v = -0.07; i = 0.4 }
+        vf += 0.25 * (v - vf)
+        if (vf > 0.05 || vf < -0.05) held = (i < -0.2) ? i + 0.2 : 0
+        lag += (0.01 / 0.31) * (held - lag)
+        printf "%.4f,%.6f,%.6f,%.6f\n", (h * 300 + k) * 0.01, i, v, -7.5 * lag + 0.03 * (2 * rand() - 1)
+      }
     }
   }' >"$1"
 }
@@ -135,6 +160,32 @@ case $scenario in
       >"$work/rp.out"
     [[ $(head -c 4 "$work/fit.png" | od -An -c | tr -d ' ') == '211PNG' ]] || fail "no PNG written"
     echo "PASS: plot written"
+    ;;
+  joint)
+    make_hits_csv "$work/h1.csv" 6 11
+    make_hits_csv "$work/h2.csv" 6 12
+    make_hits_csv "$work/h3.csv" 8 13
+    hits=(--format csv --input current --input velocity --output force --ts 0.01)
+    "$identify" --log "$work/h1.csv" --log "$work/h2.csv" "${hits[@]}" \
+      --method moesp,stall_hold --deadzone auto,none --out "$work/joint.json" | tee "$work/id.out"
+    grep -q "^family choice (inner cross-validation, 2 folds)" "$work/id.out" ||
+      fail "no inner cross-validation reported"
+    grep -q "^family stall_hold: mean causal fit" "$work/id.out" || fail "stall_hold not scored"
+    grep -q "^chosen: stall_hold" "$work/id.out" || fail "stall_hold not chosen"
+    grep -q "loaded side negative" "$work/id.out" || fail "no fitted values reported"
+    grep -q '"kind": "stall_hold"' "$work/joint.json" || fail "model file is not of kind stall_hold"
+    "$replay" --model "$work/joint.json" --format csv --log "$work/h3.csv" | tee "$work/rp.out"
+    grep -q "^scoring (causal): the model's state from its reset" "$work/rp.out" ||
+      fail "replay does not state how a joint model is scored"
+    [[ $(tail -1 "$work/rp.out") == "mean fit: "*% ]] || fail "last line is not 'mean fit: X%'"
+    [[ $(tail -2 "$work/rp.out" | head -1) == "mean RMSE: "* ]] || fail "no mean RMSE line"
+    at_least "$(mean_fit "$work/rp.out")" 95 || fail "replay fit < 95 %"
+    expect_error "has no linear state to fit to the output" \
+      "$replay" --model "$work/joint.json" --format csv --log "$work/h3.csv" --x0 oracle
+    expect_error "need 2 inputs (current, velocity) and 1 output" \
+      "$identify" --log "$work/h1.csv" --format csv --input current --output force \
+      --method push_load_observer
+    echo "PASS: stall_hold chosen and replayed, fit $(mean_fit "$work/rp.out") % (causal)"
     ;;
   *)
     fail "unknown scenario $scenario"

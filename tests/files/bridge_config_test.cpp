@@ -325,10 +325,13 @@ TEST_CASE("estimator.clamp_model loads an identified model file, relative to the
   const files::BridgeConfig c = files::load_bridge_config(dir.path() / "bridge.json");
   CHECK(c.clamp_model == dir.path() / "clamp.json");
   const auto models = files::bridge_force_models(c);
-  CHECK(models.clamp1.model().input_nonlinearity().channel(0).upper() == 0.3);
-  CHECK(models.clamp2.model().input_nonlinearity().channel(0).upper() == 0.3);
+  REQUIRE(models.clamp1.yaw() != nullptr);
+  REQUIRE(models.clamp2.yaw() != nullptr);
+  CHECK(models.clamp1.yaw()->model().input_nonlinearity().channel(0).upper() == 0.3);
+  CHECK(models.clamp2.yaw()->model().input_nonlinearity().channel(0).upper() == 0.3);
   CHECK(files::bridge_force_models(files::BridgeConfig{})
-            .clamp1.model()
+            .clamp1.yaw()
+            ->model()
             .input_nonlinearity()
             .channel(0)
             .upper() == doctest::Approx(0.21));

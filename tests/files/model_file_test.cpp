@@ -201,7 +201,9 @@ TEST_CASE("load errors name the file, the field and the value") {
         src + ": field \"output_nonlinearity\" has 0 entries, expected 1 (outputs)");
   CHECK(broken([](json& j) { j["version"] = 2; }) == src + ": field \"version\" is 2, expected 1");
   CHECK(broken([](json& j) { j["kind"] = "arx"; }) ==
-        src + ": field \"kind\" is \"arx\", expected \"state_space\" or \"hammerstein_wiener\"");
+        src +
+            ": field \"kind\" is \"arx\", expected \"state_space\", \"hammerstein_wiener\", "
+            "\"stall_hold\" or \"push_load_observer\"");
   CHECK(broken([](json& j) { j["inputs"][0].erase("unit"); }) ==
         src + ": inputs[0]: missing field \"unit\"");
 

@@ -92,8 +92,21 @@ requires(Mode != RateMode::resample || ResamplableJointForceModel<M>) class Rate
     sum_ = saved.sum;
     count_ = saved.count;
   }
-  //! Zero state, empty decimation window.
-  void reset() noexcept { restore({M::State::Zero(), Signals{}, 0}); }
+  //! The model's start state, empty decimation window. The start state is the model's own
+  //! `reset()` when it has one (PushLoadObserver starts from its initial load and variance,
+  //! not from zero), else the zero state.
+  void reset() noexcept {
+    if constexpr (requires(M & m) {
+                    { m.reset() }
+                    noexcept;
+                  }) {
+      model_.reset();
+    } else {
+      model_.reset(typename M::State(M::State::Zero()));
+    }
+    sum_ = Signals{};
+    count_ = 0;
+  }
 
  private:
   static M prepare(const M& model, Scalar loop_period, std::string_view joint) {

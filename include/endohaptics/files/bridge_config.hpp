@@ -18,13 +18,18 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <optional>
 #include <set>
 #include <string>
 #include <string_view>
+#include <type_traits>
+#include <variant>
 #include <vector>
 
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/estimation/force_estimator.hpp"
+#include "endohaptics/estimation/push_load_observer.hpp"
+#include "endohaptics/estimation/stall_hold.hpp"
 #include "endohaptics/files/json_text.hpp"
 #include "endohaptics/files/model_file.hpp"
 #include "endohaptics/kinematics/cylindrical_mapper.hpp"
@@ -42,9 +47,9 @@ struct BridgeConfig {
   //! Safety and receive timeout; `period` is not in the file (the bridge's --rate sets it).
   teleop::TeleopLoopConfig loop{};
   estimation::ForceEstimatorSettings<double> estimator{};  //!< friction levels, signs, limits
-  //! "estimator.clamp_model": an identified Hammerstein-Wiener model file (endohaptics-identify,
-  //! 6 states, 2 inputs, 1 output) for both clamps, resolved against the configuration file's
-  //! folder; empty: the 2016 appendix C yaw model.
+  //! "estimator.clamp_model": an identified model file (endohaptics-identify) for both clamps:
+  //! Hammerstein-Wiener (6 states, 2 inputs, 1 output), "stall_hold" or "push_load_observer",
+  //! resolved against the configuration file's folder; empty: the 2016 appendix C yaw model.
   std::filesystem::path clamp_model;
   sim::OperatorScript operator_script{};  //!< the scripted operator of `--device sim`
 };
@@ -499,17 +504,176 @@ void with_prefix(std::string_view source, std::string_view key, F&& validate) {
 
 }  // namespace detail::bridge_config
 
+//! The clamp model the bridge runs, whichever kind the model file holds: the appendix C yaw
+//! Hammerstein-Wiener type (estimation::ClampModel2016, also identified "hammerstein_wiener" files
+//! of 6 states, 2 inputs, 1 output), estimation::StallHold or estimation::PushLoadObserver. A
+//! JointForceModel (noexcept, allocation-free, fixed size: a std::variant of the three). Its State
+//! (10 numbers, the largest of the three; unused entries 0) is the model's state minus its reset
+//! state, so that ForceEstimator::reset (State::Zero) restarts each model as constructed: the
+//! yaw model at x = 0 as before, the observer with its filters waiting for the next sample and
+//! the training-mean load and variance (not a zero variance that would stop its updates).
+class ClampForceModel {
+ public:
+  using ScalarType = double;                              //!< floating-point type
+  using State = Eigen::Matrix<double, 10, 1>;             //!< the model's state minus its reset
+  using Signals = estimation::JointSignals<double>;       //!< one joint's signals for one tick
+  using Yaw = estimation::ClampModel2016<double>;         //!< the Hammerstein-Wiener kind
+  using StallHold = estimation::StallHold<double>;        //!< kind "stall_hold"
+  using Observer = estimation::PushLoadObserver<double>;  //!< kind "push_load_observer"
+
+ private:
+  template <typename F>
+  decltype(auto) visit(F&& f) const noexcept {
+    if (const auto* m = std::get_if<Yaw>(&model_)) return f(*m);
+    if (const auto* m = std::get_if<StallHold>(&model_)) return f(*m);
+    return f(*std::get_if<Observer>(&model_));
+  }
+  template <typename F>
+  decltype(auto) visit_mutable(F&& f) noexcept {
+    if (auto* m = std::get_if<Yaw>(&model_)) return f(*m);
+    if (auto* m = std::get_if<StallHold>(&model_)) return f(*m);
+    return f(*std::get_if<Observer>(&model_));
+  }
+  template <typename V>
+  void set_reset(const V& x) {
+    static_assert(static_cast<int>(V::RowsAtCompileTime) <=
+                  static_cast<int>(State::RowsAtCompileTime));
+    reset_.setZero();
+    reset_.template head<V::RowsAtCompileTime>() = x;
+    refresh();
+  }
+  void refresh() noexcept {
+    visit([this](const auto& m) noexcept {
+      using S = typename std::remove_cvref_t<decltype(m)>::State;
+      state_.setZero();
+      state_.template head<S::RowsAtCompileTime>() =
+          m.state() - reset_.template head<S::RowsAtCompileTime>();
+      return 0;
+    });
+  }
+
+ public:
+  //! The Hammerstein-Wiener clamp model (reset state 0).
+  explicit ClampForceModel(const Yaw& m) : model_(m) { set_reset(Yaw::State::Zero().eval()); }
+  //! The stall-hold model (reset state 0).
+  explicit ClampForceModel(const StallHold& m) : model_(m) {
+    set_reset(StallHold::State::Zero().eval());
+  }
+  //! The push-load observer (reset state: Observer::reset()).
+  explicit ClampForceModel(const Observer& m) : model_(m) {
+    auto& o = std::get<Observer>(model_);
+    o.reset();
+    set_reset(o.state());
+  }
+
+  //! True for the kinds with their own friction handling (stall_hold, push_load_observer).
+  [[nodiscard]] bool is_joint_model() const noexcept { return model_.index() != 0; }
+  //! The Hammerstein-Wiener model, or null for another kind.
+  [[nodiscard]] const Yaw* yaw() const noexcept { return std::get_if<Yaw>(&model_); }
+  //! The stall-hold model, or null for another kind.
+  [[nodiscard]] const StallHold* stall_hold() const noexcept {
+    return std::get_if<StallHold>(&model_);
+  }
+  //! The push-load observer, or null for another kind.
+  [[nodiscard]] const Observer* observer() const noexcept { return std::get_if<Observer>(&model_); }
+
+  //! s, the model's sample time.
+  [[nodiscard]] double sample_time() const noexcept {
+    return visit([](const auto& m) noexcept { return m.sample_time(); });
+  }
+  //! As the model's.
+  [[nodiscard]] bool memoryless() const noexcept {
+    return visit([](const auto& m) noexcept { return m.memoryless(); });
+  }
+  //! The model's force at its current state.
+  [[nodiscard]] double force(const Signals& s) const noexcept {
+    return visit([&s](const auto& m) noexcept { return m.force(s); });
+  }
+  //! One model period (the model's StepStatus; all-or-nothing).
+  [[nodiscard]] model::StepStatus advance(const Signals& s) noexcept {
+    const model::StepStatus status = visit_mutable([&s](auto& m) noexcept { return m.advance(s); });
+    refresh();
+    return status;
+  }
+  //! The model's state minus its reset state.
+  [[nodiscard]] const State& state() const noexcept { return state_; }
+  //! Sets the model's state to its reset state plus `x` (its leading entries).
+  void reset(const State& x = State::Zero()) noexcept {
+    visit_mutable([&](auto& m) noexcept {
+      using S = typename std::remove_cvref_t<decltype(m)>::State;
+      S full =
+          reset_.template head<S::RowsAtCompileTime>() + x.template head<S::RowsAtCompileTime>();
+      m.reset(full);
+      return 0;
+    });
+    refresh();
+  }
+
+ private:
+  std::variant<Yaw, StallHold, Observer> model_;
+  State reset_ = State::Zero();
+  State state_ = State::Zero();
+};
+
+static_assert(estimation::JointForceModel<ClampForceModel>);
+
+//! The models the bridge's ForceEstimator runs: the 2016 roll and pitch models, ClampForceModel
+//! for both clamps.
+using BridgeForceModels =
+    estimation::ForceModels<estimation::RollModel2016<double>, estimation::PitchModel2016<double>,
+                            ClampForceModel>;
+//! The bridge's ForceEstimator: the 2016 rates (rate::Decimate) and BridgeForceModels.
+using BridgeForceEstimator =
+    estimation::ForceEstimator<estimation::rate::Decimate, estimation::RollModel2016<double>,
+                               estimation::PitchModel2016<double>, ClampForceModel>;
+
 //! The force models the bridge runs: the 2016 models (estimation::models_2016), with the clamp
-//! model file of `config.clamp_model` for both clamps when set. Throws Error as
-//! load_hammerstein_wiener (naming the model file) when it cannot be loaded.
-[[nodiscard]] inline auto bridge_force_models(const BridgeConfig& config) {
-  auto models = estimation::models_2016<double>();
+//! model file of `config.clamp_model` for both clamps when set, of any kind ClampForceModel
+//! holds. Throws Error naming the model file when it cannot be loaded, is of another size or its
+//! parameters are out of range.
+[[nodiscard]] inline BridgeForceModels bridge_force_models(const BridgeConfig& config) {
+  const auto m2016 = estimation::models_2016<double>();
+  BridgeForceModels models{m2016.roll, m2016.pitch, ClampForceModel(m2016.clamp1),
+                           ClampForceModel(m2016.clamp2)};
   if (!config.clamp_model.empty()) {
-    using Clamp = estimation::ClampModel2016<double>;
-    models.clamp1 = Clamp(load_hammerstein_wiener<6, 2, 1>(config.clamp_model));
-    models.clamp2 = models.clamp1;
+    const ModelFile file = load_model(config.clamp_model);
+    const std::string where = "model file " + config.clamp_model.string();
+    const ClampForceModel clamp = detail::model_file::with_context(where, [&] {
+      switch (file.kind()) {
+        case ModelKind::stall_hold:
+          return ClampForceModel(estimation::StallHold<double>(
+              stall_hold_parameters<estimation::StallHoldParameters<double>>(file)));
+        case ModelKind::push_load_observer:
+          return ClampForceModel(estimation::PushLoadObserver<double>(
+              push_load_observer_parameters<estimation::PushLoadObserverParameters<double>>(file)));
+        case ModelKind::state_space:
+        case ModelKind::hammerstein_wiener:
+          break;
+      }
+      return ClampForceModel(
+          estimation::ClampModel2016<double>(load_hammerstein_wiener<6, 2, 1>(config.clamp_model)));
+    });
+    models.clamp1 = clamp;
+    models.clamp2 = clamp;
   }
   return models;
+}
+
+//! The estimator settings the bridge runs with `models`: `config.estimator`, except that the
+//! 5.2.3 friction gate of both clamps is opened (level 0) when their model is a joint model
+//! (stall_hold, push_load_observer): those models hold their own friction (the dead zone, the
+//! push regime), and the gate would drop the force they hold while the jaw is stalled against
+//! an object and the current has relaxed below the friction level.
+[[nodiscard]] inline estimation::ForceEstimatorSettings<double> bridge_estimator_settings(
+    const BridgeConfig& config, const BridgeForceModels& models) {
+  estimation::ForceEstimatorSettings<double> settings = config.estimator;
+  if (models.clamp1.is_joint_model()) {
+    for (const auto joint : {estimation::Motor::clamp1, estimation::Motor::clamp2}) {
+      settings.friction[static_cast<std::size_t>(joint)] =
+          model::JointFriction<double>::simplified(0.0);
+    }
+  }
+  return settings;
 }
 
 //! Checks `config` as the bridge will use it: every field in its schema range, then the
@@ -525,10 +689,10 @@ inline void validate_bridge_config(const BridgeConfig& config,
   bc::with_prefix(source, "mapping",
                   [&] { (void)kinematics::CylindricalMapper<double>(config.mapping); });
   bc::with_prefix(source, "operator", [&] { config.operator_script.validate(); });
-  auto models = estimation::models_2016<double>();
+  std::optional<BridgeForceModels> models;
   bc::with_prefix(source, "estimator.clamp_model", [&] { models = bridge_force_models(config); });
   bc::with_prefix(source, "estimator", [&] {
-    (void)estimation::ForceEstimator<estimation::rate::Decimate>(models, config.estimator);
+    (void)BridgeForceEstimator(*models, bridge_estimator_settings(config, *models));
   });
 }
 

@@ -1,7 +1,9 @@
 //! @file
-//! Identified-model files (JSON, nlohmann::json): a discrete state-space model (eq. 4.2) or a
-//! Hammerstein-Wiener model (figure 4.1) with dead-zone/saturation breakpoints, sample time in s,
-//! input/output names and units, initial state and provenance (method, order, files, fit, date).
+//! Identified-model files (JSON, nlohmann::json): a discrete state-space model (eq. 4.2), a
+//! Hammerstein-Wiener model (figure 4.1) with dead-zone/saturation breakpoints, or a joint force
+//! model's parameters (kinds "stall_hold" and "push_load_observer": estimation/stall_hold.hpp,
+//! estimation/push_load_observer.hpp), with sample time in s, input/output names and units,
+//! initial state and provenance (method, order, files, fit, date).
 //! Loading validates every field and throws Error naming the file, the field and the value.
 //! Format: docs/models/subspace.md, "Model files". Includes only core/ and model/ (a program
 //! that loads a model does not compile identification); the conversions from identification
@@ -9,6 +11,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -22,6 +25,7 @@
 #include <string>
 #include <string_view>
 #include <type_traits>
+#include <utility>
 #include <vector>
 #include "endohaptics/core/separate_compilation.hpp"
 
@@ -56,6 +60,62 @@ struct ModelProvenance {
   std::string notes{};                //!< free text
 };
 
+//! What a model file describes ("kind").
+enum class ModelKind : std::uint8_t {
+  state_space,         //!< a linear state-space model (eq. 4.2)
+  hammerstein_wiener,  //!< input maps, linear block, output maps (figure 4.1)
+  stall_hold,          //!< estimation::StallHold (estimation/stall_hold.hpp)
+  push_load_observer,  //!< estimation::PushLoadObserver (estimation/push_load_observer.hpp)
+};
+
+//! The "kind" text of `kind` ("state_space", "hammerstein_wiener", "stall_hold",
+//! "push_load_observer").
+[[nodiscard]] constexpr std::string_view to_string(ModelKind kind) noexcept {
+  switch (kind) {
+    case ModelKind::state_space:
+      return "state_space";
+    case ModelKind::hammerstein_wiener:
+      return "hammerstein_wiener";
+    case ModelKind::stall_hold:
+      return "stall_hold";
+    case ModelKind::push_load_observer:
+      return "push_load_observer";
+  }
+  return "unknown";
+}
+
+//! Kind "stall_hold": the parameters of estimation::StallHold (same names, same units: A, rad/s,
+//! s, output unit per A) without the sample time (the file's "sample_time_s"). Plain numbers here
+//! so that this header stays below estimation/; stall_hold_parameters() converts.
+struct StallHoldSettings {
+  double current_deadzone = 0.20;        //!< A, >= 0: the static friction current
+  double velocity_threshold = 0.05;      //!< rad/s, >= 0: at or below, the value is held
+  double velocity_time_constant = 0.03;  //!< s, >= 0: first-order low-pass of the velocity
+  double output_time_constant = 0.3;     //!< s, >= 0: first-order lag of the output
+  double gain = 1.0;                     //!< output units per A beyond the dead zone, finite
+  std::string side = "both";             //!< "both", "positive" or "negative"
+};
+
+//! Kind "push_load_observer": the parameters of estimation::PushLoadObserver (same names and
+//! units; load in the output's unit) without the sample time (the file's "sample_time_s").
+struct PushLoadObserverSettings {
+  double current_cutoff = 10;          //!< Hz, in (0, Nyquist)
+  double velocity_cutoff = 20;         //!< Hz, in (0, Nyquist)
+  double direction_scale = 0.05;       //!< rad, > 0
+  double velocity_threshold = 0.05;    //!< rad/s, >= 0
+  double direction_threshold = 0.5;    //!< in (0, 1]
+  double push_sign = 1;                //!< +1 or -1
+  double current_per_load = 1;         //!< A per load unit, finite and non-zero
+  double current_offset = 0;           //!< A
+  double current_per_velocity = 0;     //!< A s/rad
+  double measurement_variance = 1e-4;  //!< A^2, > 0
+  double process_variance = 1e-8;      //!< load unit^2 per step, >= 0
+  double initial_load = 0;             //!< load units
+  double initial_variance = 1e-2;      //!< load unit^2, >= 0
+  double output_offset = 0;            //!< load units
+  double output_slope = 0;             //!< dimensionless
+};
+
 //! The content of a model file, validated on load and save. The model (or a Hammerstein-Wiener
 //! model's linear block) is the library's one linear-model type, `model::DynamicStateSpace<>`,
 //! whose state is the file's x0; `model::StateSpace<Nx, Nu, Ny>(file.state_space)` gives the
@@ -72,10 +132,29 @@ struct ModelFile {
   std::vector<model::StaticMap> input_nonlinearity{};
   std::vector<model::StaticMap> output_nonlinearity{};  //!< see input_nonlinearity
   ModelProvenance provenance{};                         //!< where it came from
+  //! Kind "stall_hold": its parameters. Then `state_space` is a placeholder (one state, all
+  //! zero) that carries only the sample time and the sizes (2 inputs: current A, velocity
+  //! rad/s; 1 output); no map may be set.
+  std::optional<StallHoldSettings> stall_hold{};
+  //! Kind "push_load_observer": its parameters; `state_space` a placeholder as for stall_hold
+  //! (2 inputs: current A, encoder velocity rad/s, whose running sum times the sample time stands
+  //! for the encoder angle: the observer uses only its increments; 1 output: the load).
+  std::optional<PushLoadObserverSettings> push_load_observer{};
 
   //! True when the file describes a Hammerstein-Wiener model ("kind": "hammerstein_wiener").
   [[nodiscard]] bool is_hammerstein_wiener() const noexcept {
     return !input_nonlinearity.empty() || !output_nonlinearity.empty();
+  }
+  //! What the file describes (a joint model's parameters win over the linear block).
+  [[nodiscard]] ModelKind kind() const noexcept {
+    if (stall_hold) return ModelKind::stall_hold;
+    if (push_load_observer) return ModelKind::push_load_observer;
+    return is_hammerstein_wiener() ? ModelKind::hammerstein_wiener : ModelKind::state_space;
+  }
+  //! True for the kinds that are a joint force model, not a linear block (stall_hold,
+  //! push_load_observer): `state_space` is then only a placeholder.
+  [[nodiscard]] bool is_joint_model() const noexcept {
+    return stall_hold.has_value() || push_load_observer.has_value();
   }
 };
 
@@ -128,10 +207,111 @@ ENDOHAPTICS_DECL std::vector<SignalInfo> signals_from_json(const json& object, c
 
 ENDOHAPTICS_DECL json map_to_json(const StaticMap& m);
 
+//! Adds "A", "B", "C", "D", "x0" and, for a Hammerstein-Wiener model, the maps to `j`.
+ENDOHAPTICS_DECL void add_linear_block(json& j, const ModelFile& m);
+
+//! The "provenance" object of `j`; throws naming the field when missing or of the wrong type.
+ENDOHAPTICS_DECL ModelProvenance provenance_from_json(const json& j, const std::string& where);
+
+//! A joint-model kind ("stall_hold", "push_load_observer") from `j`: its "parameters" object
+//! (every field required, unknown fields refused), no linear-block fields, 2 inputs and 1
+//! output; validated. Throws Error naming the field.
+ENDOHAPTICS_DECL ModelFile joint_model_from_json(const json& j, const std::string& kind,
+                                                 double sample_time, std::vector<SignalInfo> inputs,
+                                                 std::vector<SignalInfo> outputs,
+                                                 const std::string& where);
+
 ENDOHAPTICS_DECL std::vector<StaticMap> maps_from_json(const json& object, const char* key,
                                                        const std::string& where);
 
+//! Throws "<where>: field \"parameters.<name>\" must be <rule>, got <value>" unless `ok`.
+ENDOHAPTICS_DECL void require_parameter(bool ok, const std::string& where, const char* name,
+                                        double value, const char* rule);
+
+//! Throws naming the field unless every value of `p` is in its range (StallHoldSettings).
+ENDOHAPTICS_DECL void validate_settings(const StallHoldSettings& p, const std::string& where);
+
+//! Throws naming the field unless every value of `p` is in its range, the cut-offs below the
+//! Nyquist frequency of `sample_time` s (PushLoadObserverSettings).
+ENDOHAPTICS_DECL void validate_settings(const PushLoadObserverSettings& p, double sample_time,
+                                        const std::string& where);
+
+//! The placeholder linear block of a joint-model kind: one state, all zero, `nu` inputs, one
+//! output, the sample time (s). Throws Error on a sample time that is not finite and > 0.
+ENDOHAPTICS_DECL model::DynamicStateSpace<> joint_model_placeholder(Eigen::Index nu,
+                                                                    double sample_time);
+
+//! Throws naming `where` when `f` is a joint-model kind (no linear block to load).
+ENDOHAPTICS_DECL void require_linear(const ModelFile& f, const std::string& where);
+
+//! Throws naming `where` unless `f` is of kind `kind`.
+ENDOHAPTICS_DECL void require_kind(const ModelFile& f, ModelKind kind, const std::string& where);
+
 }  // namespace detail::model_file
+
+//! A "stall_hold" model file: `settings`, the sample time (s), the two inputs (current,
+//! velocity) and one output with names and units, provenance (date today if empty). Throws
+//! Error naming the field when a value is out of range (the rules of StallHoldSettings).
+[[nodiscard]] ENDOHAPTICS_DECL ModelFile make_stall_hold_file(const StallHoldSettings& settings,
+                                                              double sample_time,
+                                                              std::vector<SignalInfo> inputs,
+                                                              std::vector<SignalInfo> outputs,
+                                                              ModelProvenance provenance = {});
+
+//! A "push_load_observer" model file, as make_stall_hold_file.
+[[nodiscard]] ENDOHAPTICS_DECL ModelFile make_push_load_observer_file(
+    const PushLoadObserverSettings& settings, double sample_time, std::vector<SignalInfo> inputs,
+    std::vector<SignalInfo> outputs, ModelProvenance provenance = {});
+
+//! The parameters of a "stall_hold" file as `Parameters` (estimation::StallHoldParameters<S>;
+//! a template so that this header does not include estimation/): every field and the sample
+//! time. Throws Error naming the kind when `f` is of another kind.
+template <typename Parameters>
+[[nodiscard]] Parameters stall_hold_parameters(const ModelFile& f) {
+  detail::model_file::require_kind(f, ModelKind::stall_hold, "stall_hold_parameters");
+  using S = decltype(Parameters{}.gain);
+  using Side = decltype(Parameters{}.side);
+  const StallHoldSettings& m = *f.stall_hold;
+  Parameters p;
+  p.current_deadzone = static_cast<S>(m.current_deadzone);
+  p.velocity_threshold = static_cast<S>(m.velocity_threshold);
+  p.velocity_time_constant = static_cast<S>(m.velocity_time_constant);
+  p.output_time_constant = static_cast<S>(m.output_time_constant);
+  p.gain = static_cast<S>(m.gain);
+  p.side = m.side == "positive"   ? Side::positive
+           : m.side == "negative" ? Side::negative
+                                  : Side::both;
+  p.sample_time = static_cast<S>(f.state_space.sample_time());
+  return p;
+}
+
+//! The parameters of a "push_load_observer" file as `Parameters`
+//! (estimation::PushLoadObserverParameters<S>), as stall_hold_parameters.
+template <typename Parameters>
+[[nodiscard]] Parameters push_load_observer_parameters(const ModelFile& f) {
+  detail::model_file::require_kind(f, ModelKind::push_load_observer,
+                                   "push_load_observer_parameters");
+  using S = decltype(Parameters{}.current_cutoff);
+  const PushLoadObserverSettings& m = *f.push_load_observer;
+  Parameters p;
+  p.current_cutoff = static_cast<S>(m.current_cutoff);
+  p.velocity_cutoff = static_cast<S>(m.velocity_cutoff);
+  p.direction_scale = static_cast<S>(m.direction_scale);
+  p.velocity_threshold = static_cast<S>(m.velocity_threshold);
+  p.direction_threshold = static_cast<S>(m.direction_threshold);
+  p.push_sign = static_cast<S>(m.push_sign);
+  p.current_per_load = static_cast<S>(m.current_per_load);
+  p.current_offset = static_cast<S>(m.current_offset);
+  p.current_per_velocity = static_cast<S>(m.current_per_velocity);
+  p.measurement_variance = static_cast<S>(m.measurement_variance);
+  p.process_variance = static_cast<S>(m.process_variance);
+  p.initial_load = static_cast<S>(m.initial_load);
+  p.initial_variance = static_cast<S>(m.initial_variance);
+  p.output_offset = static_cast<S>(m.output_offset);
+  p.output_slope = static_cast<S>(m.output_slope);
+  p.sample_time = static_cast<S>(f.state_space.sample_time());
+  return p;
+}
 
 //! Today's date in UTC, "YYYY-MM-DD" (for ModelProvenance::date).
 [[nodiscard]] ENDOHAPTICS_DECL std::string utc_date_today();
@@ -200,6 +380,7 @@ template <int Nx, int Nu, int Ny, typename Scalar = double>
 [[nodiscard]] model::StateSpace<Nx, Nu, Ny, Scalar> load_state_space(
     const std::filesystem::path& path) {
   const ModelFile f = load_model(path);
+  detail::model_file::require_linear(f, "model file " + path.string());
   return detail::model_file::with_context("model file " + path.string(), [&] {
     return model::StateSpace<Nx, Nu, Ny, Scalar>(f.state_space);
   });
@@ -214,6 +395,7 @@ template <int Nx, int Nu, int Ny, typename Scalar = double,
           typename InputNL = model::Deadzone<Scalar>, typename OutputNL = model::Identity<Scalar>>
 [[nodiscard]] auto load_hammerstein_wiener(const std::filesystem::path& path) {
   const ModelFile f = load_model(path);
+  detail::model_file::require_linear(f, "model file " + path.string());
   std::vector<model::StaticMap> input = f.input_nonlinearity;
   std::vector<model::StaticMap> output = f.output_nonlinearity;
   if (input.empty()) input.assign(f.inputs.size(), {});

@@ -27,6 +27,7 @@
 #include "endohaptics/model/state_space.hpp"
 #include "endohaptics/model/static_map.hpp"
 #include "endohaptics/workflow/error_context.hpp"
+#include "endohaptics/workflow/joint_models.hpp"
 #include "endohaptics/workflow/prepared_log.hpp"
 
 namespace endohaptics::workflow {
@@ -99,11 +100,12 @@ struct FileComparison {
 [[nodiscard]] ENDOHAPTICS_DECL Eigen::VectorXd steady_initial_state(
     const model::DynamicStateSpace<>& linear, const Eigen::VectorXd& u0);
 
-//! Simulates the model file (input maps, linear block, output maps) on every segment of `log`
-//! from x0 as `options.initial_state` says, leaves the first `options.warmup` s of each segment
-//! (all but its last sample when shorter) out, and scores the rest of the file together.
-//! Throws Error when the log's input or output count differs from the model's, or the warm-up is
-//! outside [0, max_warmup].
+//! Simulates the model file (input maps, linear block, output maps; or a joint model, kinds
+//! stall_hold and push_load_observer, from its start state whatever `options.initial_state` says
+//! but oracle, which it refuses) on every segment of `log` from x0 as `options.initial_state` says,
+//! leaves the first `options.warmup` s of each segment (all but its last sample when shorter) out,
+//! and scores the rest of the file together. Throws Error when the log's input or output count
+//! differs from the model's, or the warm-up is outside [0, max_warmup].
 [[nodiscard]] ENDOHAPTICS_DECL FileComparison compare_log(const files::ModelFile& model,
                                                           const PreparedLog& log,
                                                           const ScoringOptions& options = {});

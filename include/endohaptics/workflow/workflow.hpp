@@ -26,6 +26,7 @@
 #include "endohaptics/identification/subspace.hpp"
 #include "endohaptics/model/static_map.hpp"
 #include "endohaptics/workflow/error_context.hpp"
+#include "endohaptics/workflow/joint_models.hpp"
 #include "endohaptics/workflow/model_comparison.hpp"
 #include "endohaptics/workflow/prepared_log.hpp"
 #include "endohaptics/workflow/static_gain_fit.hpp"
@@ -110,6 +111,34 @@ ENDOHAPTICS_DECL double ranking_score(const CandidateModel& c);
 identify_logs(const std::vector<PreparedLog>& fit_logs, const std::vector<PreparedLog>& score_logs,
               const std::vector<files::SignalInfo>& inputs,
               const std::vector<files::SignalInfo>& outputs, const WorkflowOptions& options);
+
+//! What `choose_family` chose and why.
+struct ModelChoice {
+  files::ModelFile model;               //!< the chosen family fitted on every training file
+  std::string family{};                 //!< its name: the subspace candidate's method or the kind
+  std::vector<FamilyScore> families{};  //!< every family with its inner cross-validation score
+  std::size_t best = 0;                 //!< index of the chosen family in `families`
+  std::vector<std::vector<std::size_t>> folds{};  //!< training files held out per inner fold
+  std::vector<FileComparison> files{};  //!< the chosen model on each training file, causal
+  std::string joint_summary{};          //!< the fitted values when a joint model was chosen
+};
+
+//! Chooses the model family by the causal score on the training files only (never a held-out
+//! file): the subspace workflow's chosen candidate (`subspace`; null: none) and one family per
+//! kind of `joint_kinds`. With two or more families and two or more files, an inner
+//! cross-validation (inner_folds: leave-one-file-out up to 5 files, else 5 folds) fits each
+//! family on the other folds and scores it causally on the held-out one; the highest mean fit
+//! over the folds wins (a family that fails or is refused on a fold loses). The subspace family
+//! is refitted in each fold with the structure chosen on all training files (method, order, dead
+//! zones fixed: cheaper, and if anything in its favour). Otherwise the only family is chosen.
+//! `fit_logs`/`score_logs`: the subspace grid, prepared for fitting and for scoring; `joint_logs`:
+//! the joint models' grid, prepared for scoring (all three: the same files, same order). The
+//! chosen family is then fitted on every training file. Throws Error when nothing can be fitted.
+[[nodiscard]] ENDOHAPTICS_DECL ModelChoice choose_family(
+    const WorkflowResult* subspace, const std::vector<files::ModelKind>& joint_kinds,
+    const std::vector<PreparedLog>& fit_logs, const std::vector<PreparedLog>& score_logs,
+    const std::vector<PreparedLog>& joint_logs, const std::vector<files::SignalInfo>& inputs,
+    const std::vector<files::SignalInfo>& outputs, const WorkflowOptions& options);
 
 }  // namespace endohaptics::workflow
 

@@ -8,8 +8,109 @@
 namespace endohaptics::files {
 namespace detail::model_file {
 
+ENDOHAPTICS_DECL void require_parameter(bool ok, const std::string& where, const char* name,
+                                        double value, const char* rule) {
+  if (!ok) {
+    fail(where + ": field \"parameters." + name + "\" must be " + rule + ", got " +
+         format_number(value));
+  }
+}
+
+ENDOHAPTICS_DECL void validate_settings(const StallHoldSettings& p, const std::string& where) {
+  const auto non_negative = [&](const char* name, double v, const char* rule) {
+    require_parameter(std::isfinite(v) && v >= 0.0, where, name, v, rule);
+  };
+  non_negative("current_deadzone", p.current_deadzone, "finite and >= 0 A");
+  non_negative("velocity_threshold", p.velocity_threshold, "finite and >= 0 rad/s");
+  non_negative("velocity_time_constant", p.velocity_time_constant, "finite and >= 0 s");
+  non_negative("output_time_constant", p.output_time_constant, "finite and >= 0 s");
+  require_parameter(std::isfinite(p.gain), where, "gain", p.gain, "finite");
+  if (p.side != "both" && p.side != "positive" && p.side != "negative") {
+    fail(where + ": field \"parameters.side\" is \"" + p.side +
+         "\", expected \"both\", \"positive\" or \"negative\"");
+  }
+}
+
+ENDOHAPTICS_DECL void validate_settings(const PushLoadObserverSettings& p, double sample_time,
+                                        const std::string& where) {
+  const double nyquist = 0.5 / sample_time;
+  require_parameter(p.current_cutoff > 0 && p.current_cutoff < nyquist, where, "current_cutoff",
+                    p.current_cutoff, "in (0, Nyquist = 0.5 / sample_time_s) Hz");
+  require_parameter(p.velocity_cutoff > 0 && p.velocity_cutoff < nyquist, where, "velocity_cutoff",
+                    p.velocity_cutoff, "in (0, Nyquist = 0.5 / sample_time_s) Hz");
+  require_parameter(std::isfinite(p.direction_scale) && p.direction_scale > 0, where,
+                    "direction_scale", p.direction_scale, "finite and > 0 rad");
+  require_parameter(std::isfinite(p.velocity_threshold) && p.velocity_threshold >= 0, where,
+                    "velocity_threshold", p.velocity_threshold, "finite and >= 0 rad/s");
+  require_parameter(p.direction_threshold > 0 && p.direction_threshold <= 1, where,
+                    "direction_threshold", p.direction_threshold, "in (0, 1]");
+  require_parameter(p.push_sign == 1 || p.push_sign == -1, where, "push_sign", p.push_sign,
+                    "+1 or -1");
+  require_parameter(std::isfinite(p.current_per_load) && p.current_per_load != 0, where,
+                    "current_per_load", p.current_per_load, "finite and non-zero");
+  const std::pair<const char*, double> finite[] = {{"current_offset", p.current_offset},
+                                                   {"current_per_velocity", p.current_per_velocity},
+                                                   {"initial_load", p.initial_load},
+                                                   {"output_offset", p.output_offset},
+                                                   {"output_slope", p.output_slope}};
+  for (const auto& [name, v] : finite)
+    require_parameter(std::isfinite(v), where, name, v, "finite");
+  require_parameter(std::isfinite(p.measurement_variance) && p.measurement_variance > 0, where,
+                    "measurement_variance", p.measurement_variance, "finite and > 0");
+  require_parameter(std::isfinite(p.process_variance) && p.process_variance >= 0, where,
+                    "process_variance", p.process_variance, "finite and >= 0");
+  require_parameter(std::isfinite(p.initial_variance) && p.initial_variance >= 0, where,
+                    "initial_variance", p.initial_variance, "finite and >= 0");
+}
+
+ENDOHAPTICS_DECL model::DynamicStateSpace<> joint_model_placeholder(Eigen::Index nu,
+                                                                    double sample_time) {
+  return model::DynamicStateSpace<>(Eigen::MatrixXd::Zero(1, 1), Eigen::MatrixXd::Zero(1, nu),
+                                    Eigen::MatrixXd::Zero(1, 1), Eigen::MatrixXd::Zero(1, nu),
+                                    sample_time);
+}
+
+ENDOHAPTICS_DECL void require_linear(const ModelFile& f, const std::string& where) {
+  if (f.is_joint_model()) {
+    fail(where + ": kind \"" + std::string(to_string(f.kind())) +
+         "\" is a joint force model, not a linear or Hammerstein-Wiener model (load it with "
+         "load_model and run it as its estimation type)");
+  }
+}
+
+ENDOHAPTICS_DECL void require_kind(const ModelFile& f, ModelKind kind, const std::string& where) {
+  if (f.kind() != kind) {
+    fail(where + ": the model file is of kind \"" + std::string(to_string(f.kind())) +
+         "\", not \"" + std::string(to_string(kind)) + "\"");
+  }
+}
+
 ENDOHAPTICS_DECL void validate(const ModelFile& m, const std::string& where) {
   const model::DynamicStateSpace<>& ss = m.state_space;
+  if (m.stall_hold && m.push_load_observer) {
+    fail(where +
+         ": a model file holds one joint model, not both stall_hold and push_load_observer "
+         "parameters");
+  }
+  if (m.is_joint_model()) {
+    const std::string kind(to_string(m.kind()));
+    if (m.inputs.size() != 2 || m.outputs.size() != 1) {
+      fail(where + ": kind \"" + kind + "\" needs 2 inputs (current, velocity) and 1 output, got " +
+           std::to_string(m.inputs.size()) + " and " + std::to_string(m.outputs.size()));
+    }
+    if (m.is_hammerstein_wiener()) {
+      fail(where + ": kind \"" + kind + "\" has no input or output nonlinearity");
+    }
+    if (ss.state_size() != 1 || ss.input_size() != 2 || ss.output_size() != 1 ||
+        !ss.A().isZero(0.0) || !ss.B().isZero(0.0) || !ss.C().isZero(0.0) || !ss.D().isZero(0.0) ||
+        !ss.state().isZero(0.0)) {
+      fail(where + ": kind \"" + kind +
+           "\": the linear block must be the placeholder (1 state, 2 inputs, 1 output, all zero)");
+    }
+    if (m.stall_hold) validate_settings(*m.stall_hold, where);
+    if (m.push_load_observer) validate_settings(*m.push_load_observer, ss.sample_time(), where);
+  }
+
   const auto nu = static_cast<std::size_t>(ss.input_size());
   const auto ny = static_cast<std::size_t>(ss.output_size());
   auto signals = [&](const char* field, const std::vector<SignalInfo>& v, std::size_t count,
@@ -155,6 +256,117 @@ ENDOHAPTICS_DECL std::vector<SignalInfo> signals_from_json(const json& object, c
   return out;
 }
 
+ENDOHAPTICS_DECL void add_linear_block(json& j, const ModelFile& m) {
+  const model::DynamicStateSpace<>& ss = m.state_space;
+  j["A"] = matrix_to_json(ss.A());
+  j["B"] = matrix_to_json(ss.B());
+  j["C"] = matrix_to_json(ss.C());
+  j["D"] = matrix_to_json(ss.D());
+  j["x0"] = std::vector<double>(ss.state().data(), ss.state().data() + ss.state().size());
+  if (m.is_hammerstein_wiener()) {
+    j["input_nonlinearity"] = json::array();
+    for (const auto& map : m.input_nonlinearity)
+      j["input_nonlinearity"].push_back(map_to_json(map));
+    j["output_nonlinearity"] = json::array();
+    for (const auto& map : m.output_nonlinearity) {
+      j["output_nonlinearity"].push_back(map_to_json(map));
+    }
+  }
+}
+
+ENDOHAPTICS_DECL ModelProvenance provenance_from_json(const json& j, const std::string& where) {
+  ModelProvenance out;
+  const auto& p = field(j, "provenance", where);
+  if (!p.is_object()) fail(where + ": field \"provenance\" is not an object");
+  const std::string pw = where + ": provenance";
+  out.method = text(field(p, "method", pw), where, "provenance.method");
+  out.order = integer(field(p, "order", pw), where, "provenance.order");
+  out.block_rows = integer(field(p, "block_rows", pw), where, "provenance.block_rows");
+  out.date = text(field(p, "date", pw), where, "provenance.date");
+  out.notes = text(field(p, "notes", pw), where, "provenance.notes");
+  const auto& files = field(p, "files", pw);
+  const auto& fit = field(p, "fit_percent", pw);
+  if (!files.is_array()) fail(where + ": field \"provenance.files\" is not an array");
+  if (!fit.is_array()) fail(where + ": field \"provenance.fit_percent\" is not an array");
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    out.files.push_back(text(files[i], where, "provenance.files[" + std::to_string(i) + "]"));
+  }
+  for (std::size_t i = 0; i < fit.size(); ++i) {
+    out.fit_percent.push_back(
+        number(fit[i], where, "provenance.fit_percent[" + std::to_string(i) + "]"));
+  }
+  return out;
+}
+
+ENDOHAPTICS_DECL ModelFile joint_model_from_json(const json& j, const std::string& kind,
+                                                 double sample_time, std::vector<SignalInfo> inputs,
+                                                 std::vector<SignalInfo> outputs,
+                                                 const std::string& where) {
+  for (const char* linear :
+       {"states", "A", "B", "C", "D", "x0", "input_nonlinearity", "output_nonlinearity"}) {
+    if (j.contains(linear)) {
+      fail(where + ": kind \"" + kind + "\" has no field \"" + linear +
+           "\" (its parameters are in \"parameters\")");
+    }
+  }
+  if (inputs.size() != 2 || outputs.size() != 1) {
+    fail(where + ": kind \"" + kind + "\" needs 2 inputs (current, velocity) and 1 output, got " +
+         std::to_string(inputs.size()) + " and " + std::to_string(outputs.size()));
+  }
+  const json& params = field(j, "parameters", where);
+  if (!params.is_object()) fail(where + ": field \"parameters\" is not an object");
+  std::vector<std::string> known;
+  const auto get = [&](const char* name, double& out) {
+    known.emplace_back(name);
+    out = number(field(params, name, where + ": parameters"), where,
+                 std::string("parameters.") + name);
+  };
+  ModelFile m{
+      .state_space = with_context(where, [&] { return joint_model_placeholder(2, sample_time); }),
+      .inputs = std::move(inputs),
+      .outputs = std::move(outputs)};
+  if (kind == "stall_hold") {
+    StallHoldSettings p;
+    get("current_deadzone", p.current_deadzone);
+    get("velocity_threshold", p.velocity_threshold);
+    get("velocity_time_constant", p.velocity_time_constant);
+    get("output_time_constant", p.output_time_constant);
+    get("gain", p.gain);
+    known.emplace_back("side");
+    p.side = text(field(params, "side", where + ": parameters"), where, "parameters.side");
+    m.stall_hold = p;
+  } else {
+    PushLoadObserverSettings p;
+    get("current_cutoff", p.current_cutoff);
+    get("velocity_cutoff", p.velocity_cutoff);
+    get("direction_scale", p.direction_scale);
+    get("velocity_threshold", p.velocity_threshold);
+    get("direction_threshold", p.direction_threshold);
+    get("push_sign", p.push_sign);
+    get("current_per_load", p.current_per_load);
+    get("current_offset", p.current_offset);
+    get("current_per_velocity", p.current_per_velocity);
+    get("measurement_variance", p.measurement_variance);
+    get("process_variance", p.process_variance);
+    get("initial_load", p.initial_load);
+    get("initial_variance", p.initial_variance);
+    get("output_offset", p.output_offset);
+    get("output_slope", p.output_slope);
+    m.push_load_observer = p;
+  }
+  for (const auto& [key, value] : params.items()) {
+    if (std::find(known.begin(), known.end(), key) == known.end()) {
+      std::string all;
+      for (const auto& k : known) all += (all.empty() ? "" : ", ") + k;
+      fail(where + ": unknown field \"parameters." + key + "\" for kind \"" + kind +
+           "\" (known: " + all + ")");
+    }
+  }
+  m.provenance = provenance_from_json(j, where);
+  validate(m, where);
+  return m;
+}
+
 ENDOHAPTICS_DECL json map_to_json(const StaticMap& m) {
   json j{{"type", model::to_string(m.kind)}};
   if (m.kind != StaticMapKind::none) {
@@ -207,10 +419,10 @@ ENDOHAPTICS_DECL nlohmann::json to_json(const ModelFile& m) {
   nlohmann::json j;
   j["format"] = "endohaptics-model";
   j["version"] = ModelFile::format_version;
-  j["kind"] = m.is_hammerstein_wiener() ? "hammerstein_wiener" : "state_space";
+  j["kind"] = std::string(to_string(m.kind()));
   const model::DynamicStateSpace<>& ss = m.state_space;
   j["sample_time_s"] = ss.sample_time();
-  j["states"] = ss.state_size();
+  if (!m.is_joint_model()) j["states"] = ss.state_size();
   for (const char* key : {"inputs", "outputs"}) {
     nlohmann::json signals = nlohmann::json::array();
     for (const SignalInfo& s : std::string_view(key) == "inputs" ? m.inputs : m.outputs) {
@@ -218,20 +430,34 @@ ENDOHAPTICS_DECL nlohmann::json to_json(const ModelFile& m) {
     }
     j[key] = std::move(signals);
   }
-  j["A"] = mf::matrix_to_json(ss.A());
-  j["B"] = mf::matrix_to_json(ss.B());
-  j["C"] = mf::matrix_to_json(ss.C());
-  j["D"] = mf::matrix_to_json(ss.D());
-  j["x0"] = std::vector<double>(ss.state().data(), ss.state().data() + ss.state().size());
-  if (m.is_hammerstein_wiener()) {
-    j["input_nonlinearity"] = nlohmann::json::array();
-    for (const auto& map : m.input_nonlinearity)
-      j["input_nonlinearity"].push_back(mf::map_to_json(map));
-    j["output_nonlinearity"] = nlohmann::json::array();
-    for (const auto& map : m.output_nonlinearity) {
-      j["output_nonlinearity"].push_back(mf::map_to_json(map));
-    }
+  if (m.stall_hold) {
+    const StallHoldSettings& p = *m.stall_hold;
+    j["parameters"] = {{"current_deadzone", p.current_deadzone},
+                       {"velocity_threshold", p.velocity_threshold},
+                       {"velocity_time_constant", p.velocity_time_constant},
+                       {"output_time_constant", p.output_time_constant},
+                       {"gain", p.gain},
+                       {"side", p.side}};
   }
+  if (m.push_load_observer) {
+    const PushLoadObserverSettings& p = *m.push_load_observer;
+    j["parameters"] = {{"current_cutoff", p.current_cutoff},
+                       {"velocity_cutoff", p.velocity_cutoff},
+                       {"direction_scale", p.direction_scale},
+                       {"velocity_threshold", p.velocity_threshold},
+                       {"direction_threshold", p.direction_threshold},
+                       {"push_sign", p.push_sign},
+                       {"current_per_load", p.current_per_load},
+                       {"current_offset", p.current_offset},
+                       {"current_per_velocity", p.current_per_velocity},
+                       {"measurement_variance", p.measurement_variance},
+                       {"process_variance", p.process_variance},
+                       {"initial_load", p.initial_load},
+                       {"initial_variance", p.initial_variance},
+                       {"output_offset", p.output_offset},
+                       {"output_slope", p.output_slope}};
+  }
+  if (!m.is_joint_model()) mf::add_linear_block(j, m);
   const ModelProvenance& p = m.provenance;
   j["provenance"] = {{"method", p.method},
                      {"order", p.order},
@@ -257,9 +483,11 @@ ENDOHAPTICS_DECL ModelFile model_from_json(const nlohmann::json& j, const std::s
              std::to_string(ModelFile::format_version));
   }
   const std::string kind = mf::text(mf::field(j, "kind", where), where, "kind");
-  if (kind != "state_space" && kind != "hammerstein_wiener") {
+  if (kind != "state_space" && kind != "hammerstein_wiener" && kind != "stall_hold" &&
+      kind != "push_load_observer") {
     mf::fail(where + ": field \"kind\" is \"" + kind +
-             "\", expected \"state_space\" or \"hammerstein_wiener\"");
+             "\", expected \"state_space\", \"hammerstein_wiener\", \"stall_hold\" or "
+             "\"push_load_observer\"");
   }
   const double sample_time =
       mf::number(mf::field(j, "sample_time_s", where), where, "sample_time_s");
@@ -267,11 +495,15 @@ ENDOHAPTICS_DECL ModelFile model_from_json(const nlohmann::json& j, const std::s
     mf::fail(where + ": field \"sample_time_s\" must be finite and > 0, got " +
              mf::format_number(sample_time));
   }
-  const int n =
-      mf::integer(mf::field(j, "states", where), where, "states", 1, ModelFile::max_states);
   std::vector<SignalInfo> inputs = mf::signals_from_json(j, "inputs", where);
   std::vector<SignalInfo> outputs = mf::signals_from_json(j, "outputs", where);
   if (outputs.empty()) mf::fail(where + ": field \"outputs\" must name at least one output");
+  if (kind == "stall_hold" || kind == "push_load_observer") {
+    return mf::joint_model_from_json(j, kind, sample_time, std::move(inputs), std::move(outputs),
+                                     where);
+  }
+  const int n =
+      mf::integer(mf::field(j, "states", where), where, "states", 1, ModelFile::max_states);
   const auto nu = static_cast<Eigen::Index>(inputs.size());
   const auto ny = static_cast<Eigen::Index>(outputs.size());
   const Eigen::MatrixXd A = mf::matrix_from_json(j, "A", n, n, "states", "states", where);
@@ -302,29 +534,44 @@ ENDOHAPTICS_DECL ModelFile model_from_json(const nlohmann::json& j, const std::s
                "output_nonlinearity entries");
     }
   }
-  const auto& p = mf::field(j, "provenance", where);
-  if (!p.is_object()) mf::fail(where + ": field \"provenance\" is not an object");
-  const std::string pw = where + ": provenance";
-  m.provenance.method = mf::text(mf::field(p, "method", pw), where, "provenance.method");
-  m.provenance.order = mf::integer(mf::field(p, "order", pw), where, "provenance.order");
-  m.provenance.block_rows =
-      mf::integer(mf::field(p, "block_rows", pw), where, "provenance.block_rows");
-  m.provenance.date = mf::text(mf::field(p, "date", pw), where, "provenance.date");
-  m.provenance.notes = mf::text(mf::field(p, "notes", pw), where, "provenance.notes");
-  const auto& files = mf::field(p, "files", pw);
-  const auto& fit = mf::field(p, "fit_percent", pw);
-  if (!files.is_array()) mf::fail(where + ": field \"provenance.files\" is not an array");
-  if (!fit.is_array()) mf::fail(where + ": field \"provenance.fit_percent\" is not an array");
-  for (std::size_t i = 0; i < files.size(); ++i) {
-    m.provenance.files.push_back(
-        mf::text(files[i], where, "provenance.files[" + std::to_string(i) + "]"));
-  }
-  for (std::size_t i = 0; i < fit.size(); ++i) {
-    m.provenance.fit_percent.push_back(
-        mf::number(fit[i], where, "provenance.fit_percent[" + std::to_string(i) + "]"));
-  }
+  m.provenance = mf::provenance_from_json(j, where);
   mf::validate(m, where);
   return m;
+}
+
+ENDOHAPTICS_DECL ModelFile make_stall_hold_file(const StallHoldSettings& settings,
+                                                double sample_time, std::vector<SignalInfo> inputs,
+                                                std::vector<SignalInfo> outputs,
+                                                ModelProvenance provenance) {
+  namespace mf = detail::model_file;
+  ModelFile f{
+      .state_space = mf::with_context("make_stall_hold_file",
+                                      [&] { return mf::joint_model_placeholder(2, sample_time); }),
+      .inputs = std::move(inputs),
+      .outputs = std::move(outputs),
+      .provenance = std::move(provenance),
+      .stall_hold = settings};
+  if (f.provenance.date.empty()) f.provenance.date = utc_date_today();
+  mf::validate(f, "make_stall_hold_file");
+  return f;
+}
+
+ENDOHAPTICS_DECL ModelFile make_push_load_observer_file(const PushLoadObserverSettings& settings,
+                                                        double sample_time,
+                                                        std::vector<SignalInfo> inputs,
+                                                        std::vector<SignalInfo> outputs,
+                                                        ModelProvenance provenance) {
+  namespace mf = detail::model_file;
+  ModelFile f{
+      .state_space = mf::with_context("make_push_load_observer_file",
+                                      [&] { return mf::joint_model_placeholder(2, sample_time); }),
+      .inputs = std::move(inputs),
+      .outputs = std::move(outputs),
+      .provenance = std::move(provenance),
+      .push_load_observer = settings};
+  if (f.provenance.date.empty()) f.provenance.date = utc_date_today();
+  mf::validate(f, "make_push_load_observer_file");
+  return f;
 }
 
 ENDOHAPTICS_DECL void save_model(const std::filesystem::path& path, const ModelFile& model) {

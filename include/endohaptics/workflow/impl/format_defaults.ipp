@@ -19,8 +19,12 @@ ENDOHAPTICS_DECL FormatDefaults format_defaults(files::LogFormat format) {
       d.outputs = {"force"};
       d.sample_time = 0.02;
       d.preprocessing.cutoff = 0.0;
-      d.method = "moesp";
       d.current_deadzone = "auto";
+      // Issue 15: the stall-hold dead zone (estimation/stall_hold.hpp) as a second family, on a
+      // 10 ms grid (its priors: 30 ms velocity filter, 0.3 s output lag); identify keeps the
+      // family with the better inner leave-one-file-out causal fit on the training files.
+      d.method = "moesp,stall_hold";
+      d.joint_sample_time = 0.01;
       break;
     case files::LogFormat::umn_mis_2018:
       // UMN grasper: measured current and encoder velocity -> grip torque on a 10 ms grid, 10 Hz
@@ -32,8 +36,13 @@ ENDOHAPTICS_DECL FormatDefaults format_defaults(files::LogFormat format) {
       d.outputs = {"grip_torque"};
       d.sample_time = 0.01;
       d.preprocessing.cutoff = 10.0;
-      d.method = "moesp,static";
       d.current_deadzone = "auto";
+      // Issue 15: the push-regime load observer (estimation/push_load_observer.hpp) as another
+      // family, at the logs' 1 kHz (the rate of the bridge's loop; its encoder angle is the
+      // running sum of motor_velocity, exact on the logged samples); identify keeps the family
+      // with the better inner cross-validated causal fit on the training files.
+      d.method = "moesp,static,push_load_observer";
+      d.joint_sample_time = 0.001;
       break;
     case files::LogFormat::csv:
       break;

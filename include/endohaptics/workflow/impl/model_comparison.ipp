@@ -46,6 +46,17 @@ ENDOHAPTICS_DECL FileComparison compare_log(const files::ModelFile& model, const
   if (!(options.max_lag >= 0.0 && std::isfinite(options.max_lag))) {
     wf::fail("max_lag must be finite and >= 0 s, got " + wf::format_number(options.max_lag));
   }
+  if (model.is_joint_model() && options.initial_state == InitialStateMode::oracle) {
+    wf::fail("--x0 oracle: a " + std::string(files::to_string(model.kind())) +
+             " model has no linear state to fit to the output (it starts from its reset state, "
+             "filters at the first sample); score it causally (--x0 steady, the default)");
+  }
+  if (model.is_joint_model() && std::abs(log.sample_time - model.state_space.sample_time()) >
+                                    1e-9 * model.state_space.sample_time()) {
+    wf::fail(log.source + ": prepared at " + wf::format_number(log.sample_time) + " s, the " +
+             std::string(files::to_string(model.kind())) + " model runs at " +
+             wf::format_number(model.state_space.sample_time()) + " s");
+  }
   std::vector<StaticMap> in_maps = model.input_nonlinearity;
   std::vector<StaticMap> out_maps = model.output_nonlinearity;
   if (in_maps.empty()) in_maps.assign(static_cast<std::size_t>(nu), StaticMap{});
@@ -64,6 +75,18 @@ ENDOHAPTICS_DECL FileComparison compare_log(const files::ModelFile& model, const
   Eigen::MatrixXd y_hat_all(total, ny);
   Eigen::Index row = 0;
   for (const DataSet& d : log.segments) {
+    if (model.is_joint_model()) {  // a joint model: causal from its start state, no x0
+      const Eigen::MatrixXd y_hat = wf::with_context(
+          log.source, [&] { return Eigen::MatrixXd(simulate_joint_model(model, d.u)); });
+      const Eigen::Index skip = std::min(c.warmup_samples, d.y.rows() - 1);
+      const Eigen::Index keep = d.y.rows() - skip;
+      y_all.middleRows(row, keep) = d.y.bottomRows(keep);
+      y_hat_all.middleRows(row, keep) = y_hat.bottomRows(keep);
+      row += keep;
+      c.y.push_back(d.y);
+      c.y_hat.push_back(y_hat);
+      continue;
+    }
     const Eigen::MatrixXd u = apply_maps(in_maps, d.u);
     Eigen::VectorXd x0 = Eigen::VectorXd::Zero(linear.state_size());
     switch (options.initial_state) {

@@ -323,3 +323,140 @@ ENDOHAPTICS_DECL WorkflowResult identify_logs(const std::vector<PreparedLog>& fi
 }
 
 }  // namespace endohaptics::workflow
+
+namespace endohaptics::workflow {
+
+ENDOHAPTICS_DECL ModelChoice choose_family(
+    const WorkflowResult* subspace, const std::vector<files::ModelKind>& joint_kinds,
+    const std::vector<PreparedLog>& fit_logs, const std::vector<PreparedLog>& score_logs,
+    const std::vector<PreparedLog>& joint_logs, const std::vector<files::SignalInfo>& inputs,
+    const std::vector<files::SignalInfo>& outputs, const WorkflowOptions& options) {
+  namespace wf = detail;
+  const std::size_t families = (subspace != nullptr ? 1 : 0) + joint_kinds.size();
+  if (families == 0) wf::fail("identify: no model family to fit");
+  const std::size_t n_files = !joint_logs.empty() ? joint_logs.size() : score_logs.size();
+  if (!joint_kinds.empty() && joint_logs.size() != n_files) {
+    wf::fail("choose_family: the joint-model logs differ in number from the others");
+  }
+  if (subspace != nullptr && (fit_logs.size() != score_logs.size() ||
+                              (!joint_kinds.empty() && score_logs.size() != n_files))) {
+    wf::fail("choose_family: the subspace logs differ in number from the others");
+  }
+  // The subspace family refitted with its structure fixed (method, order, dead zones).
+  WorkflowOptions fixed = options;
+  std::string subspace_name;
+  if (subspace != nullptr) {
+    const CandidateModel& c = subspace->chosen();
+    subspace_name = c.method;
+    fixed.candidates.clear();
+    fixed.static_gain = c.method.starts_with("static");
+    if (!fixed.static_gain) fixed.candidates = {c.linear.weighting};
+    fixed.order = fixed.static_gain ? 0 : c.linear.order;
+    fixed.search_order = false;
+    fixed.deadzone.assign(inputs.size(), DeadzoneSetting{});
+    for (std::size_t j = 0; j < c.model.input_nonlinearity.size() && j < inputs.size(); ++j) {
+      const StaticMap& m = c.model.input_nonlinearity[j];
+      if (m.kind == StaticMapKind::deadzone) {
+        fixed.deadzone[j] = {DeadzoneSetting::Mode::fixed, m.upper};
+      }
+    }
+  }
+  const auto fit_family = [&](std::size_t family,
+                              const std::vector<std::size_t>& train) -> files::ModelFile {
+    if (subspace != nullptr && family == 0) {
+      std::vector<PreparedLog> f, s;
+      for (const std::size_t i : train) {
+        f.push_back(fit_logs[i]);
+        s.push_back(score_logs[i]);
+      }
+      return identify_logs(f, s, inputs, outputs, fixed).chosen().model;
+    }
+    std::vector<PreparedLog> j;
+    for (const std::size_t i : train) j.push_back(joint_logs[i]);
+    return fit_joint_model(joint_kinds[family - (subspace != nullptr ? 1 : 0)], j, inputs, outputs,
+                           options.scoring.warmup)
+        .model;
+  };
+  const auto logs_of = [&](std::size_t family) -> const std::vector<PreparedLog>& {
+    return subspace != nullptr && family == 0 ? score_logs : joint_logs;
+  };
+  ModelChoice choice{.model = subspace != nullptr
+                                  ? subspace->chosen().model
+                                  : files::make_stall_hold_file({}, 1.0, inputs, outputs)};
+  for (std::size_t f = 0; f < families; ++f) {
+    FamilyScore score;
+    score.family =
+        subspace != nullptr && f == 0
+            ? subspace_name
+            : std::string(files::to_string(joint_kinds[f - (subspace != nullptr ? 1 : 0)]));
+    choice.families.push_back(score);
+  }
+  if (families > 1) choice.folds = inner_folds(n_files);
+  // One training file and several families: no file to hold out, so each family is fitted and
+  // scored on that file (the training score; stated in the report by an empty `folds`).
+  const bool training_only = families > 1 && choice.folds.empty();
+  const std::vector<std::vector<std::size_t>> all_files{{0}};
+  const auto& folds = training_only ? all_files : choice.folds;
+  for (std::size_t f = 0; f < families && !folds.empty(); ++f) {
+    FamilyScore& score = choice.families[f];
+    double fit_sum = 0.0, rmse_sum = 0.0;
+    for (const auto& held_out : folds) {
+      std::vector<std::size_t> train;
+      for (std::size_t i = 0; i < n_files; ++i) {
+        if (training_only || std::find(held_out.begin(), held_out.end(), i) == held_out.end()) {
+          train.push_back(i);
+        }
+      }
+      double fold_fit = 0.0, fold_rmse = 0.0;
+#if defined(__cpp_exceptions)
+      try {
+#endif
+        const files::ModelFile m = fit_family(f, train);
+        for (const std::size_t i : held_out) {
+          const FileComparison c = compare_log(m, logs_of(f)[i], options.scoring);
+          fold_fit += c.mean_fit() / static_cast<double>(held_out.size());
+          fold_rmse += c.mean_rmse() / static_cast<double>(held_out.size());
+        }
+#if defined(__cpp_exceptions)
+      } catch (const Error& e) {
+        score.failure = e.what();
+        fold_fit = -std::numeric_limits<double>::infinity();
+        fold_rmse = std::numeric_limits<double>::infinity();
+      }
+#endif
+      score.fold_fit.push_back(fold_fit);
+      score.fold_rmse.push_back(fold_rmse);
+      fit_sum += fold_fit;
+      rmse_sum += fold_rmse;
+    }
+    const auto k = static_cast<double>(folds.size());
+    score.mean_fit =
+        std::isfinite(fit_sum) ? fit_sum / k : -std::numeric_limits<double>::infinity();
+    score.mean_rmse = rmse_sum / k;
+    if (!std::isfinite(score.mean_fit)) score.mean_fit = -std::numeric_limits<double>::infinity();
+  }
+  choice.best = 0;
+  for (std::size_t f = 1; f < families; ++f) {
+    if (choice.families[f].mean_fit > choice.families[choice.best].mean_fit) choice.best = f;
+  }
+  choice.family = choice.families[choice.best].family;
+  if (subspace != nullptr && choice.best == 0) {
+    choice.model = subspace->chosen().model;
+    choice.files = subspace->chosen().files;
+    return choice;
+  }
+  const files::ModelKind kind = joint_kinds[choice.best - (subspace != nullptr ? 1 : 0)];
+  const JointModelFit fit =
+      fit_joint_model(kind, joint_logs, inputs, outputs, options.scoring.warmup);
+  choice.model = fit.model;
+  choice.joint_summary = fit.summary;
+  for (const PreparedLog& log : joint_logs) {
+    choice.files.push_back(compare_log(choice.model, log, options.scoring));
+  }
+  double sum = 0.0;
+  for (const FileComparison& c : choice.files) sum += c.mean_fit();
+  choice.model.provenance.fit_percent = {sum / static_cast<double>(choice.files.size())};
+  return choice;
+}
+
+}  // namespace endohaptics::workflow

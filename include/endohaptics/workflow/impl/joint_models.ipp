@@ -1,0 +1,229 @@
+//! @file
+//! Function bodies of workflow/joint_models.hpp: included at its end (header-only, the default),
+//! or compiled once with ENDOHAPTICS_SEPARATE_COMPILATION (core/separate_compilation.hpp).
+#pragma once
+
+#include "endohaptics/workflow/joint_models.hpp"
+
+namespace endohaptics::workflow {
+
+ENDOHAPTICS_DECL std::optional<files::ModelKind> joint_model_kind(std::string_view method) {
+  if (method == "stall_hold") return files::ModelKind::stall_hold;
+  if (method == "push_load_observer") return files::ModelKind::push_load_observer;
+  return std::nullopt;
+}
+
+ENDOHAPTICS_DECL estimation::StallHoldParameters<double> stall_hold_parameters(
+    const files::ModelFile& f) {
+  return files::stall_hold_parameters<estimation::StallHoldParameters<double>>(f);
+}
+
+ENDOHAPTICS_DECL estimation::PushLoadObserverParameters<double> push_load_observer_parameters(
+    const files::ModelFile& f) {
+  return files::push_load_observer_parameters<estimation::PushLoadObserverParameters<double>>(f);
+}
+
+ENDOHAPTICS_DECL Eigen::VectorXd simulate_joint_model(const files::ModelFile& model,
+                                                      const Eigen::MatrixXd& u) {
+  if (!model.is_joint_model()) {
+    detail::fail("simulate_joint_model: the model file is of kind \"" +
+                 std::string(files::to_string(model.kind())) + "\", not a joint model");
+  }
+  if (u.cols() != 2) {
+    detail::fail("simulate_joint_model: " + std::to_string(u.cols()) +
+                 " input columns, the joint models take 2 (current, velocity)");
+  }
+  const double ts = model.state_space.sample_time();
+  Eigen::VectorXd y(u.rows());
+  const auto check = [&](model::StepStatus status, Eigen::Index k) {
+    if (status != model::StepStatus::ok) {
+      detail::fail("simulate_joint_model: " + std::string(files::to_string(model.kind())) +
+                   ": non-finite signal or result at sample " + std::to_string(k));
+    }
+  };
+  if (model.stall_hold) {
+    estimation::StallHold<double> m(stall_hold_parameters(model));
+    for (Eigen::Index k = 0; k < u.rows(); ++k) {
+      const estimation::JointSignals<double> s{0.0, u(k, 1), u(k, 0), 0.0};
+      check(m.advance(s), k);
+      y[k] = m.force(s);
+    }
+    return y;
+  }
+  estimation::PushLoadObserver<double> m(push_load_observer_parameters(model));
+  double position = 0.0;  // the encoder angle up to a constant: only increments are used
+  for (Eigen::Index k = 0; k < u.rows(); ++k) {
+    position += u(k, 1) * ts;
+    const estimation::JointSignals<double> s{position, u(k, 1), u(k, 0), 0.0};
+    check(m.advance(s), k);
+    y[k] = m.force(s);
+  }
+  return y;
+}
+
+namespace detail {
+
+//! NRMSE fit % of `y_hat` against `y` (-Inf for a constant `y`).
+inline double fit_percent(const Eigen::VectorXd& y, const Eigen::VectorXd& y_hat) {
+  const double spread = (y.array() - y.mean()).matrix().norm();
+  return spread > 0 ? 100.0 * (1.0 - (y - y_hat).norm() / spread)
+                    : -std::numeric_limits<double>::infinity();
+}
+
+}  // namespace detail
+
+ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
+                                               const std::vector<PreparedLog>& logs,
+                                               const std::vector<files::SignalInfo>& inputs,
+                                               const std::vector<files::SignalInfo>& outputs,
+                                               double warmup) {
+  if (logs.empty()) detail::fail("fit_joint_model: no logs");
+  if (inputs.size() != 2 || outputs.size() != 1) {
+    detail::fail("fit_joint_model: " + std::string(files::to_string(kind)) +
+                 " needs 2 inputs (current, velocity) and 1 output, got " +
+                 std::to_string(inputs.size()) + " and " + std::to_string(outputs.size()));
+  }
+  const double ts = logs.front().sample_time;
+  const auto skip = static_cast<Eigen::Index>(std::ceil(warmup / ts));
+  files::ModelProvenance provenance;
+  provenance.method = std::string(files::to_string(kind));
+  for (const PreparedLog& log : logs) provenance.files.push_back(log.source);
+  JointModelFit out{.model = files::make_stall_hold_file({}, ts, inputs, outputs)};
+  if (kind == files::ModelKind::stall_hold) {
+    std::vector<StallHoldData> data;
+    for (const PreparedLog& log : logs) {
+      for (const DataSet& d : log.segments) {
+        if (d.u.rows() <= skip + 1) continue;
+        data.push_back({d.u.col(0), d.u.col(1), d.y.col(0)});
+      }
+    }
+    if (data.empty()) detail::fail("fit_joint_model: no segment longer than the warm-up");
+    estimation::StallHoldParameters<double> prior;
+    prior.sample_time = ts;
+    const StallHoldFit fit = fit_stall_hold(data, prior, warmup);
+    const auto& p = fit.parameters;
+    const char* side = p.side == estimation::StallHoldSide::positive   ? "positive"
+                       : p.side == estimation::StallHoldSide::negative ? "negative"
+                                                                       : "both";
+    provenance.fit_percent = {fit.mean_fit_percent};
+    out.model = files::make_stall_hold_file(
+        {p.current_deadzone, p.velocity_threshold, p.velocity_time_constant, p.output_time_constant,
+         p.gain, side},
+        ts, inputs, outputs, provenance);
+    out.training_fit = fit.fit_percent;
+    out.summary = "stall_hold: dead zone " + detail::format_number(p.current_deadzone) +
+                  " A, held at |v| <= " + detail::format_number(p.velocity_threshold) +
+                  " rad/s, velocity filter " + detail::format_number(p.velocity_time_constant) +
+                  " s, output lag " + detail::format_number(p.output_time_constant) +
+                  " s (priors); fitted: gain " + detail::format_number(p.gain) + " " +
+                  outputs.front().unit + "/A, loaded side " + side;
+    return out;
+  }
+  if (kind != files::ModelKind::push_load_observer) {
+    detail::fail("fit_joint_model: kind \"" + std::string(files::to_string(kind)) +
+                 "\" is not a joint model");
+  }
+  std::vector<LoadObserverData> data;
+  double peak = 0.0, sum = 0.0, sum2 = 0.0;
+  Eigen::Index count = 0;
+  for (const PreparedLog& log : logs) {
+    for (const DataSet& d : log.segments) {
+      if (d.u.rows() <= skip + 1) continue;
+      LoadObserverData e{d.u.col(0), Eigen::VectorXd(d.u.rows()), d.y.col(0)};
+      double position = 0.0;
+      for (Eigen::Index k = 0; k < d.u.rows(); ++k) {
+        position += d.u(k, 1) * ts;  // as simulate_joint_model: only increments matter
+        e.position[k] = position;
+      }
+      peak = std::max(peak, e.load.cwiseAbs().maxCoeff());
+      sum += e.load.sum();
+      sum2 += e.load.squaredNorm();
+      count += e.load.size();
+      data.push_back(std::move(e));
+    }
+  }
+  if (data.empty()) detail::fail("fit_joint_model: no segment longer than the warm-up");
+  const double mean = sum / static_cast<double>(count);
+  const double variance = std::max(sum2 / static_cast<double>(count) - mean * mean, 0.0);
+  estimation::PushLoadObserverParameters<double> prior;
+  prior.sample_time = ts;
+  prior.initial_variance = variance > 0 ? variance : 1.0;
+  prior.process_variance = std::pow(0.03 * peak, 2) * ts;
+  // The push direction is the one in which the motor works against the load: there the
+  // current's magnitude grows with the load (|d_p + c_p load| increases with |load|, at the
+  // training-mean load); the other direction is back-driven, its current shrinks with the load.
+  // Among the signs that satisfy this, the better causal training RMSE; only if none does, the
+  // better RMSE alone (on the UMN logs the back-driven fit has the lower training RMSE but does
+  // not carry over to another session: 20 vs 6.8 mN m on five runs).
+  const auto works_against = [](const LoadObserverFit& f) {
+    const auto& q = f.parameters;
+    const double load_term = q.current_per_load * q.initial_load;
+    return load_term * (q.current_offset + load_term) > 0.0;
+  };
+  std::optional<LoadObserverFit> best;
+  std::string failures;
+  for (const double sign : {1.0, -1.0}) {
+    prior.push_sign = sign;
+#if defined(__cpp_exceptions)
+    try {
+#endif
+      LoadObserverFit fit = fit_push_load_observer(data, prior, warmup);
+      const bool better =
+          !best || (works_against(fit) && !works_against(*best)) ||
+          (works_against(fit) == works_against(*best) && fit.mean_rmse < best->mean_rmse);
+      if (better) best = std::move(fit);
+#if defined(__cpp_exceptions)
+    } catch (const Error& e) {
+      failures += std::string(failures.empty() ? "" : "; ") + "push sign " +
+                  detail::format_number(sign) + ": " + e.what();
+    }
+#endif
+  }
+  if (!best) detail::fail("fit_joint_model: push_load_observer: " + failures);
+  const auto& p = best->parameters;
+  out.model = files::make_push_load_observer_file(
+      {p.current_cutoff, p.velocity_cutoff, p.direction_scale, p.velocity_threshold,
+       p.direction_threshold, p.push_sign, p.current_per_load, p.current_offset,
+       p.current_per_velocity, p.measurement_variance, p.process_variance, p.initial_load,
+       p.initial_variance, p.output_offset, p.output_slope},
+      ts, inputs, outputs, provenance);
+  out.training_fit.clear();
+  const estimation::PushLoadObserver<double> fitted(p);
+  for (const LoadObserverData& d : data) {
+    const auto n = d.load.size() - skip;
+    out.training_fit.push_back(
+        detail::fit_percent(d.load.tail(n), simulate_load_observer(fitted, d).tail(n)));
+  }
+  double fit_sum = 0.0;
+  for (const double f : out.training_fit) fit_sum += f;
+  out.model.provenance.fit_percent = {fit_sum / static_cast<double>(out.training_fit.size())};
+  const std::string unit = outputs.front().unit;
+  out.summary =
+      "push_load_observer: push sign " + detail::format_number(p.push_sign) +
+      " (of +1, -1: the motor works against the load, |current| grows with it" +
+      std::string(works_against(*best) ? "" : ": NOT met by either sign, the better RMSE") +
+      "), push regime " + detail::format_number(100.0 * best->push_fraction) +
+      " % of the samples; fitted: current per load " + detail::format_number(p.current_per_load) +
+      " A/" + unit + ", offset " + detail::format_number(p.current_offset) + " A, per velocity " +
+      detail::format_number(p.current_per_velocity) + " A s/rad, R " +
+      detail::format_number(p.measurement_variance) + " A^2, load-side friction " +
+      detail::format_number(p.output_offset) + " " + unit + " + " +
+      detail::format_number(p.output_slope) + " x load, initial load " +
+      detail::format_number(p.initial_load) + " " + unit + "; priors: Q " +
+      detail::format_number(p.process_variance) + " per step, P0 " +
+      detail::format_number(p.initial_variance) + ", filters " +
+      detail::format_number(p.current_cutoff) + "/" + detail::format_number(p.velocity_cutoff) +
+      " Hz, q0 " + detail::format_number(p.direction_scale) + " rad";
+  return out;
+}
+
+ENDOHAPTICS_DECL std::vector<std::vector<std::size_t>> inner_folds(std::size_t files) {
+  std::vector<std::vector<std::size_t>> folds;
+  if (files < 2) return folds;
+  const std::size_t k = std::min<std::size_t>(files, 5);
+  folds.resize(k);
+  for (std::size_t i = 0; i < files; ++i) folds[i % k].push_back(i);
+  return folds;
+}
+
+}  // namespace endohaptics::workflow

@@ -1,0 +1,91 @@
+//! @file
+//! The joint force models of issue 15 in the identify/replay workflow: estimation::StallHold
+//! (model-file kind "stall_hold", docs/research_force_models.md A1) and
+//! estimation::PushLoadObserver ("push_load_observer", K2) simulated causally on prepared logs
+//! (inputs: current A, velocity rad/s; the observer's encoder angle is the running sum of the
+//! velocity times the sample time, of which it uses only the increments), fitted from logs
+//! prepared for scoring (workflow/stall_hold_fit.hpp, workflow/push_load_observer_fit.hpp), and
+//! compared with the subspace candidates by an inner cross-validation over the training files.
+//! Configuration time: allocates, throws endohaptics::Error.
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+#include "endohaptics/core/separate_compilation.hpp"
+
+#include "endohaptics/core/error.hpp"
+#include "endohaptics/estimation/push_load_observer.hpp"
+#include "endohaptics/estimation/stall_hold.hpp"
+#include "endohaptics/files/model_file.hpp"
+#include "endohaptics/workflow/error_context.hpp"
+#include "endohaptics/workflow/prepared_log.hpp"
+#include "endohaptics/workflow/push_load_observer_fit.hpp"
+#include "endohaptics/workflow/stall_hold_fit.hpp"
+
+namespace endohaptics::workflow {
+
+//! The joint-model kind named by a --method value ("stall_hold", "push_load_observer"), or none.
+[[nodiscard]] ENDOHAPTICS_DECL std::optional<files::ModelKind> joint_model_kind(
+    std::string_view method);
+
+//! The model file's StallHold parameters in the estimation type (sample time included).
+[[nodiscard]] ENDOHAPTICS_DECL estimation::StallHoldParameters<double> stall_hold_parameters(
+    const files::ModelFile& f);
+
+//! The model file's PushLoadObserver parameters in the estimation type (sample time included).
+[[nodiscard]] ENDOHAPTICS_DECL estimation::PushLoadObserverParameters<double>
+push_load_observer_parameters(const files::ModelFile& f);
+
+//! A joint-model file (kind stall_hold or push_load_observer) run causally on one segment from
+//! its start state: `u` is N x 2 (current A, velocity rad/s), one output value per row. Throws
+//! Error on another kind, another input count, or a non-finite signal or result (naming the row).
+[[nodiscard]] ENDOHAPTICS_DECL Eigen::VectorXd simulate_joint_model(const files::ModelFile& model,
+                                                                    const Eigen::MatrixXd& u);
+
+//! A joint model fitted on logs, with its causal training score.
+struct JointModelFit {
+  files::ModelFile model;              //!< kind stall_hold or push_load_observer
+  std::vector<double> training_fit{};  //!< causal fit % per experiment (segment) after the warm-up
+  std::string summary{};               //!< one line: the fitted values, for identify's report
+};
+
+//! Fits a joint model of `kind` on `logs` (prepared for scoring: what a controller has; inputs
+//! current and velocity, one output; every segment longer than the warm-up), at the logs' sample
+//! time. StallHold: the priors of StallHoldParameters (table 5.2's dead zone, 0.05 rad/s, 30 ms,
+//! 0.3 s), the gain and the loaded side by least squares (fit_stall_hold). PushLoadObserver: the
+//! priors of PushLoadObserverParameters, P0 = the variance of the training output, Q = (0.03 max
+//! |output|)^2 Ts per step (a random walk of 3 % of the range per root second; 1e-8 (N m)^2 per
+//! ms for the UMN grasper, the research note's), both push signs fitted
+//! (fit_push_load_observer), the one in which the motor works against the load kept (the
+//! current's magnitude grows with the load at the training-mean load), then the better causal
+//! training RMSE. Throws Error on another kind or unusable data.
+[[nodiscard]] ENDOHAPTICS_DECL JointModelFit
+fit_joint_model(files::ModelKind kind, const std::vector<PreparedLog>& logs,
+                const std::vector<files::SignalInfo>& inputs,
+                const std::vector<files::SignalInfo>& outputs, double warmup);
+
+//! One model family scored by the inner cross-validation of `choose_family`.
+struct FamilyScore {
+  std::string family{};             //!< e.g. "moesp + dead zone", "stall_hold"
+  std::vector<double> fold_fit{};   //!< causal mean fit % on each fold's held-out files
+  std::vector<double> fold_rmse{};  //!< causal mean RMSE on each fold's held-out files
+  double mean_fit = -std::numeric_limits<double>::infinity();  //!< over the folds, %
+  double mean_rmse = std::numeric_limits<double>::infinity();  //!< over the folds, output units
+  std::string failure{};  //!< why a fold could not be fitted (the family then loses)
+};
+
+//! The folds of the inner cross-validation over `files` training files: min(files, 5) folds,
+//! file i held out in fold i mod folds (leave-one-file-out up to 5 files). Empty for < 2 files.
+[[nodiscard]] ENDOHAPTICS_DECL std::vector<std::vector<std::size_t>> inner_folds(std::size_t files);
+
+}  // namespace endohaptics::workflow
+
+#if !defined(ENDOHAPTICS_SEPARATE_COMPILATION)
+#include "endohaptics/workflow/impl/joint_models.ipp"
+#endif

@@ -1,0 +1,239 @@
+// Model-file kinds "stall_hold" and "push_load_observer" (issue 15): round trips, hostile input,
+// and a file of each kind loaded by the bridge configuration and run in its ForceEstimator.
+#include "alloc_counter.hpp"  // first: counts every heap allocation of this executable
+
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "endohaptics/estimation/push_load_observer.hpp"
+#include "endohaptics/estimation/stall_hold.hpp"
+#include "endohaptics/files/bridge_config.hpp"
+#include "endohaptics/files/model_file.hpp"
+#include "test_support.hpp"
+
+namespace files_joint_model_file_test {
+
+namespace files = endohaptics::files;
+namespace est = endohaptics::estimation;
+using endohaptics::test::message_of;
+using endohaptics::test::TempDir;
+using endohaptics::test::write_text;
+using nlohmann::json;
+
+namespace {
+
+const std::vector<files::SignalInfo> clamp_inputs{{"current", "A"}, {"velocity", "rad/s"}};
+
+files::ModelFile stall_hold_file() {
+  files::StallHoldSettings p;
+  p.gain = -7.5;
+  p.side = "negative";
+  p.current_deadzone = 0.18;
+  return files::make_stall_hold_file(p, 0.01, clamp_inputs, {{"force", "N"}},
+                                     {.method = "stall_hold", .files = {"a.csv", "b.csv"}});
+}
+
+files::ModelFile observer_file() {
+  files::PushLoadObserverSettings p;
+  p.current_per_load = 1.45;
+  p.current_offset = 0.07;
+  p.initial_load = 0.04;
+  p.output_offset = -0.002;
+  p.output_slope = 0.1;
+  p.process_variance = 1e-8;
+  return files::make_push_load_observer_file(p, 0.001, clamp_inputs, {{"grip_torque", "N m"}});
+}
+
+// The message model_from_json gives for `j` (source "m.json").
+std::string error_of(const json& j) {
+  return message_of([&] { (void)files::model_from_json(j, "m.json"); });
+}
+
+}  // namespace
+
+TEST_CASE("joint-model files: both kinds round-trip through JSON and disk") {
+  const files::ModelFile s = stall_hold_file();
+  CHECK(s.kind() == files::ModelKind::stall_hold);
+  CHECK(s.is_joint_model());
+  const json j = files::to_json(s);
+  CHECK(j["kind"] == "stall_hold");
+  CHECK_FALSE(j.contains("A"));
+  CHECK_FALSE(j.contains("states"));
+  CHECK(j["parameters"]["side"] == "negative");
+  const files::ModelFile back = files::model_from_json(j);
+  REQUIRE(back.stall_hold.has_value());
+  CHECK(back.stall_hold->gain == -7.5);
+  CHECK(back.stall_hold->current_deadzone == 0.18);
+  CHECK(back.state_space.sample_time() == 0.01);
+  CHECK(back.provenance.files == std::vector<std::string>{"a.csv", "b.csv"});
+  const auto p = files::stall_hold_parameters<est::StallHoldParameters<double>>(back);
+  CHECK(p.side == est::StallHoldSide::negative);
+  CHECK(p.gain == -7.5);
+  CHECK(p.sample_time == 0.01);
+
+  TempDir dir("joint_model");
+  files::save_model(dir.path() / "o.json", observer_file());
+  const files::ModelFile o = files::load_model(dir.path() / "o.json");
+  CHECK(o.kind() == files::ModelKind::push_load_observer);
+  CHECK(files::to_json(o) == files::to_json(observer_file()));
+  const auto q = files::push_load_observer_parameters<est::PushLoadObserverParameters<double>>(o);
+  CHECK(q.current_per_load == 1.45);
+  CHECK(q.initial_load == 0.04);
+  CHECK(q.sample_time == 0.001);
+  CHECK_NOTHROW((void)est::PushLoadObserver<double>{q});
+  // The wrong kind, and the linear loaders, refuse with the kind named.
+  CHECK(message_of(
+            [&] { (void)files::stall_hold_parameters<est::StallHoldParameters<double>>(o); }) ==
+        "stall_hold_parameters: the model file is of kind \"push_load_observer\", not "
+        "\"stall_hold\"");
+  CHECK(message_of([&] {
+          (void)files::load_hammerstein_wiener<6, 2, 1>(dir.path() / "o.json");
+        }).find("kind \"push_load_observer\" is a joint force model") != std::string::npos);
+}
+
+TEST_CASE("joint-model files: hostile and out-of-range content is refused naming the field") {
+  const json good = files::to_json(stall_hold_file());
+  auto with = [&](const char* key, const json& value) {
+    json j = good;
+    j["parameters"][key] = value;
+    return j;
+  };
+  CHECK(error_of(with("current_deadzone", -0.1)) ==
+        "model file m.json: field \"parameters.current_deadzone\" must be finite and >= 0 A, got "
+        "-0.1");
+  CHECK(error_of(with("gain", nullptr)) ==
+        "model file m.json: field \"parameters.gain\" is not a number (null)");
+  CHECK(error_of(with("side", "up")) ==
+        "model file m.json: field \"parameters.side\" is \"up\", expected \"both\", \"positive\" "
+        "or \"negative\"");
+  CHECK(error_of(with("velocity_threshold", "fast"))
+            .find("\"parameters.velocity_threshold\" is "
+                  "not a number") != std::string::npos);
+  CHECK(error_of(with("spare", 1)) ==
+        "model file m.json: unknown field \"parameters.spare\" for kind \"stall_hold\" (known: "
+        "current_deadzone, velocity_threshold, velocity_time_constant, output_time_constant, "
+        "gain, side)");
+  json missing = good;
+  missing["parameters"].erase("gain");
+  CHECK(error_of(missing) == "model file m.json: parameters: missing field \"gain\"");
+  json no_params = good;
+  no_params.erase("parameters");
+  CHECK(error_of(no_params) == "model file m.json: missing field \"parameters\"");
+  json params_array = good;
+  params_array["parameters"] = json::array();
+  CHECK(error_of(params_array) == "model file m.json: field \"parameters\" is not an object");
+  json linear = good;
+  linear["A"] = json::array({json::array({0.5})});
+  CHECK(error_of(linear) ==
+        "model file m.json: kind \"stall_hold\" has no field \"A\" (its "
+        "parameters are in \"parameters\")");
+  json three = good;
+  three["inputs"].push_back({{"name", "position"}, {"unit", "rad"}});
+  CHECK(error_of(three) ==
+        "model file m.json: kind \"stall_hold\" needs 2 inputs (current, "
+        "velocity) and 1 output, got 3 and 1");
+  json kind = good;
+  kind["kind"] = "neural_network";
+  CHECK(error_of(kind) ==
+        "model file m.json: field \"kind\" is \"neural_network\", expected "
+        "\"state_space\", \"hammerstein_wiener\", \"stall_hold\" or "
+        "\"push_load_observer\"");
+  json ts = good;
+  ts["sample_time_s"] = 0.0;
+  CHECK(error_of(ts) == "model file m.json: field \"sample_time_s\" must be finite and > 0, got 0");
+
+  const json obs = files::to_json(observer_file());
+  auto obs_with = [&](const char* key, const json& value) {
+    json j = obs;
+    j["parameters"][key] = value;
+    return j;
+  };
+  CHECK(error_of(obs_with("push_sign", 0.5)) ==
+        "model file m.json: field \"parameters.push_sign\" must be +1 or -1, got 0.5");
+  CHECK(error_of(obs_with("current_cutoff", 600.0)) ==
+        "model file m.json: field \"parameters.current_cutoff\" must be in (0, Nyquist = 0.5 / "
+        "sample_time_s) Hz, got 600");
+  CHECK(error_of(obs_with("measurement_variance", 0.0)) ==
+        "model file m.json: field \"parameters.measurement_variance\" must be finite and > 0, got "
+        "0");
+  CHECK(error_of(obs_with("current_per_load", 0.0)) ==
+        "model file m.json: field \"parameters.current_per_load\" must be finite and non-zero, "
+        "got 0");
+  CHECK(error_of(obs_with("direction_threshold", 1.5)) ==
+        "model file m.json: field \"parameters.direction_threshold\" must be in (0, 1], got 1.5");
+  // The library's makers check the same rules.
+  files::StallHoldSettings bad;
+  bad.output_time_constant = std::numeric_limits<double>::infinity();
+  CHECK(message_of([&] {
+          (void)files::make_stall_hold_file(bad, 0.01, clamp_inputs, {{"force", "N"}});
+        }) ==
+        "make_stall_hold_file: field \"parameters.output_time_constant\" must be finite "
+        "and >= 0 s, got inf");
+  // Both joint models in one file is not a kind.
+  files::ModelFile both = stall_hold_file();
+  both.push_load_observer = files::PushLoadObserverSettings{};
+  CHECK(message_of([&] {
+          (void)files::to_json(both);
+        }).starts_with("to_json: a model file holds one joint model"));
+}
+
+TEST_CASE("bridge: a model file of each kind configures the clamps and runs in the tick") {
+  TempDir dir("bridge_joint");
+  files::save_model(dir.path() / "stall.json", stall_hold_file());
+  files::save_model(dir.path() / "observer.json", observer_file());
+  for (const char* name : {"stall.json", "observer.json"}) {
+    CAPTURE(name);
+    write_text(dir.path() / "bridge.json",
+               std::string(R"({"estimator": {"clamp_model": ")") + name + "\"}}");
+    const files::BridgeConfig config = files::load_bridge_config(dir.path() / "bridge.json");
+    const files::BridgeForceModels models = files::bridge_force_models(config);
+    CHECK(models.clamp1.is_joint_model());
+    CHECK(models.clamp1.yaw() == nullptr);
+    auto settings = files::bridge_estimator_settings(config, models);
+    // The joint models hold their own friction: the 5.2.3 gate of the clamps is opened.
+    CHECK(settings.friction[2].static_level == 0.0);
+    CHECK(settings.friction[3].static_level == 0.0);
+    CHECK(settings.friction[0].static_level == 0.7);  // roll untouched
+    files::BridgeForceEstimator estimator(models, settings);
+    CHECK(estimator.ticks_per_model_step(est::Motor::clamp1) ==
+          (std::string(name) == "stall.json" ? 10 : 1));
+    est::JointState<double> in;
+    est::ForceEstimator<>::Forces out = est::ForceEstimator<>::Forces::Zero();
+    // A grasp: the clamp-1 motor closes with rising negative current, then stalls.
+    bool ok = true;
+    const long allocations = endohaptics::test::allocations_during([&] {
+      for (int k = 0; k < 2000; ++k) {
+        const double t = 1e-3 * k;
+        in.velocity[2] = t < 1.0 ? 0.1 : 0.0;
+        in.position[2] += 1e-3 * in.velocity[2];
+        in.current[2] = t < 1.0 ? -0.8 * t : -0.8 * std::exp(-(t - 1.0) / 0.2);
+        ok = ok && estimator.step(in, out) == est::ForceStatus::ok;
+      }
+    });
+    CHECK(ok);
+    CHECK(allocations == 0);
+    CHECK(out.allFinite());
+    if (std::string(name) == "stall.json") {
+      // Held through the stall although the current has relaxed to -0.005 A (far below the
+      // 0.18 A dead zone and the 0.21 A friction gate): about gain x (0.7 - 0.18) A.
+      CHECK(std::abs(in.current[2]) < 0.01);
+      CHECK(std::abs(out[2]) > 3.0);
+      CHECK(std::abs(out[2]) < 7.5 * 0.62);
+    }
+    // The estimator's reset restarts the models as constructed (the observer: its initial
+    // load, not a zero state with zero variance).
+    estimator.reset();
+    CHECK(estimator.joint_model<est::Motor::clamp1>().state().isZero());
+    if (const auto* o = estimator.joint_model<est::Motor::clamp1>().observer()) {
+      CHECK(o->state()[6] == 0.04);
+      CHECK(o->state()[7] == o->parameters().initial_variance);
+    }
+  }
+}
+
+}  // namespace files_joint_model_file_test

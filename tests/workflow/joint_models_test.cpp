@@ -1,0 +1,161 @@
+// The joint force models in the identify/replay workflow (issue 15): simulation and causal
+// scoring of model files of kind stall_hold / push_load_observer, their fit from prepared logs,
+// the family choice by inner cross-validation, and the formats' defaults.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <endohaptics/workflow/workflow.hpp>
+#include <string>
+#include <vector>
+
+#include "test_support.hpp"
+
+namespace workflow_joint_models_test {
+
+namespace est = endohaptics::estimation;
+namespace files = endohaptics::files;
+namespace wf = endohaptics::workflow;
+using endohaptics::test::message_of;
+
+namespace {
+
+const std::vector<files::SignalInfo> inputs{{"current", "A"}, {"velocity", "rad/s"}};
+const std::vector<files::SignalInfo> outputs{{"force", "N"}};
+
+// Clamp hits at 10 ms (move in with the current ramping negative, stall while it relaxes, move
+// out), the force a stall-hold of gain `gain`, one hit depth per hit; as a prepared log.
+wf::PreparedLog hits_log(double gain, int hits, double first_depth, const std::string& name) {
+  const int per_hit = 300;
+  Eigen::MatrixXd u(hits * per_hit, 2);
+  for (int h = 0; h < hits; ++h) {
+    const double depth = first_depth + 0.2 * h;
+    for (int k = 0; k < per_hit; ++k) {
+      const int i = h * per_hit + k;
+      if (k < 100) {
+        u.row(i) << -depth * k / 100.0, 0.07;
+      } else if (k < 200) {
+        u.row(i) << -depth * std::exp(-(k - 100) / 20.0), 0.0;
+      } else {
+        u.row(i) << 0.4, -0.07;
+      }
+    }
+  }
+  est::StallHoldParameters<double> truth;
+  truth.sample_time = 0.01;
+  truth.side = est::StallHoldSide::negative;
+  truth.gain = gain;
+  const files::ModelFile model = files::make_stall_hold_file(
+      {truth.current_deadzone, truth.velocity_threshold, truth.velocity_time_constant,
+       truth.output_time_constant, gain, "negative"},
+      0.01, inputs, outputs);
+  wf::PreparedLog log;
+  log.source = name;
+  log.sample_time = 0.01;
+  log.preparation = wf::Preparation::score;
+  log.segments.push_back({u, wf::simulate_joint_model(model, u)});
+  log.start_time.push_back(0.0);
+  return log;
+}
+
+}  // namespace
+
+TEST_CASE("joint models: a stall-hold file simulates as the estimation type, scored causally") {
+  const wf::PreparedLog log = hits_log(-7.5, 3, 0.5, "hits.csv");
+  est::StallHoldParameters<double> p;
+  p.sample_time = 0.01;
+  p.side = est::StallHoldSide::negative;
+  p.gain = -7.5;
+  const wf::StallHoldData data{log.segments[0].u.col(0), log.segments[0].u.col(1),
+                               log.segments[0].y.col(0)};
+  const Eigen::VectorXd direct = wf::simulate_stall_hold(est::StallHold<double>(p), data);
+  CHECK(direct.isApprox(log.segments[0].y.col(0)));
+  CHECK(direct.maxCoeff() > 3.0);  // the hits carry force
+
+  const files::ModelFile model =
+      files::make_stall_hold_file({0.2, 0.05, 0.03, 0.3, -7.5, "negative"}, 0.01, inputs, outputs);
+  const wf::FileComparison c = wf::compare_log(model, log);
+  CHECK(c.fit[0] == doctest::Approx(100.0));
+  CHECK(c.rmse[0] == doctest::Approx(0.0).epsilon(1e-9));
+  CHECK(c.warmup_samples == 50);  // the default 0.5 s
+  // No output-fitted state for a joint model, and no other grid than its own.
+  CHECK(message_of([&] {
+          (void)wf::compare_log(model, log, {wf::InitialStateMode::oracle, 0.0, 1.0});
+        }).starts_with("--x0 oracle: a stall_hold model has no linear state"));
+  wf::PreparedLog other = log;
+  other.sample_time = 0.02;
+  CHECK(message_of([&] { (void)wf::compare_log(model, other); }) ==
+        "hits.csv: prepared at 0.02 s, the stall_hold model runs at 0.01 s");
+  CHECK(message_of([&] { (void)wf::simulate_joint_model(model, Eigen::MatrixXd::Zero(5, 3)); }) ==
+        "simulate_joint_model: 3 input columns, the joint models take 2 (current, velocity)");
+}
+
+TEST_CASE("joint models: fit_joint_model recovers the stall-hold gain and side from logs") {
+  const std::vector<wf::PreparedLog> logs{hits_log(-7.5, 3, 0.5, "a"), hits_log(-7.5, 2, 0.7, "b")};
+  const wf::JointModelFit fit =
+      wf::fit_joint_model(files::ModelKind::stall_hold, logs, inputs, outputs, 0.5);
+  REQUIRE(fit.model.stall_hold.has_value());
+  CHECK(fit.model.stall_hold->gain == doctest::Approx(-7.5));
+  CHECK(fit.model.stall_hold->side == "negative");
+  CHECK(fit.model.provenance.files == std::vector<std::string>{"a", "b"});
+  CHECK(fit.summary.find("loaded side negative") != std::string::npos);
+  CHECK(message_of([&] {
+          (void)wf::fit_joint_model(files::ModelKind::stall_hold, logs, {inputs[0]}, outputs, 0.5);
+        }) ==
+        "fit_joint_model: stall_hold needs 2 inputs (current, velocity) and 1 output, got 1 "
+        "and 1");
+  CHECK(message_of([&] {
+          (void)wf::fit_joint_model(files::ModelKind::hammerstein_wiener, logs, inputs, outputs,
+                                    0.5);
+        }) == "fit_joint_model: kind \"hammerstein_wiener\" is not a joint model");
+}
+
+TEST_CASE("joint models: the family is chosen by inner cross-validation on the training files") {
+  CHECK(wf::inner_folds(1).empty());
+  CHECK(wf::inner_folds(3) == std::vector<std::vector<std::size_t>>{{0}, {1}, {2}});
+  const auto seven = wf::inner_folds(7);
+  REQUIRE(seven.size() == 5);
+  CHECK(seven[0] == std::vector<std::size_t>{0, 5});
+  CHECK(seven[4] == std::vector<std::size_t>{4});
+
+  std::vector<wf::PreparedLog> logs;
+  for (int f = 0; f < 4; ++f) logs.push_back(hits_log(-7.5, 2, 0.5 + 0.1 * f, std::to_string(f)));
+  // The observer never sees the motor push against a load in these hits (the current of the
+  // moving-in phase does not grow with any load it can fit): it fails or scores below, and loses.
+  const wf::ModelChoice choice = wf::choose_family(
+      nullptr, {files::ModelKind::push_load_observer, files::ModelKind::stall_hold}, {}, {}, logs,
+      inputs, outputs, wf::WorkflowOptions{});
+  REQUIRE(choice.families.size() == 2);
+  CHECK(choice.folds.size() == 4);  // leave one file out
+  CHECK(choice.family == "stall_hold");
+  CHECK(choice.best == 1);
+  CHECK(choice.families[1].mean_fit == doctest::Approx(100.0));
+  CHECK(choice.families[1].fold_fit.size() == 4);
+  CHECK(choice.families[0].mean_fit < choice.families[1].mean_fit);
+  REQUIRE(choice.model.stall_hold.has_value());
+  CHECK(choice.model.stall_hold->gain == doctest::Approx(-7.5));
+  CHECK(choice.files.size() == 4);
+  CHECK_FALSE(choice.joint_summary.empty());
+  // One family: no cross-validation, that family.
+  const wf::ModelChoice only = wf::choose_family(nullptr, {files::ModelKind::stall_hold}, {}, {},
+                                                 logs, inputs, outputs, wf::WorkflowOptions{});
+  CHECK(only.folds.empty());
+  CHECK(only.family == "stall_hold");
+  CHECK(message_of([&] {
+          (void)wf::choose_family(nullptr, {}, {}, {}, logs, inputs, outputs,
+                                  wf::WorkflowOptions{});
+        }) == "identify: no model family to fit");
+}
+
+TEST_CASE("joint models: the formats' defaults offer them, --method names them") {
+  const auto aau = wf::format_defaults(files::LogFormat::endowrist_2016);
+  CHECK(aau.method == "moesp,stall_hold");
+  CHECK(aau.joint_sample_time == 0.01);
+  const auto umn = wf::format_defaults(files::LogFormat::umn_mis_2018);
+  CHECK(umn.method == "moesp,static,push_load_observer");
+  CHECK(umn.joint_sample_time == 0.001);
+  CHECK(wf::joint_model_kind("stall_hold") == files::ModelKind::stall_hold);
+  CHECK(wf::joint_model_kind("push_load_observer") == files::ModelKind::push_load_observer);
+  CHECK_FALSE(wf::joint_model_kind("moesp").has_value());
+}
+
+}  // namespace workflow_joint_models_test
