@@ -2,7 +2,8 @@
 // force, UndefinedBehaviorSanitizer still checks code defined in this project and AddressSanitizer
 // still checks Eigen's kernels. `sanitizer_probe overflow` overflows a signed int in a function of
 // ours; `sanitizer_probe overread` sums an Eigen::Map one element past the end of a heap buffer.
-// Each must be reported (CTest matches the report), or the sanitized build checks less than it says.
+// Each must be reported (CTest matches the report), or the sanitized build checks less than it
+// says.
 #include <Eigen/Core>
 #include <cstdio>
 #include <cstring>
