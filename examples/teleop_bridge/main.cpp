@@ -131,20 +131,9 @@ int run_loop(Transport& transport, Device& device, endohaptics::SteadyClock& clo
         std::chrono::duration<double, std::milli>(loop_config.max_tick_dt()).count();
     loop_config.passivity.round_trip_ticks =
         static_cast<int>(std::lround(opt.passivity_round_trip / period_ms));
-    // Book only the joint force the mapping renders unclipped (eq. 5.8: a clamp's share of the
-    // radial channel is half its force), so the observer's operator port is the force felt.
-    const auto& m = cfg.mapping;
-    for (int slot = 0; slot < tp::loop_motors; ++slot) {
-      const auto joint = m.motor_order[static_cast<std::size_t>(slot)];
-      const int channel = joint == endohaptics::protocol::Motor::roll    ? 1
-                          : joint == endohaptics::protocol::Motor::pitch ? 2
-                                                                         : 0;
-      const double share = channel == 0 ? 2.0 : 1.0;
-      if (m.force_scale[channel] > 0.0) {
-        loop_config.passivity.force_limit[slot] =
-            share * m.channel_limit[channel] / m.force_scale[channel];
-      }
-    }
+    // Book only the joint force the mapping renders unclipped, so the observer's operator port
+    // is the force felt.
+    loop_config.passivity.force_limit = mapper.unclipped_joint_force();
   }
   tp::TeleopLoop loop(transport, device, paced, mapper, clock, loop_config);
 

@@ -162,6 +162,29 @@ TEST_CASE("per-joint range limits: each joint is limited and reported") {
   CHECK(wide.clamped_mask == (bit(Motor::clamp1) | bit(Motor::clamp2)));
 }
 
+TEST_CASE("unclipped joint force: the largest joint force each channel renders unclipped") {
+  Config c;
+  c.motor_order = {Motor::clamp2, Motor::roll, Motor::clamp1, Motor::pitch};
+  c.force_scale = Vector3(4.0, 2.0, 0.0);  // radial, tangential, z (pitch not rendered)
+  c.channel_limit = Vector3(3.0, 1.0, 1.5);
+  c.force_limit = 1e9;  // only the channel limits here
+  const Mapper mapper(c);
+  const Motors limit = mapper.unclipped_joint_force();
+  CHECK(limit[0] == doctest::Approx(1.5));  // clamp: 2 x 3 N / 4 (half its force is radial)
+  CHECK(limit[1] == doctest::Approx(0.5));  // roll: 1 N / 2
+  CHECK(limit[2] == doctest::Approx(1.5));
+  CHECK(std::isinf(limit[3]));  // a channel scaled to 0 never clips
+  // At the limit a lone joint force is rendered unclipped, just beyond it the channel clips.
+  for (int m = 0; m < 3; ++m) {
+    Motors f = Motors::Zero();
+    Vector3 stylus;
+    f[m] = 0.999 * limit[m];
+    CHECK(mapper.map_force(f, stylus).channel_limited_mask == 0);
+    f[m] = 1.01 * limit[m];
+    CHECK(mapper.map_force(f, stylus).channel_limited_mask != 0);
+  }
+}
+
 TEST_CASE("motor order is a configurable permutation") {
   Config config;
   config.motor_order = {Motor::clamp2, Motor::roll, Motor::clamp1, Motor::pitch};

@@ -18,6 +18,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <numbers>
 #include <string>
 #include <string_view>
@@ -248,6 +249,25 @@ class CylindricalMapper {
   //! Eq. 5.8 at the theta of the last successful `map_position` (or `theta_neutral`).
   ForceResult map_force(const MotorVector& motor_force, Vector3& stylus_force) const noexcept {
     return map_force(motor_force, held_theta_, stylus_force);
+  }
+
+  //! Per motor slot, the largest joint force (N) that eq. 5.8 renders without its channel's
+  //! `channel_limit` clipping it, with the other joints at zero: channel_limit / force_scale, and
+  //! twice that for the clamps (a clamp's share of the radial channel is half its force);
+  //! +infinity where the channel's scale is 0. For layers that must know what the operator
+  //! feels unclipped (teleop::PassivityConfig::force_limit).
+  [[nodiscard]] MotorVector unclipped_joint_force() const noexcept {
+    MotorVector limit;
+    for (std::size_t m = 0; m < config_.motor_order.size(); ++m) {
+      const Motor joint = config_.motor_order[m];
+      const Eigen::Index channel = joint == Motor::roll ? 1 : joint == Motor::pitch ? 2 : 0;
+      const Scalar share = channel == 0 ? Scalar(2) : Scalar(1);
+      const Scalar scale = config_.force_scale[channel];
+      limit[static_cast<Eigen::Index>(m)] = scale > Scalar(0)
+                                                ? share * config_.channel_limit[channel] / scale
+                                                : std::numeric_limits<Scalar>::infinity();
+    }
+    return limit;
   }
 
   //! Inverse of eq. 5.8 without scale or limit: stylus force (N) at `theta` -> (F_clamp along
