@@ -21,7 +21,7 @@ start_emulator() {
   "$bin/endohaptics-sbrio-emulator" --bind 127.0.0.1 --port "$1" --key "$key" --quiet >"$work/emulator.$1.out" 2>&1 &
   emulator_pid=$!
   for _ in $(seq 100); do
-    port=$(sed -n 's/.*listening on 127.0.0.1:\([0-9]*\).*/\1/p' "$work/emulator.$1.out")
+    port=$(sed -n 's/.*listening on 127.0.0.1:\([0-9]*\).*/\1/p' "$work/emulator.$1.out" 2>/dev/null || true)
     [[ -n $port ]] && return 0
     kill -0 "$emulator_pid" 2>/dev/null || fail "emulator died: $(cat "$work/emulator.$1.out")"
     sleep 0.05
