@@ -11,7 +11,7 @@
 #      two lines "2016 preset: fit ..." and "identified: fit ...".
 # Usage: demo.sh BIN_DIR OUT_DIR [SECONDS per teleoperation run, default 10; the identification
 # experiment runs twice as long: with 10 s of it the identified model's fit in step 4 varied
-# from 68 to 83 % between runs of the demo, with 20 s it was 80-82 % (docs/identification_results.md)]
+# from 68 to 83 % between runs of the demo, with 20 s it was 80-82 % (README, quick start)]
 set -euo pipefail
 bin=$1
 out=$2
