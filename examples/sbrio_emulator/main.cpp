@@ -57,22 +57,21 @@ struct RunOptions {
   double loss = 0.0;       // --loss
 };
 
-// Serves setpoints through `transport` (v2 SecureTransport, or the UDP socket itself) until the
-// duration or a signal; `udp` is the socket underneath.
+// The send path: every answer goes through a delay line with loss (pass-through with all three
+// at 0), below protocol v2, so a delayed state still names the setpoint it answered when it was
+// made (above v2 it would be sealed when it leaves, naming the newest setpoint: a stale answer
+// passed off as fresh).
+using Delayed = sim::DelayedSendTransport<transport::UdpServerTransport, endohaptics::SteadyClock>;
+
+// Serves setpoints through `transport` (v2 SecureTransport over `delayed`, or `delayed` itself)
+// until the duration or a signal; `udp` is the socket underneath.
 template <typename Transport>
-int run(Transport& transport, transport::UdpServerTransport& udp, sim::SimulatedRig<4>& rig,
-        endohaptics::SteadyClock& clock, const sim::EmulatorConfig& config,
-        const RunOptions& opts) {
+int run(Transport& transport, Delayed& delayed, transport::UdpServerTransport& udp,
+        sim::SimulatedRig<4>& rig, endohaptics::SteadyClock& clock,
+        const sim::EmulatorConfig& config, const RunOptions& opts) {
   const auto& [truth_path, truth_period_ms, duration, watchdog_ms, motors, environment, quiet,
                delay_ms, jitter_ms, loss] = opts;
-  // Every answer goes through a delay line with loss (pass-through with all three at 0).
-  using Delayed = sim::DelayedSendTransport<Transport, endohaptics::SteadyClock>;
-  const auto ms = [](double v) {
-    return std::chrono::nanoseconds(static_cast<std::int64_t>(v * 1e6 + 0.5));
-  };
-  auto delayed = std::make_unique<Delayed>(
-      transport, clock, sim::DelaySettings{ms(delay_ms), ms(jitter_ms)}, loss, 1);
-  sim::SbrioEmulator emulator(*delayed, rig, clock, config);
+  sim::SbrioEmulator emulator(transport, rig, clock, config);
   TruthLog truth;
   if (!truth_path.empty()) {
     truth.file = std::fopen(truth_path.c_str(), "w");
@@ -165,7 +164,7 @@ int run(Transport& transport, transport::UdpServerTransport& udp, sim::Simulated
       c.transport_errors, c.watchdog_trips);
   if (delay_ms > 0 || jitter_ms > 0 || loss > 0) {
     fmt::print("sbrio-emulator: send path: {} answers lost, {} refused by a full delay line\n",
-               delayed->lost(), delayed->overflowed());
+               delayed.lost(), delayed.overflowed());
   }
   // No false success: a truth log that could not be written (full disk) fails the run.
   if (truth.file != nullptr) {
@@ -262,22 +261,24 @@ int main(int argc, char** argv) {
     sim::EmulatorConfig config;
     config.watchdog_timeout = std::chrono::microseconds(static_cast<long>(watchdog_ms * 1e3));
     // v2: a PC session silent for the watchdog time is dropped (the motors are off by then).
-    std::optional<
-        transport::SecureTransport<transport::UdpServerTransport, protocol::SecureResponder<4>>>
-        secure;
+    const auto ms = [](double v) {
+      return std::chrono::nanoseconds(static_cast<std::int64_t>(v * 1e6 + 0.5));
+    };
+    Delayed delayed(udp_transport, clock, sim::DelaySettings{ms(delay_ms), ms(jitter_ms)}, loss, 1);
+    std::optional<transport::SecureTransport<Delayed, protocol::SecureResponder<4>>> secure;
     if (wire == "2016") {
       fmt::print(
           "sbrio-emulator: WARNING: --protocol 2016: unauthenticated; setpoints are obeyed from "
           "the first sender only (address and port pinned), others are counted\n");
     } else {
-      secure.emplace(udp_transport, protocol::SecureResponder<4>(protocol::load_key_file(key_path),
-                                                                 protocol::random_session_id(),
-                                                                 config.watchdog_timeout));
+      secure.emplace(delayed, protocol::SecureResponder<4>(protocol::load_key_file(key_path),
+                                                           protocol::random_session_id(),
+                                                           config.watchdog_timeout));
     }
     const RunOptions opts{truth_path,  truth_period_ms, duration, watchdog_ms, motors,
                           environment, quiet,           delay_ms, jitter_ms,   loss};
-    return secure ? run(*secure, udp_transport, rig, clock, config, opts)
-                  : run(udp_transport, udp_transport, rig, clock, config, opts);
+    return secure ? run(*secure, delayed, udp_transport, rig, clock, config, opts)
+                  : run(delayed, delayed, udp_transport, rig, clock, config, opts);
   } catch (const std::exception& e) {
     fmt::print(stderr, "error: {}\n", e.what());
     return 1;

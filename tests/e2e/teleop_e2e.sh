@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # End-to-end tests on UDP loopback: endohaptics-sbrio-emulator + endohaptics-bridge as separate
-# processes, bounded in time. Usage: teleop_e2e.sh BIN_DIR steady|kill-restart|identified
+# processes, bounded in time. Usage: teleop_e2e.sh BIN_DIR steady|kill-restart|identified|delayed
 set -euo pipefail
 bin=$1
 scenario=$2
@@ -16,9 +16,11 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 key="$work/link.key"
 "$bin/endohaptics-bridge" --generate-key "$key" >/dev/null || fail "cannot generate a key"
 
-# Starts the emulator on $1 (0: any port) and sets emulator_pid and port.
+# Starts the emulator on $1 (0: any port; further arguments are the emulator's) and sets
+# emulator_pid and port.
 start_emulator() {
-  "$bin/endohaptics-sbrio-emulator" --bind 127.0.0.1 --port "$1" --key "$key" --quiet >"$work/emulator.$1.out" 2>&1 &
+  "$bin/endohaptics-sbrio-emulator" --bind 127.0.0.1 --port "$1" --key "$key" --quiet "${@:2}" \
+    >"$work/emulator.$1.out" 2>&1 &
   emulator_pid=$!
   for _ in $(seq 100); do
     port=$(sed -n 's/.*listening on 127.0.0.1:\([0-9]*\).*/\1/p' "$work/emulator.$1.out" 2>/dev/null || true)
@@ -100,6 +102,24 @@ case $scenario in
       }' "$work/ticks.csv" || fail "kill/restart behaviour (see above)"
     grep -q "link_losses=1 recoveries=1" "$work/bridge.out" || fail "summary should count 1 loss, 1 recovery"
     echo "PASS: safe state on loss, kept running, recovered with a force ramp"
+    ;;
+  delayed)
+    # Answers held 20 ms on the emulator's send path, below protocol v2: every state names the
+    # setpoint it answered 20 ticks ago. The bridge refuses them as stale answers by default
+    # (no link, never a stale state passed off as fresh) and accepts them with --max-answer-lag.
+    start_emulator 0 --delay 20
+    "$bin/endohaptics-bridge" --sbrio "127.0.0.1:$port" --key "$key" --duration 1.5 \
+      >"$work/strict.out" 2>&1 || fail "bridge exited with $?: $(cat "$work/strict.out")"
+    cat "$work/strict.out"
+    received=$(summary_value received "$work/strict.out")
+    [[ $received == 0 ]] || fail "$received delayed states accepted without --max-answer-lag"
+    "$bin/endohaptics-bridge" --sbrio "127.0.0.1:$port" --key "$key" --duration 2 \
+      --max-answer-lag 40 >"$work/lag.out" 2>&1 || fail "bridge exited with $?: $(cat "$work/lag.out")"
+    cat "$work/lag.out"
+    complete=$(summary_value complete "$work/lag.out")
+    [[ -n $complete ]] || fail "no summary line"
+    awk -v c="$complete" 'BEGIN { exit !(c >= 90) }' || fail "only $complete % of ticks complete with --max-answer-lag 40"
+    echo "PASS: 0 delayed states accepted by default, $complete % complete with --max-answer-lag 40"
     ;;
   identified)
     # The demo's pipeline (examples/demo.sh), 6 s per run: the clamp model identified on the
