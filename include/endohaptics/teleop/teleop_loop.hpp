@@ -235,14 +235,13 @@ class TeleopLoop {
       // resumes from what is sent, so what it held back is given back when energy allows).
       MotorVector gated;
       if (passivity_.controlling() &&
-          passivity_.shape_setpoint(config_.safety.clamp_to_range(out.position), motor_force_,
-                                    gated)) {
-        out.position = config_.safety.clamp_to_range(gated);
-        limiter_.initialize(out.position);
+          passivity_.shape_setpoint(out.position, motor_force_, gated)) {
+        out.position = gated;
         r.passivity.robot_active = true;
       }
     }
     out.position = config_.safety.clamp_to_range(out.position);
+    if (r.passivity.robot_active) limiter_.initialize(out.position);
     passivity_.commit(out.position);
     r.setpoint = out.position;
     r.enable_mask = out.enable_mask;
