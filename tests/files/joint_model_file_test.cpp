@@ -227,8 +227,16 @@ TEST_CASE("bridge: a model file of each kind configures the clamps and runs in t
     }
     // The estimator's reset restarts the models as constructed (the observer: its initial
     // load, not a zero state with zero variance).
+    // (The state after the reset is the state of the model as constructed from the file.)
     estimator.reset();
-    CHECK(estimator.joint_model<est::Motor::clamp1>().state().isZero());
+    CHECK(estimator.joint_model<est::Motor::clamp1>().state() == models.clamp1.state());
+    // A snapshot restores the model exactly (a failed tick leaves the estimator untouched).
+    files::ClampForceModel model = models.clamp1;
+    for (int k = 0; k < 30; ++k) (void)model.advance({0.001 * k, 0.1, -0.02 * k, 0.0});
+    const files::ClampForceModel::State saved = model.state();
+    (void)model.advance({0.05, 0.1, -0.7, 0.0});
+    model.reset(saved);
+    CHECK(model.state() == saved);
     if (const auto* o = estimator.joint_model<est::Motor::clamp1>().observer()) {
       CHECK(o->state()[6] == 0.04);
       CHECK(o->state()[7] == o->parameters().initial_variance);

@@ -508,14 +508,13 @@ void with_prefix(std::string_view source, std::string_view key, F&& validate) {
 //! Hammerstein-Wiener type (estimation::ClampModel2016, also identified "hammerstein_wiener" files
 //! of 6 states, 2 inputs, 1 output), estimation::StallHold or estimation::PushLoadObserver. A
 //! JointForceModel (noexcept, allocation-free, fixed size: a std::variant of the three). Its State
-//! (10 numbers, the largest of the three; unused entries 0) is the model's state minus its reset
-//! state, so that ForceEstimator::reset (State::Zero) restarts each model as constructed: the
-//! yaw model at x = 0 as before, the observer with its filters waiting for the next sample and
-//! the training-mean load and variance (not a zero variance that would stop its updates).
+//! is the model's own, padded with zeros to 10 numbers (the largest of the three); reset() is the
+//! model's own start state (ForceEstimator::reset, through RateStepper: the yaw model at x = 0,
+//! the observer with its filters waiting for the next sample and its initial load and variance).
 class ClampForceModel {
  public:
   using ScalarType = double;                              //!< floating-point type
-  using State = Eigen::Matrix<double, 10, 1>;             //!< the model's state minus its reset
+  using State = Eigen::Matrix<double, 10, 1>;             //!< the model's state, zero-padded
   using Signals = estimation::JointSignals<double>;       //!< one joint's signals for one tick
   using Yaw = estimation::ClampModel2016<double>;         //!< the Hammerstein-Wiener kind
   using StallHold = estimation::StallHold<double>;        //!< kind "stall_hold"
@@ -534,37 +533,17 @@ class ClampForceModel {
     if (auto* m = std::get_if<StallHold>(&model_)) return f(*m);
     return f(*std::get_if<Observer>(&model_));
   }
-  template <typename V>
-  void set_reset(const V& x) {
-    static_assert(static_cast<int>(V::RowsAtCompileTime) <=
-                  static_cast<int>(State::RowsAtCompileTime));
-    reset_.setZero();
-    reset_.template head<V::RowsAtCompileTime>() = x;
-    refresh();
-  }
-  void refresh() noexcept {
-    visit([this](const auto& m) noexcept {
-      using S = typename std::remove_cvref_t<decltype(m)>::State;
-      state_.setZero();
-      state_.template head<S::RowsAtCompileTime>() =
-          m.state() - reset_.template head<S::RowsAtCompileTime>();
-      return 0;
-    });
-  }
+  template <typename M>
+  static constexpr int size_of = static_cast<int>(M::State::RowsAtCompileTime);
+  static_assert(size_of<Yaw> <= 10 && size_of<StallHold> <= 10 && size_of<Observer> <= 10);
 
  public:
-  //! The Hammerstein-Wiener clamp model (reset state 0).
-  explicit ClampForceModel(const Yaw& m) : model_(m) { set_reset(Yaw::State::Zero().eval()); }
-  //! The stall-hold model (reset state 0).
-  explicit ClampForceModel(const StallHold& m) : model_(m) {
-    set_reset(StallHold::State::Zero().eval());
-  }
-  //! The push-load observer (reset state: Observer::reset()).
-  explicit ClampForceModel(const Observer& m) : model_(m) {
-    auto& o = std::get<Observer>(model_);
-    o.reset();
-    set_reset(o.state());
-  }
+  //! The Hammerstein-Wiener clamp model.
+  explicit ClampForceModel(const Yaw& m) : model_(m) {}
+  //! The stall-hold model.
+  explicit ClampForceModel(const StallHold& m) : model_(m) {}
+  //! The push-load observer.
+  explicit ClampForceModel(const Observer& m) : model_(m) {}
 
   //! True for the kinds with their own friction handling (stall_hold, push_load_observer).
   [[nodiscard]] bool is_joint_model() const noexcept { return model_.index() != 0; }
@@ -591,28 +570,35 @@ class ClampForceModel {
   }
   //! One model period (the model's StepStatus; all-or-nothing).
   [[nodiscard]] model::StepStatus advance(const Signals& s) noexcept {
-    const model::StepStatus status = visit_mutable([&s](auto& m) noexcept { return m.advance(s); });
-    refresh();
-    return status;
+    return visit_mutable([&s](auto& m) noexcept { return m.advance(s); });
   }
-  //! The model's state minus its reset state.
-  [[nodiscard]] const State& state() const noexcept { return state_; }
-  //! Sets the model's state to its reset state plus `x` (its leading entries).
-  void reset(const State& x = State::Zero()) noexcept {
-    visit_mutable([&](auto& m) noexcept {
-      using S = typename std::remove_cvref_t<decltype(m)>::State;
-      S full =
-          reset_.template head<S::RowsAtCompileTime>() + x.template head<S::RowsAtCompileTime>();
-      m.reset(full);
+  //! The model's state, padded with zeros.
+  [[nodiscard]] State state() const noexcept {
+    return visit([](const auto& m) noexcept {
+      State x = State::Zero();
+      x.head<size_of<std::remove_cvref_t<decltype(m)>>>() = m.state();
+      return x;
+    });
+  }
+  //! Sets the model's state to the leading entries of `x` (what state() returned restores it
+  //! exactly).
+  void reset(const State& x) noexcept {
+    visit_mutable([&x](auto& m) noexcept {
+      using M = std::remove_cvref_t<decltype(m)>;
+      m.reset(typename M::State(x.head<size_of<M>>()));
       return 0;
     });
-    refresh();
+  }
+  //! The model's own start state (its reset()).
+  void reset() noexcept {
+    visit_mutable([](auto& m) noexcept {
+      m.reset();
+      return 0;
+    });
   }
 
  private:
   std::variant<Yaw, StallHold, Observer> model_;
-  State reset_ = State::Zero();
-  State state_ = State::Zero();
 };
 
 static_assert(estimation::JointForceModel<ClampForceModel>);
