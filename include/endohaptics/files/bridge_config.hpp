@@ -624,21 +624,19 @@ using BridgeForceEstimator =
   if (!config.clamp_model.empty()) {
     const ModelFile file = load_model(config.clamp_model);
     const std::string where = "model file " + config.clamp_model.string();
-    const ClampForceModel clamp = detail::model_file::with_context(where, [&] {
-      switch (file.kind()) {
-        case ModelKind::stall_hold:
-          return ClampForceModel(estimation::StallHold<double>(
-              stall_hold_parameters<estimation::StallHoldParameters<double>>(file)));
-        case ModelKind::push_load_observer:
-          return ClampForceModel(estimation::PushLoadObserver<double>(
-              push_load_observer_parameters<estimation::PushLoadObserverParameters<double>>(file)));
-        case ModelKind::state_space:
-        case ModelKind::hammerstein_wiener:
-          break;
+    const auto joint_model = [&] {
+      if (file.kind() == ModelKind::stall_hold) {
+        using P = estimation::StallHoldParameters<double>;
+        return ClampForceModel(estimation::StallHold<double>(stall_hold_parameters<P>(file)));
       }
+      using P = estimation::PushLoadObserverParameters<double>;
       return ClampForceModel(
-          estimation::ClampModel2016<double>(load_hammerstein_wiener<6, 2, 1>(config.clamp_model)));
-    });
+          estimation::PushLoadObserver<double>(push_load_observer_parameters<P>(file)));
+    };
+    const ClampForceModel clamp = file.is_joint_model()
+                                      ? detail::model_file::with_context(where, joint_model)
+                                      : ClampForceModel(estimation::ClampModel2016<double>(
+                                            hammerstein_wiener_from<6, 2, 1>(file, where)));
     models.clamp1 = clamp;
     models.clamp2 = clamp;
   }

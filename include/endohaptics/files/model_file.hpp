@@ -386,24 +386,32 @@ template <int Nx, int Nu, int Ny, typename Scalar = double>
   });
 }
 
-//! Loads a Hammerstein-Wiener model file into HammersteinWiener<StateSpace<Nx, Nu, Ny>,
-//! PerChannel<InputNL, Nu>, PerChannel<OutputNL, Ny>> (default: dead zones in, identity out,
-//! the type of model::YawForceHW2016 for 6, 2, 1) with model::to_hammerstein_wiener. A plain
-//! state-space file gets zero-width dead zones. Throws Error as load_model, on other sizes, or
-//! maps the types cannot hold (the message prefixed with the path).
+//! A loaded model file as HammersteinWiener<StateSpace<Nx, Nu, Ny>, PerChannel<InputNL, Nu>,
+//! PerChannel<OutputNL, Ny>> (default: dead zones in, identity out, the type of
+//! model::YawForceHW2016 for 6, 2, 1) with model::to_hammerstein_wiener. A plain state-space file
+//! gets zero-width dead zones. Throws Error for a joint-model kind, on other sizes, or maps the
+//! types cannot hold (the message prefixed with `where`).
 template <int Nx, int Nu, int Ny, typename Scalar = double,
           typename InputNL = model::Deadzone<Scalar>, typename OutputNL = model::Identity<Scalar>>
-[[nodiscard]] auto load_hammerstein_wiener(const std::filesystem::path& path) {
-  const ModelFile f = load_model(path);
-  detail::model_file::require_linear(f, "model file " + path.string());
+[[nodiscard]] auto hammerstein_wiener_from(const ModelFile& f, const std::string& where) {
+  detail::model_file::require_linear(f, where);
   std::vector<model::StaticMap> input = f.input_nonlinearity;
   std::vector<model::StaticMap> output = f.output_nonlinearity;
   if (input.empty()) input.assign(f.inputs.size(), {});
   if (output.empty()) output.assign(f.outputs.size(), {});
-  return detail::model_file::with_context("model file " + path.string(), [&] {
+  return detail::model_file::with_context(where, [&] {
     return model::to_hammerstein_wiener<Nx, Nu, Ny, Scalar, InputNL, OutputNL>(f.state_space, input,
                                                                                output);
   });
+}
+
+//! Loads a Hammerstein-Wiener model file: load_model, then hammerstein_wiener_from (errors
+//! prefixed with the path).
+template <int Nx, int Nu, int Ny, typename Scalar = double,
+          typename InputNL = model::Deadzone<Scalar>, typename OutputNL = model::Identity<Scalar>>
+[[nodiscard]] auto load_hammerstein_wiener(const std::filesystem::path& path) {
+  return hammerstein_wiener_from<Nx, Nu, Ny, Scalar, InputNL, OutputNL>(
+      load_model(path), "model file " + path.string());
 }
 
 }  // namespace endohaptics::files
