@@ -288,3 +288,43 @@ TEST_CASE("SecureSession: exchanges allocate nothing") {
 }
 
 }  // namespace protocol_secure_session_test
+
+namespace protocol_secure_session_test {
+
+TEST_CASE(
+    "SecureSession: a binding setpoint held back by an attacker and delivered later never binds") {
+  Initiator pc(test_key(), 0x1111);
+  Responder sbrio(test_key(), 0x2222, 100ms);
+  SetpointPayload got{};
+  StatePayload state{};
+  // The PC's first setpoint is answered unbound; its answer reaches the PC.
+  REQUIRE(sbrio.open(next_setpoint(pc), got, 1ms) == SecureStatus::unbound);
+  REQUIRE(pc.open(answer(sbrio), state) == SecureStatus::ok);
+  // The attacker drops the PC's next setpoints (they echo the sbRIO's session, enable mask 15)
+  // and delivers them 10 s later, when the PC is long gone.
+  std::vector<SetpointPacket> held;
+  for (int i = 0; i < 5; ++i) held.push_back(next_setpoint(pc, 0x0F));
+  for (const SetpointPacket& p : held) {
+    got.fill(std::byte{0xEE});
+    CHECK(sbrio.open(p, got, 10s) == SecureStatus::unbound);
+    CHECK(got.back() == std::byte{0});  // every motor disabled
+    CHECK_FALSE(sbrio.bound());
+  }
+}
+
+TEST_CASE(
+    "SecureSession: a binding setpoint within the expiry of the state it acknowledges binds") {
+  Initiator pc(test_key(), 0x1111);
+  Responder sbrio(test_key(), 0x2222, 100ms);
+  SetpointPayload got{};
+  StatePayload state{};
+  REQUIRE(sbrio.open(next_setpoint(pc), got, 1ms) == SecureStatus::unbound);
+  REQUIRE(pc.open(answer(sbrio), state) == SecureStatus::ok);
+  // 99 ms later (a slow link): still within the expiry.
+  got.fill(std::byte{0xEE});
+  CHECK(sbrio.open(next_setpoint(pc, 0x0F), got, 100ms) == SecureStatus::ok);
+  CHECK(sbrio.bound());
+  CHECK(got.back() == std::byte{0x0F});
+}
+
+}  // namespace protocol_secure_session_test

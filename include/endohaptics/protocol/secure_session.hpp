@@ -263,7 +263,10 @@ class SecureResponder {
       return SecureStatus::ok;
     }
     if (h.sequence == 0) return SecureStatus::too_old;
-    if (!expired && h.peer_session == session_) {  // echoes this (unbound) session: bind
+    // Binds only on a setpoint that echoes this (unbound) session and acknowledges one of its
+    // recent states, answered at most `expiry` ago: a setpoint held back by an attacker on the
+    // link and delivered later (after the PC stopped) cannot bind; it is answered unbound.
+    if (!expired && h.peer_session == session_ && answered_recently(h.ack, now)) {
       v.new_peer_session = true;
       out = v;
       return SecureStatus::ok;
@@ -277,6 +280,7 @@ class SecureResponder {
     if (v.renew_own_session) renew();
     answer_session_ = v.header.session;
     answer_sequence_ = v.header.sequence;
+    answered_at_[(sent_ + 1) % answered_at_.size()] = now;  // the next state answers it
     if (v.renew_own_session || (!bound_ && !v.new_peer_session)) return;  // unbound: answer only
     if (v.new_peer_session) {
       bound_ = true;
@@ -321,6 +325,14 @@ class SecureResponder {
   [[nodiscard]] const ReplayWindow& window() const noexcept { return window_; }
 
  private:
+  // True when state `ack` of this session is among the last answered_at_.size() states and the
+  // setpoint it answered was committed at most `expiry` before `now`.
+  [[nodiscard]] bool answered_recently(std::uint64_t ack,
+                                       std::chrono::nanoseconds now) const noexcept {
+    if (ack == 0 || ack > sent_ || sent_ - ack >= answered_at_.size()) return false;
+    return now - answered_at_[ack % answered_at_.size()] <= expiry_;
+  }
+
   void renew() noexcept {
     bound_ = false;
     peer_session_ = 0;
@@ -342,6 +354,9 @@ class SecureResponder {
   std::uint64_t sent_ = 0;
   std::uint64_t answer_session_ = 0;
   std::uint64_t answer_sequence_ = 0;
+  // When the setpoint answered by each of the last 1024 states was committed (by sequence mod
+  // 1024): a binding setpoint must acknowledge one of them, answered within `expiry`.
+  std::array<std::chrono::nanoseconds, 1024> answered_at_{};
 };
 
 }  // namespace endohaptics::protocol
