@@ -166,6 +166,7 @@ class TimeDomainPassivity {
     estimate_.setZero();
     history_.fill(sent);
     sent_ = sent;
+    have_robot_ = false;  // no motion booked across the outage against the force before it
     started_ = true;
   }
 
@@ -182,25 +183,32 @@ class TimeDomainPassivity {
   }
 
   //! Robot-side PC (admittance type): while the observer shows a deficit, shortens the step from
-  //! the last sent setpoint to `candidate` (rad) that would push against the newest force `force`
-  //! (N), by at most the deficit (energy reference: the step's energy against that force); it
-  //! never reverses a step. Writes the setpoint to send; returns true when it changed it.
-  bool shape_setpoint(const Vector& candidate, const Vector& force, Vector& out) noexcept {
+  //! `from` (rad, where the setpoint shaping started: TeleopLoop passes its rate limiter's origin,
+  //! so the result, a point between `from` and `candidate`, keeps the rate limit) to `candidate`
+  //! that would push against the newest force `force` (N), by at most the deficit (energy
+  //! reference: the step's energy against that force); it never reverses a step. Writes the
+  //! setpoint to send; returns true when it changed it.
+  bool shape_setpoint(const Vector& candidate, const Vector& from, const Vector& force,
+                      Vector& out) noexcept {
     out = candidate;
     if (!controlling() || !started_) return false;
     bool changed = false;
     for (int j = 0; j < Vector::SizeAtCompileTime; ++j) {
       const double deficit = -energy(j);
-      const double step = (candidate[j] - sent_[j]) * config_.lever[j];  // m at the tool
+      const double step = (candidate[j] - from[j]) * config_.lever[j];  // m at the tool
       const double cost = -force[j] * step;  // J this step puts into the environment
       if (deficit > 0.0 && cost > 0.0) {
         const double keep = std::clamp((cost - deficit) / cost, 0.0, 1.0);
-        out[j] = sent_[j] + keep * (candidate[j] - sent_[j]);
+        out[j] = from[j] + keep * (candidate[j] - from[j]);
         dissipated_robot_ += (1.0 - keep) * cost;
         changed = true;
       }
     }
     return changed;
+  }
+  //! As above, the step from the last setpoint committed.
+  bool shape_setpoint(const Vector& candidate, const Vector& force, Vector& out) noexcept {
+    return shape_setpoint(candidate, sent_, force, out);
   }
 
   //! Records the setpoint actually sent this tick (rad) in the history (every tick).

@@ -230,12 +230,13 @@ class TeleopLoop {
     } else {
       // The limiter moves towards the desired setpoint inside the joint range, so a stylus beyond
       // the range never parks the limiter outside it (it would stick at the edge on the way back).
+      const MotorVector from = limiter_.previous();  // the gate below steps from here too
       r.rate_limited = limiter_.shape(desired, dt, out.position);
       // Robot-side passivity controller: the step the channel's energy allows (the limiter
       // resumes from what is sent, so what it held back is given back when energy allows).
       MotorVector gated;
       if (passivity_.controlling() &&
-          passivity_.shape_setpoint(out.position, motor_force_, gated)) {
+          passivity_.shape_setpoint(out.position, from, motor_force_, gated)) {
         out.position = gated;
         r.passivity.robot_active = true;
       }
