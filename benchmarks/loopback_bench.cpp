@@ -11,6 +11,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstdlib>
 #include <endohaptics/estimation/force_estimator.hpp>
 #include <endohaptics/estimation/paced_estimator.hpp>
 #include <endohaptics/kinematics/cylindrical_mapper.hpp>
@@ -25,6 +26,7 @@
 #include <endohaptics/transport/udp_transport.hpp>
 #include <memory>
 #include <optional>
+#include <string_view>
 #include <thread>
 #include <type_traits>
 
@@ -39,6 +41,14 @@ using std::chrono::nanoseconds;
 using ServerV2 =
     transport::SecureTransport<transport::UdpServerTransport, protocol::SecureResponder<4>>;
 using ClientV2 = transport::SecureTransport<transport::UdpTransport, protocol::SecureInitiator<4>>;
+
+// Ticks per run: `full`, or a tenth of it when ENDOHAPTICS_BENCH_SMOKE=1 (the CTest smoke pass,
+// benchmarks/CMakeLists.txt, which checks that every benchmark runs, not how well: the runs'
+// names show the count actually run).
+std::int64_t run_ticks(std::int64_t full) {
+  const char* smoke = std::getenv("ENDOHAPTICS_BENCH_SMOKE");
+  return smoke != nullptr && std::string_view(smoke) == "1" ? full / 10 : full;
+}
 
 // The benchmark key (a fixed pattern; the programs load theirs from a file).
 protocol::SecureKey bench_key() {
@@ -195,33 +205,37 @@ void BM_Baseline_clock_nanosleep_1kHz(benchmark::State& st) {
 }  // namespace
 
 BENCHMARK(BM_Baseline_clock_nanosleep_1kHz)
-    ->Arg(3000)
+    ->Arg(run_ticks(3000))
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
-BENCHMARK(BM_Loopback_1kHz)->Arg(3000)->Iterations(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Loopback_1kHz)
+    ->Arg(run_ticks(3000))
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_Loopback_1kHz_busy_tail_200us)
-    ->Arg(3000)
+    ->Arg(run_ticks(3000))
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 BENCHMARK(BM_Loopback_1kHz_fifo_busy_tail_200us)
-    ->Arg(3000)
+    ->Arg(run_ticks(3000))
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 BENCHMARK(BM_Loopback_1kHz_v2)
-    ->Arg(3000)
+    ->Arg(run_ticks(3000))
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 BENCHMARK(BM_Loopback_max_rate)
-    ->Arg(60000)
+    ->Arg(run_ticks(60000))
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 BENCHMARK(BM_Loopback_max_rate_v2)
-    ->Arg(60000)
+    ->Arg(run_ticks(60000))
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
