@@ -6,6 +6,7 @@
 #include <fstream>
 #include <string>
 #include <system_error>
+#include <type_traits>
 
 #include "endohaptics/files/model_file.hpp"
 #include "endohaptics/model/presets_2016.hpp"
@@ -356,6 +357,44 @@ TEST_CASE("estimator.clamp_model loads an identified model file, relative to the
   CHECK(error_of(R"({"estimator": {"clamp_model": ""}})") ==
         "bridge.json: estimator.clamp_model: must be the name of a model file (a non-empty "
         "string), got \"\"");
+}
+
+TEST_CASE("estimator.clamp_model of a lower order runs in the bridge's 6 states, unchanged") {
+  TempDir dir("clamp_model_order");
+  // An order-2 Hammerstein-Wiener clamp model (what endohaptics-identify --order 2 writes).
+  const Eigen::Matrix2d A{{0.95, 0.02}, {-0.01, 0.9}};
+  const Eigen::Matrix<double, 2, 2> B{{0.4, 0.01}, {0.1, -0.02}};
+  const Eigen::Matrix<double, 1, 2> C{{0.8, 0.3}};
+  const Eigen::Matrix<double, 1, 2> D{{0.05, 0.0}};
+  const endohaptics::model::StateSpace<2, 2, 1> low(A, B, C, D, 0.001);
+  files::ModelFile file =
+      files::make_model_file(low, {{"current", "A"}, {"velocity", "rad/s"}}, {{"force", "N"}});
+  file.input_nonlinearity = {{endohaptics::model::StaticMapKind::deadzone, -0.19, 0.19}, {}};
+  file.output_nonlinearity = {{}};
+  files::save_model(dir.path() / "clamp.json", file);
+  write_text(dir.path() / "bridge.json", R"({"estimator": {"clamp_model": "clamp.json"}})");
+  const auto models =
+      files::bridge_force_models(files::load_bridge_config(dir.path() / "bridge.json"));
+  REQUIRE(models.clamp1.yaw() != nullptr);
+  const auto& linear = models.clamp1.yaw()->model().linear();
+  static_assert(std::remove_cvref_t<decltype(linear)>::states == files::bridge_clamp_states);
+  CHECK(linear.A().topLeftCorner<2, 2>() == A);
+  CHECK(linear.A().rightCols<4>().isZero());
+  CHECK(linear.A().bottomRows<4>().isZero());
+  CHECK(linear.dc_gain() == low.dc_gain());
+  CHECK(models.clamp1.yaw()->model().input_nonlinearity().channel(0).upper() == 0.19);
+  // Seven states do not fit: refused, naming the file.
+  const endohaptics::model::StateSpace<7, 2, 1> seven(
+      Eigen::Matrix<double, 7, 7>::Identity() * 0.5, Eigen::Matrix<double, 7, 2>::Ones(),
+      Eigen::Matrix<double, 1, 7>::Ones(), Eigen::Matrix<double, 1, 2>::Zero(), 0.001);
+  files::save_model(
+      dir.path() / "seven.json",
+      files::make_model_file(seven, {{"current", "A"}, {"velocity", "rad/s"}}, {{"force", "N"}}));
+  write_text(dir.path() / "bridge7.json", R"({"estimator": {"clamp_model": "seven.json"}})");
+  const std::string too_big =
+      message_of([&] { (void)files::load_bridge_config(dir.path() / "bridge7.json"); });
+  CHECK(too_big.find("seven.json") != std::string::npos);
+  CHECK(too_big.find("7 states") != std::string::npos);
 }
 
 TEST_CASE("safety-relevant values have physical bounds (issue 14's field cases)") {

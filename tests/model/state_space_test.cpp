@@ -4,6 +4,7 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -614,6 +615,34 @@ TEST_CASE("converting constructor: dynamic -> fixed (sizes checked), fixed -> dy
   const DynamicStateSpace<> huge(huge_a, dynamic.B(), dynamic.C(), dynamic.D(), 0.01);
   CHECK(message_of([&] { StateSpace<3, 2, 2, float>{huge}; }) ==
         "StateSpace: A(0,0) is not finite (inf)");
+}
+
+TEST_CASE("embed_states: a lower-order model in more states, output for output the same") {
+  std::mt19937_64 rng(7);
+  DynamicStateSpace<> low(random_model<StateSpace<2, 2, 1>>(rng));
+  low.reset(VectorXd{{0.3, -0.1}});
+  const DynamicStateSpace<> six = endohaptics::model::embed_states(low, 6);
+  REQUIRE(six.state_size() == 6);
+  CHECK(six.input_size() == 2);
+  CHECK(six.output_size() == 1);
+  CHECK(six.sample_time() == low.sample_time());
+  CHECK(six.spectral_radius() == doctest::Approx(low.spectral_radius()));
+  CHECK(six.state() == (VectorXd(6) << 0.3, -0.1, 0, 0, 0, 0).finished());
+  // In the fixed 6-state type the real-time path runs: the same outputs, sample for sample.
+  StateSpace<6, 2, 1> fixed(six);
+  std::uniform_real_distribution<double> u(-2.0, 2.0);
+  double worst = 0.0;
+  for (int k = 0; k < 500; ++k) {
+    const Eigen::Vector2d in(u(rng), u(rng));
+    const double expected = low.step(VectorXd(in))(0);
+    worst = std::max(worst, std::abs(fixed.step(in)(0) - expected));
+  }
+  CHECK(worst == 0.0);  // the added states are zero and decoupled: not even rounding differs
+  CHECK(fixed.state().tail<4>().isZero());
+  // Same order: the model as it is; fewer states than the order: refused.
+  CHECK(endohaptics::model::embed_states(low, 2).A() == low.A());
+  CHECK(message_of([&] { (void)endohaptics::model::embed_states(low, 1); }) ==
+        "embed_states: a model of order 2 does not fit in 1 states");
 }
 
 TEST_CASE(

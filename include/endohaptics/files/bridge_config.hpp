@@ -33,6 +33,7 @@
 #include "endohaptics/files/json_text.hpp"
 #include "endohaptics/files/model_file.hpp"
 #include "endohaptics/kinematics/cylindrical_mapper.hpp"
+#include "endohaptics/model/state_space.hpp"
 #include "endohaptics/sim/scripted_operator.hpp"
 #include "endohaptics/teleop/safety.hpp"
 #include "endohaptics/teleop/teleop_loop.hpp"
@@ -613,10 +614,14 @@ using BridgeForceEstimator =
     estimation::ForceEstimator<estimation::rate::Decimate, estimation::RollModel2016<double>,
                                estimation::PitchModel2016<double>, ClampForceModel>;
 
+//! States of the bridge's Hammerstein-Wiener clamp model (ClampModel2016: the appendix C yaw
+//! model's 6); a clamp model file of lower order is embedded in them (model::embed_states).
+inline constexpr int bridge_clamp_states = 6;
+
 //! The force models the bridge runs: the 2016 models (estimation::models_2016), with the clamp
 //! model file of `config.clamp_model` for both clamps when set, of any kind ClampForceModel
-//! holds. Throws Error naming the model file when it cannot be loaded, is of another size or its
-//! parameters are out of range.
+//! holds (a linear block of order <= bridge_clamp_states). Throws Error naming the model file
+//! when it cannot be loaded, is of another size or its parameters are out of range.
 [[nodiscard]] inline BridgeForceModels bridge_force_models(const BridgeConfig& config) {
   const auto m2016 = estimation::models_2016<double>();
   BridgeForceModels models{m2016.roll, m2016.pitch, ClampForceModel(m2016.clamp1),
@@ -633,10 +638,19 @@ using BridgeForceEstimator =
       return ClampForceModel(
           estimation::PushLoadObserver<double>(push_load_observer_parameters<P>(file)));
     };
+    // The clamp type holds 6 states (the 2016 yaw model's): a linear block of lower order runs
+    // in it embedded exactly (model::embed_states: the added states are decoupled and zero).
+    const auto hammerstein_wiener = [&] {
+      ModelFile six = file;
+      if (six.state_space.state_size() < bridge_clamp_states) {
+        six.state_space = model::embed_states(six.state_space, bridge_clamp_states);
+      }
+      return ClampForceModel(estimation::ClampModel2016<double>(
+          hammerstein_wiener_from<bridge_clamp_states, 2, 1>(six, where)));
+    };
     const ClampForceModel clamp = file.is_joint_model()
                                       ? detail::model_file::with_context(where, joint_model)
-                                      : ClampForceModel(estimation::ClampModel2016<double>(
-                                            hammerstein_wiener_from<6, 2, 1>(file, where)));
+                                      : hammerstein_wiener();
     models.clamp1 = clamp;
     models.clamp2 = clamp;
   }

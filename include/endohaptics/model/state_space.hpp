@@ -347,6 +347,34 @@ class StateSpace {
 template <typename Scalar = double>
 using DynamicStateSpace = StateSpace<Eigen::Dynamic, Eigen::Dynamic, Eigen::Dynamic, Scalar>;
 
+//! `m` realised with `states` >= m.state_size() states, so that a lower-order model runs in a
+//! fixed-size type of that many states (e.g. the bridge's 6-state clamp model). The added states
+//! are decoupled and stay zero: A = diag(A_m, 0), B = [B_m; 0], C = [C_m 0], x = [x_m; 0]. The
+//! input-output behaviour is exactly m's, from any initial state of m; the spectral radius is
+//! m's. Throws Error when `states` is smaller than m's order.
+template <typename Scalar>
+[[nodiscard]] DynamicStateSpace<Scalar> embed_states(const DynamicStateSpace<Scalar>& m,
+                                                     int states) {
+  const int n = m.state_size();
+  if (states < n) {
+    ENDOHAPTICS_THROW(Error("embed_states: a model of order " + std::to_string(n) +
+                            " does not fit in " + std::to_string(states) + " states"));
+  }
+  using Matrix = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
+  Matrix A = Matrix::Zero(states, states);
+  Matrix B = Matrix::Zero(states, m.input_size());
+  Matrix C = Matrix::Zero(m.output_size(), states);
+  A.topLeftCorner(n, n) = m.A();
+  B.topRows(n) = m.B();
+  C.leftCols(n) = m.C();
+  DynamicStateSpace<Scalar> out(A, B, C, m.D(), m.sample_time());
+  Eigen::Matrix<Scalar, Eigen::Dynamic, 1> x =
+      Eigen::Matrix<Scalar, Eigen::Dynamic, 1>::Zero(states);
+  x.head(n) = m.state();
+  out.reset(x);
+  return out;
+}
+
 //! Continuous-time LTI model (eq. 4.1): x' = A x + B u, y = C x + D u. Only a description to
 //! be discretised with `discretize_zoh` or `discretize_tustin`; it has no state.
 template <int Nx, int Nu, int Ny, typename Scalar = double>
