@@ -5,13 +5,18 @@
 #      and bridge with the force feedback off, a scripted operator grasping at another depth and
 #      pace than in the runs below; the emulator logs what the sbRIO reports and the true force;
 #   2. endohaptics-identify: a Hammerstein-Wiener clamp model (reported current and velocity ->
-#      force, 6 states: what the bridge loads) from that log;
+#      force) of order 2 from that log; the bridge runs it in its 6-state clamp type
+#      (model::embed_states). Order 2: the sbRIO's current filter and velocity window are the
+#      fast dynamics between the reported signals and the force. Orders 3-6 fitted this one log
+#      as well or better but generalised worse: at order 6 the identified run's fit ranged
+#      61.5-81.3 % over 19 runs of the 12 s / 6 s pipeline (3 below 70 %), at order 2
+#      77.5-80.7 % over 12 (docs/identification_results.md, "The demo's clamp model");
 #   3. teleoperation with the 2016 preset (appendix C), then with the identified model;
 #   4. endohaptics-force-report: both runs against the emulator's truth, one plot, and as its last
 #      two lines "2016 preset: fit ..." and "identified: fit ...".
 # Usage: demo.sh BIN_DIR OUT_DIR [SECONDS per teleoperation run, default 10; the identification
-# experiment runs twice as long: with 10 s of it the identified model's fit in step 4 varied
-# from 68 to 83 % between runs of the demo, with 20 s it was 80-82 % (README, quick start)]
+# experiment runs twice as long. With the default the identified model's fit in step 4 was
+# 77.6-81.5 % over six runs of the demo (README, quick start)]
 set -euo pipefail
 bin=$1
 out=$2
@@ -65,7 +70,7 @@ duration=$seconds
 
 echo "== 2. identify the clamp model: reported current and velocity of motor 2 -> true force"
 "$bin/endohaptics-identify" --format csv --log "$out/experiment.truth.csv" \
-  --input reported_current2 --input reported_velocity2 --output force2 --ts 0.001 --order 6 \
+  --input reported_current2 --input reported_velocity2 --output force2 --ts 0.001 --order 2 \
   --deadzone auto --method best --out "$out/clamp_model.json" | tail -n 3
 
 echo "== 3. teleoperation with the 2016 preset (appendix C yaw model)"
