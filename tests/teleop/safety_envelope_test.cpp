@@ -397,6 +397,51 @@ TEST_CASE("property: random and adversarial state streams never open the envelop
   }
 }
 
+TEST_CASE("property: with the passivity layer on (TDPA), the envelope stays closed too") {
+  // The TDPA's robot-side controller rewrites the setpoint and its operator-side controller the
+  // force: neither may step outside the range, the rate limit or the force limit. Round trips of
+  // 0 and 20 ticks, a finite and an unlimited joint force limit; 6 seeds x 3 policies each.
+  for (const int round_trip : {0, 20}) {
+    for (const bool limited : {false, true}) {
+      for (const auto policy :
+           {tp::SafeStatePolicy::hold_position, tp::SafeStatePolicy::disable_motors,
+            tp::SafeStatePolicy::zero_force}) {
+        for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+          CAPTURE(round_trip);
+          CAPTURE(limited);
+          CAPTURE(seed);
+          CAPTURE(tp::to_string(policy));
+          tp::TeleopLoopConfig config;
+          config.safety.policy = policy;
+          config.passivity.mode = tp::PassivityMode::tdpa;
+          config.passivity.round_trip_ticks = round_trip;
+          if (limited) config.passivity.force_limit.setConstant(2.0);
+          Rig rig(config);
+          rig.link.responder().rng.seed(seed);
+          rig.link.responder().honest_percent = seed % 3 == 0 ? 90 : 60;
+          rig.device.rng.seed(seed + 200);
+          tp::TickResult previous;
+          previous.enable_mask = 0;
+          bool recovered = false;
+          std::uint64_t robot_active = 0, operator_active = 0, enabled = 0;
+          for (int i = 0; i < 3000; ++i) {
+            const auto r = rig.tick();
+            check_envelope(r, previous, config, recovered);
+            recovered = previous.link == tp::LinkState::lost && r.link == tp::LinkState::recovering;
+            robot_active += r.passivity.robot_active;
+            operator_active += r.passivity.operator_active;
+            enabled += r.enable_mask != 0;
+            previous = r;
+          }
+          CHECK(enabled > 0);
+          // The controllers acted in these runs (the loud estimator's forces do work).
+          CHECK(robot_active + operator_active > 0);
+        }
+      }
+    }
+  }
+}
+
 TEST_CASE("property: uniformly random state bytes never open the envelope") {
   // Every float of every state drawn from all 2^32 bit patterns (NaN, Inf, denormals, 3e38...).
   transport::RespondingTransport<RandomBytes, 64, 32> link{RandomBytes{}};
