@@ -78,7 +78,11 @@ TEST_CASE("stall-hold: parameters are checked, steps allocate nothing") {
   auto p = params();
   p.current_deadzone = -0.1;
   CHECK(message_of([&] { est::StallHold<double> bad(p); }) ==
-        "StallHoldParameters: current_deadzone must be finite and >= 0 A, got -0.1");
+        "StallHoldParameters: current_deadzone must be in [0, 1e6] A, got -0.1");
+  p = params();
+  p.gain = 1e300;  // finite, but gain x current would overflow the estimate
+  CHECK(message_of([&] { est::StallHold<double> bad(p); }) ==
+        "StallHoldParameters: gain must be in [-1e6, 1e6], got 1e+300");
   p = params();
   p.sample_time = 0.0;
   CHECK(message_of([&] { est::StallHold<double> bad(p); }) ==

@@ -104,8 +104,7 @@ TEST_CASE("joint-model files: hostile and out-of-range content is refused naming
     return j;
   };
   CHECK(error_of(with("current_deadzone", -0.1)) ==
-        "model file m.json: field \"parameters.current_deadzone\" must be finite and >= 0 A, got "
-        "-0.1");
+        "model file m.json: field \"parameters.current_deadzone\" must be in [0, 1e6] A, got -0.1");
   CHECK(error_of(with("gain", nullptr)) ==
         "model file m.json: field \"parameters.gain\" is not a number (null)");
   CHECK(error_of(with("side", "up")) ==
@@ -159,11 +158,18 @@ TEST_CASE("joint-model files: hostile and out-of-range content is refused naming
         "model file m.json: field \"parameters.current_cutoff\" must be in (0, Nyquist = 0.5 / "
         "sample_time_s) Hz, got 600");
   CHECK(error_of(obs_with("measurement_variance", 0.0)) ==
-        "model file m.json: field \"parameters.measurement_variance\" must be finite and > 0, got "
-        "0");
+        "model file m.json: field \"parameters.measurement_variance\" must be in (0, 1e6], got 0");
   CHECK(error_of(obs_with("current_per_load", 0.0)) ==
-        "model file m.json: field \"parameters.current_per_load\" must be finite and non-zero, "
-        "got 0");
+        "model file m.json: field \"parameters.current_per_load\" must be of magnitude in [1e-9, "
+        "1e6], got 0");
+  // Huge but finite values (before: loaded, then every tick's estimate was Inf and rejected).
+  CHECK(error_of(obs_with("initial_load", 1e308)) ==
+        "model file m.json: field \"parameters.initial_load\" must be in [-1e6, 1e6], got 1e+308");
+  CHECK(error_of(obs_with("current_per_load", -1e-300)) ==
+        "model file m.json: field \"parameters.current_per_load\" must be of magnitude in [1e-9, "
+        "1e6], got -1e-300");
+  CHECK(error_of(with("gain", -1e300)) ==
+        "model file m.json: field \"parameters.gain\" must be in [-1e6, 1e6], got -1e+300");
   CHECK(error_of(obs_with("direction_threshold", 1.5)) ==
         "model file m.json: field \"parameters.direction_threshold\" must be in (0, 1], got 1.5");
   // The library's makers check the same rules.
@@ -172,8 +178,8 @@ TEST_CASE("joint-model files: hostile and out-of-range content is refused naming
   CHECK(message_of([&] {
           (void)files::make_stall_hold_file(bad, 0.01, clamp_inputs, {{"force", "N"}});
         }) ==
-        "make_stall_hold_file: field \"parameters.output_time_constant\" must be finite "
-        "and >= 0 s, got inf");
+        "make_stall_hold_file: field \"parameters.output_time_constant\" must be in [0, 1e6] s, "
+        "got inf");
   // Both joint models in one file is not a kind.
   files::ModelFile both = stall_hold_file();
   both.push_load_observer = files::PushLoadObserverSettings{};

@@ -84,6 +84,16 @@ TEST_CASE("push-load observer: filters start at the first sample, allocation-fre
   p.push_sign = 0.5;
   CHECK(message_of([&] { est::PushLoadObserver<double> bad(p); }) ==
         "PushLoadObserverParameters: push_sign must be +1 or -1, got 0.5");
+  p = {};
+  p.initial_load = 1e308;  // finite, but the estimate would be Inf on every tick
+  CHECK(message_of([&] { est::PushLoadObserver<double> bad(p); }) ==
+        "PushLoadObserverParameters: an offset, slope or initial load must be in [-1e6, 1e6], got "
+        "1e+308");
+  p = {};
+  p.current_per_load = 1e-12;
+  CHECK(message_of([&] { est::PushLoadObserver<double> bad(p); }) ==
+        "PushLoadObserverParameters: current_per_load must be of magnitude in [1e-9, 1e6], got "
+        "1e-12");
 }
 
 TEST_CASE("push-load observer on the UMN grasper, one session to the other, scored causally" *

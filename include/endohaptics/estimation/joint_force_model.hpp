@@ -11,6 +11,15 @@
 
 namespace endohaptics::estimation {
 
+//! Largest magnitude of a joint model's parameter (StallHold, PushLoadObserver) in its own unit
+//! (A, rad/s, s, N, N m, mN m, ... per unit): far beyond any surgical instrument, and small enough
+//! that no product of two parameters and a plausible signal overflows. A larger value is a
+//! corrupt or hostile model file, refused at configuration time rather than turning every tick's
+//! estimate into Inf (which the tick would reject, rendering no force at all).
+inline constexpr double max_joint_model_parameter = 1e6;
+//! Smallest |current_per_load| of a PushLoadObserver, A per load unit (it divides the current).
+inline constexpr double min_current_per_load = 1e-9;
+
 //! The signals of one joint (one motor) for one tick.
 template <typename Scalar = double>
 struct JointSignals {

@@ -63,18 +63,20 @@ struct PushLoadObserverParameters {
     require(direction_threshold > 0 && direction_threshold <= 1, "direction_threshold",
             direction_threshold, "in (0, 1]");
     require(push_sign == 1 || push_sign == -1, "push_sign", push_sign, "+1 or -1");
-    require(std::isfinite(current_per_load) && current_per_load != 0, "current_per_load",
-            current_per_load, "finite and non-zero");
+    const auto max = static_cast<Scalar>(max_joint_model_parameter);  // also false for NaN:
+    require(std::fabs(current_per_load) >= static_cast<Scalar>(min_current_per_load) &&
+                std::fabs(current_per_load) <= max,
+            "current_per_load", current_per_load, "of magnitude in [1e-9, 1e6]");
     for (const Scalar v :
          {current_offset, current_per_velocity, initial_load, output_offset, output_slope}) {
-      require(std::isfinite(v), "an offset, slope or initial load", v, "finite");
+      require(std::fabs(v) <= max, "an offset, slope or initial load", v, "in [-1e6, 1e6]");
     }
-    require(std::isfinite(measurement_variance) && measurement_variance > 0, "measurement_variance",
-            measurement_variance, "finite and > 0");
-    require(std::isfinite(process_variance) && process_variance >= 0, "process_variance",
-            process_variance, "finite and >= 0");
-    require(std::isfinite(initial_variance) && initial_variance >= 0, "initial_variance",
-            initial_variance, "finite and >= 0");
+    require(measurement_variance > 0 && measurement_variance <= max, "measurement_variance",
+            measurement_variance, "in (0, 1e6]");
+    require(process_variance >= 0 && process_variance <= max, "process_variance", process_variance,
+            "in [0, 1e6]");
+    require(initial_variance >= 0 && initial_variance <= max, "initial_variance", initial_variance,
+            "in [0, 1e6]");
   }
 };
 

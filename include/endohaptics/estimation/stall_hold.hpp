@@ -47,15 +47,16 @@ struct StallHoldParameters {
                                 ", got " + endohaptics::detail::format_number(value)));
       }
     };
-    require(std::isfinite(current_deadzone) && current_deadzone >= 0, "current_deadzone",
-            current_deadzone, "finite and >= 0 A");
-    require(std::isfinite(velocity_threshold) && velocity_threshold >= 0, "velocity_threshold",
-            velocity_threshold, "finite and >= 0 rad/s");
-    require(std::isfinite(velocity_time_constant) && velocity_time_constant >= 0,
-            "velocity_time_constant", velocity_time_constant, "finite and >= 0 s");
-    require(std::isfinite(output_time_constant) && output_time_constant >= 0,
-            "output_time_constant", output_time_constant, "finite and >= 0 s");
-    require(std::isfinite(gain), "gain", gain, "finite");
+    const auto max = static_cast<Scalar>(max_joint_model_parameter);  // also false for NaN:
+    require(current_deadzone >= 0 && current_deadzone <= max, "current_deadzone", current_deadzone,
+            "in [0, 1e6] A");
+    require(velocity_threshold >= 0 && velocity_threshold <= max, "velocity_threshold",
+            velocity_threshold, "in [0, 1e6] rad/s");
+    require(velocity_time_constant >= 0 && velocity_time_constant <= max, "velocity_time_constant",
+            velocity_time_constant, "in [0, 1e6] s");
+    require(output_time_constant >= 0 && output_time_constant <= max, "output_time_constant",
+            output_time_constant, "in [0, 1e6] s");
+    require(std::fabs(gain) <= max, "gain", gain, "in [-1e6, 1e6]");
     require(std::isfinite(sample_time) && sample_time > 0, "sample_time", sample_time,
             "finite and > 0 s");
   }

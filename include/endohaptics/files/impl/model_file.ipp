@@ -5,6 +5,8 @@
 
 #include "endohaptics/files/model_file.hpp"
 
+#include "endohaptics/estimation/joint_force_model.hpp"
+
 namespace endohaptics::files {
 namespace detail::model_file {
 
@@ -16,15 +18,18 @@ ENDOHAPTICS_DECL void require_parameter(bool ok, const std::string& where, const
   }
 }
 
+// Bounds: estimation/joint_force_model.hpp (max_joint_model_parameter, min_current_per_load).
+constexpr double max_parameter = estimation::max_joint_model_parameter;
+
 ENDOHAPTICS_DECL void validate_settings(const StallHoldSettings& p, const std::string& where) {
   const auto non_negative = [&](const char* name, double v, const char* rule) {
-    require_parameter(std::isfinite(v) && v >= 0.0, where, name, v, rule);
+    require_parameter(v >= 0.0 && v <= max_parameter, where, name, v, rule);  // false for NaN
   };
-  non_negative("current_deadzone", p.current_deadzone, "finite and >= 0 A");
-  non_negative("velocity_threshold", p.velocity_threshold, "finite and >= 0 rad/s");
-  non_negative("velocity_time_constant", p.velocity_time_constant, "finite and >= 0 s");
-  non_negative("output_time_constant", p.output_time_constant, "finite and >= 0 s");
-  require_parameter(std::isfinite(p.gain), where, "gain", p.gain, "finite");
+  non_negative("current_deadzone", p.current_deadzone, "in [0, 1e6] A");
+  non_negative("velocity_threshold", p.velocity_threshold, "in [0, 1e6] rad/s");
+  non_negative("velocity_time_constant", p.velocity_time_constant, "in [0, 1e6] s");
+  non_negative("output_time_constant", p.output_time_constant, "in [0, 1e6] s");
+  require_parameter(std::fabs(p.gain) <= max_parameter, where, "gain", p.gain, "in [-1e6, 1e6]");
   if (p.side != "both" && p.side != "positive" && p.side != "negative") {
     fail(where + ": field \"parameters.side\" is \"" + p.side +
          "\", expected \"both\", \"positive\" or \"negative\"");
@@ -46,21 +51,22 @@ ENDOHAPTICS_DECL void validate_settings(const PushLoadObserverSettings& p, doubl
                     "direction_threshold", p.direction_threshold, "in (0, 1]");
   require_parameter(p.push_sign == 1 || p.push_sign == -1, where, "push_sign", p.push_sign,
                     "+1 or -1");
-  require_parameter(std::isfinite(p.current_per_load) && p.current_per_load != 0, where,
-                    "current_per_load", p.current_per_load, "finite and non-zero");
+  require_parameter(std::fabs(p.current_per_load) >= estimation::min_current_per_load &&
+                        std::fabs(p.current_per_load) <= max_parameter,
+                    where, "current_per_load", p.current_per_load, "of magnitude in [1e-9, 1e6]");
   const std::pair<const char*, double> finite[] = {{"current_offset", p.current_offset},
                                                    {"current_per_velocity", p.current_per_velocity},
                                                    {"initial_load", p.initial_load},
                                                    {"output_offset", p.output_offset},
                                                    {"output_slope", p.output_slope}};
   for (const auto& [name, v] : finite)
-    require_parameter(std::isfinite(v), where, name, v, "finite");
-  require_parameter(std::isfinite(p.measurement_variance) && p.measurement_variance > 0, where,
-                    "measurement_variance", p.measurement_variance, "finite and > 0");
-  require_parameter(std::isfinite(p.process_variance) && p.process_variance >= 0, where,
-                    "process_variance", p.process_variance, "finite and >= 0");
-  require_parameter(std::isfinite(p.initial_variance) && p.initial_variance >= 0, where,
-                    "initial_variance", p.initial_variance, "finite and >= 0");
+    require_parameter(std::fabs(v) <= max_parameter, where, name, v, "in [-1e6, 1e6]");
+  require_parameter(p.measurement_variance > 0 && p.measurement_variance <= max_parameter, where,
+                    "measurement_variance", p.measurement_variance, "in (0, 1e6]");
+  require_parameter(p.process_variance >= 0 && p.process_variance <= max_parameter, where,
+                    "process_variance", p.process_variance, "in [0, 1e6]");
+  require_parameter(p.initial_variance >= 0 && p.initial_variance <= max_parameter, where,
+                    "initial_variance", p.initial_variance, "in [0, 1e6]");
 }
 
 ENDOHAPTICS_DECL model::DynamicStateSpace<> joint_model_placeholder(Eigen::Index nu,
