@@ -395,6 +395,18 @@ TEST_CASE("estimator.clamp_model of a lower order runs in the bridge's 6 states,
       message_of([&] { (void)files::load_bridge_config(dir.path() / "bridge7.json"); });
   CHECK(too_big.find("seven.json") != std::string::npos);
   CHECK(too_big.find("7 states") != std::string::npos);
+  // An unstable linear block is refused (before: it loaded and its estimate diverged to Inf).
+  const endohaptics::model::StateSpace<2, 2, 1> unstable(Eigen::Matrix2d{{1.01, 0.0}, {0.0, 0.5}},
+                                                         B, C, D, 0.001);
+  files::save_model(dir.path() / "unstable.json",
+                    files::make_model_file(unstable, {{"current", "A"}, {"velocity", "rad/s"}},
+                                           {{"force", "N"}}));
+  write_text(dir.path() / "bridge_unstable.json",
+             R"({"estimator": {"clamp_model": "unstable.json"}})");
+  const std::string unstable_error =
+      message_of([&] { (void)files::load_bridge_config(dir.path() / "bridge_unstable.json"); });
+  CHECK(unstable_error.find("unstable.json: the clamp model is not stable (spectral radius 1.01, "
+                            "must be < 1)") != std::string::npos);
 }
 
 TEST_CASE("safety-relevant values have physical bounds (issue 14's field cases)") {

@@ -641,6 +641,14 @@ inline constexpr int bridge_clamp_states = 6;
     // The clamp type holds 6 states (the 2016 yaw model's): a linear block of lower order runs
     // in it embedded exactly (model::embed_states: the added states are decoupled and zero).
     const auto hammerstein_wiener = [&] {
+      // An unstable linear block loads as a valid model, but its estimate would grow until the
+      // tick rejects it as non-finite (and renders no force): refused here, as identify does.
+      const double rho = file.state_space.spectral_radius();
+      if (!(rho < 1.0)) {
+        ENDOHAPTICS_THROW(Error(where + ": the clamp model is not stable (spectral radius " +
+                                endohaptics::detail::format_number(rho) +
+                                ", must be < 1): its estimate would grow without bound"));
+      }
       ModelFile six = file;
       if (six.state_space.state_size() < bridge_clamp_states) {
         six.state_space = model::embed_states(six.state_space, bridge_clamp_states);
