@@ -96,6 +96,10 @@ TEST_CASE("joint-model files: both kinds round-trip through JSON and disk") {
         }).find("kind \"push_load_observer\" is a joint force model") != std::string::npos);
 }
 
+// model_file.hpp stays below estimation/ and repeats its parameter bounds: they must agree.
+static_assert(files::ModelFile::max_parameter == est::max_joint_model_parameter);
+static_assert(files::ModelFile::min_current_per_load == est::min_current_per_load);
+
 TEST_CASE("joint-model files: hostile and out-of-range content is refused naming the field") {
   const json good = files::to_json(stall_hold_file());
   auto with = [&](const char* key, const json& value) {

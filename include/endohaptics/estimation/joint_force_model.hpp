@@ -18,6 +18,8 @@ namespace endohaptics::estimation {
 //! estimate into Inf (which the tick would reject, rendering no force at all).
 inline constexpr double max_joint_model_parameter = 1e6;
 //! Smallest |current_per_load| of a PushLoadObserver, A per load unit (it divides the current).
+//! Both bounds are repeated as files::ModelFile::max_parameter and min_current_per_load (the
+//! model-file header stays below this layer; a test checks that they agree).
 inline constexpr double min_current_per_load = 1e-9;
 
 //! The signals of one joint (one motor) for one tick.

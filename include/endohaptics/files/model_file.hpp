@@ -125,6 +125,11 @@ struct ModelFile {
   static constexpr int format_version = 1;  //!< "version" written and accepted
   //! Largest "states" accepted on load: A alone is states^2 numbers (8 MB at 1000).
   static constexpr int max_states = 1000;
+  //! Largest magnitude of a joint-model parameter and smallest |current_per_load| accepted: the
+  //! bounds of estimation::max_joint_model_parameter and estimation::min_current_per_load,
+  //! repeated here because this header stays below estimation/ (a test checks they agree).
+  static constexpr double max_parameter = 1e6;
+  static constexpr double min_current_per_load = 1e-9;  //!< see max_parameter
   model::DynamicStateSpace<> state_space;  //!< A, B, C, D, sample time (s); state() = x0
   std::vector<SignalInfo> inputs{};        //!< nu entries
   std::vector<SignalInfo> outputs{};       //!< ny entries

@@ -5,8 +5,6 @@
 
 #include "endohaptics/files/model_file.hpp"
 
-#include "endohaptics/estimation/joint_force_model.hpp"
-
 namespace endohaptics::files {
 namespace detail::model_file {
 
@@ -18,8 +16,7 @@ ENDOHAPTICS_DECL void require_parameter(bool ok, const std::string& where, const
   }
 }
 
-// Bounds: estimation/joint_force_model.hpp (max_joint_model_parameter, min_current_per_load).
-constexpr double max_parameter = estimation::max_joint_model_parameter;
+constexpr double max_parameter = ModelFile::max_parameter;
 
 ENDOHAPTICS_DECL void validate_settings(const StallHoldSettings& p, const std::string& where) {
   const auto non_negative = [&](const char* name, double v, const char* rule) {
@@ -51,7 +48,7 @@ ENDOHAPTICS_DECL void validate_settings(const PushLoadObserverSettings& p, doubl
                     "direction_threshold", p.direction_threshold, "in (0, 1]");
   require_parameter(p.push_sign == 1 || p.push_sign == -1, where, "push_sign", p.push_sign,
                     "+1 or -1");
-  require_parameter(std::fabs(p.current_per_load) >= estimation::min_current_per_load &&
+  require_parameter(std::fabs(p.current_per_load) >= ModelFile::min_current_per_load &&
                         std::fabs(p.current_per_load) <= max_parameter,
                     where, "current_per_load", p.current_per_load, "of magnitude in [1e-9, 1e6]");
   const std::pair<const char*, double> finite[] = {{"current_offset", p.current_offset},
