@@ -9,7 +9,7 @@
 #      (model::embed_states). Order 2: the sbRIO's current filter and velocity window are the
 #      fast dynamics between the reported signals and the force. Orders 3-6 fitted this one log
 #      as well or better but generalised worse: at order 6 the identified run's fit ranged
-#      61.5-81.3 % over 19 runs of the 12 s / 6 s pipeline (3 below 70 %), at order 2
+#      61.5-81.3 % over 19 runs of the 12 s / 6 s pipeline (2 below 70 %), at order 2
 #      77.5-80.7 % over 12 (docs/identification_results.md, "The demo's clamp model");
 #   3. teleoperation with the 2016 preset (appendix C), then with the identified model;
 #   4. endohaptics-force-report: both runs against the emulator's truth, one plot, and as its last

@@ -63,7 +63,7 @@ struct PushLoadObserverParameters {
     require(direction_threshold > 0 && direction_threshold <= 1, "direction_threshold",
             direction_threshold, "in (0, 1]");
     require(push_sign == 1 || push_sign == -1, "push_sign", push_sign, "+1 or -1");
-    const auto max = static_cast<Scalar>(max_joint_model_parameter);  // also false for NaN:
+    const auto max = static_cast<Scalar>(max_joint_model_parameter);  // comparisons fail for NaN
     require(std::fabs(current_per_load) >= static_cast<Scalar>(min_current_per_load) &&
                 std::fabs(current_per_load) <= max,
             "current_per_load", current_per_load, "of magnitude in [1e-9, 1e6]");

@@ -47,7 +47,7 @@ struct StallHoldParameters {
                                 ", got " + endohaptics::detail::format_number(value)));
       }
     };
-    const auto max = static_cast<Scalar>(max_joint_model_parameter);  // also false for NaN:
+    const auto max = static_cast<Scalar>(max_joint_model_parameter);  // comparisons fail for NaN
     require(current_deadzone >= 0 && current_deadzone <= max, "current_deadzone", current_deadzone,
             "in [0, 1e6] A");
     require(velocity_threshold >= 0 && velocity_threshold <= max, "velocity_threshold",
