@@ -7,7 +7,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
-#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
@@ -19,6 +18,7 @@
 #include <utility>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/model/dense_numerics.hpp"
 
 namespace endohaptics::estimation {
 
@@ -101,12 +101,12 @@ template <typename Scalar>
 Eigen::Matrix<Scalar, Eigen::Dynamic, 1> symmetric_eigenvalues(const DynamicMatrix<Scalar>& M,
                                                                std::string_view owner,
                                                                std::string_view what) {
-  const Eigen::EigenSolver<DynamicMatrix<Scalar>> solver(M, /*computeEigenvectors=*/false);
-  if (solver.info() != Eigen::Success) {
+  model::numerics::ComplexVector<Scalar> eigenvalues;
+  if (!model::numerics::eigenvalues<Scalar>(M, eigenvalues)) {
     ENDOHAPTICS_THROW(
         Error(std::string(owner) + ": eigenvalues of " + std::string(what) + " did not converge"));
   }
-  Eigen::Matrix<Scalar, Eigen::Dynamic, 1> values = solver.eigenvalues().real();
+  Eigen::Matrix<Scalar, Eigen::Dynamic, 1> values = eigenvalues.real();
   std::sort(values.data(), values.data() + values.size());
   return values;
 }
@@ -147,8 +147,8 @@ void require_detectable(const DynamicMatrix<Scalar>& A, const DynamicMatrix<Scal
                         std::string_view owner, Scalar eps) {
   const Eigen::Index nx = A.rows();
   const Eigen::Index ny = C.rows();
-  const Eigen::EigenSolver<DynamicMatrix<Scalar>> eig(A, /*computeEigenvectors=*/false);
-  if (eig.info() != Eigen::Success) {
+  model::numerics::ComplexVector<Scalar> eigenvalues;
+  if (!model::numerics::eigenvalues<Scalar>(A, eigenvalues)) {
     ENDOHAPTICS_THROW(Error(std::string(owner) + ": eigenvalue computation of A did not converge"));
   }
   const Scalar root_eps = std::sqrt(eps);
@@ -159,7 +159,7 @@ void require_detectable(const DynamicMatrix<Scalar>& A, const DynamicMatrix<Scal
     if (row_norm > Scalar(0)) C_scaled.row(i) *= scale / row_norm;
   }
   for (Eigen::Index k = 0; k < nx; ++k) {
-    const std::complex<Scalar> lambda = eig.eigenvalues()(k);
+    const std::complex<Scalar> lambda = eigenvalues(k);
     if (std::abs(lambda) < Scalar(1) - root_eps || lambda.imag() < Scalar(0)) continue;
     DynamicMatrix<Scalar> real_part(nx + ny, nx);
     real_part.topRows(nx) = -A;
@@ -267,9 +267,13 @@ DareSolution<Eigen::Dynamic, Scalar> solve_filter_dare_dynamic(
   const Matrix S = C * H * C.transpose() + R_sym;
   const Matrix S_inv_CP = S.llt().solve(C * H);
   const Matrix closed_loop = A - A * S_inv_CP.transpose() * C;
-  const Eigen::EigenSolver<Matrix> eig(closed_loop, /*computeEigenvectors=*/false);
-  const Scalar radius = eig.eigenvalues().cwiseAbs().maxCoeff();
-  if (eig.info() != Eigen::Success || !(radius < Scalar(1) - std::sqrt(eps))) {
+  model::numerics::ComplexVector<Scalar> poles;
+  if (!model::numerics::eigenvalues<Scalar>(closed_loop, poles)) {
+    ENDOHAPTICS_THROW(
+        Error(std::string(owner) + ": eigenvalues of the error dynamics A - L C did not converge"));
+  }
+  const Scalar radius = poles.cwiseAbs().maxCoeff();
+  if (!(radius < Scalar(1) - std::sqrt(eps))) {
     ENDOHAPTICS_THROW(
         Error(std::string(owner) +
               ": no stabilising solution: the error dynamics A - L C have spectral radius " +
@@ -282,6 +286,19 @@ DareSolution<Eigen::Dynamic, Scalar> solve_filter_dare_dynamic(
   solution.P = std::move(H);
   return solution;
 }
+
+#if defined(ENDOHAPTICS_EXTERN_NUMERICS)
+// The double instantiations (the working precision of float and double models), compiled once in
+// estimation/impl/dare.ipp (ENDOHAPTICS_EXTERN_NUMERICS: core/separate_compilation.hpp).
+extern template DareSolution<Eigen::Dynamic, double> solve_filter_dare_dynamic<double>(
+    const DynamicMatrix<double>&, const DynamicMatrix<double>&, const DynamicMatrix<double>&,
+    const DynamicMatrix<double>&, const DareOptions<double>&, double);
+extern template DynamicMatrix<double> filter_riccati_defect<double>(const DynamicMatrix<double>&,
+                                                                    const DynamicMatrix<double>&,
+                                                                    const DynamicMatrix<double>&,
+                                                                    const DynamicMatrix<double>&,
+                                                                    const DynamicMatrix<double>&);
+#endif
 
 }  // namespace detail
 

@@ -5,31 +5,18 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <complex>
 #include <limits>
 #include <type_traits>
-#include <unsupported/Eigen/MatrixFunctions>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/model/dense_numerics.hpp"
 #include "endohaptics/model/hammerstein_wiener.hpp"
 #include "endohaptics/model/state_space.hpp"
 
 namespace endohaptics::estimation {
-
-namespace detail::force {
-
-//! Principal matrix logarithm (Eigen unsupported MatrixFunctions). Precondition: no eigenvalue
-//! of `M` on the closed negative real axis.
-template <typename Scalar>
-Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> matrix_log(
-    const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& M) {
-  return M.log();
-}
-
-}  // namespace detail::force
 
 //! Continuous-time model whose ZOH discretisation at `discrete.sample_time()` is `discrete`
 //! (scipy-style d2c 'zoh'): logm([[A, B], [0, I]]) / Ts = [[Ac, Bc], [0, 0]], Cc = C, Dc = D.
@@ -40,17 +27,17 @@ template <int Nx, int Nu, int Ny, typename Scalar>
     const model::StateSpace<Nx, Nu, Ny, Scalar>& discrete) {
   const Scalar eps = std::numeric_limits<Scalar>::epsilon();
   // Dynamic size on purpose: configuration time only, and one instantiation of Eigen's
-  // eigenvalue solver and matrix logarithm per Scalar instead of one per model size (they are
-  // heavy to compile).
-  using Dynamic = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
+  // eigenvalue solver and matrix logarithm per Scalar instead of one per model size
+  // (model/dense_numerics.hpp).
+  using Dynamic = model::numerics::Matrix<Scalar>;
   const Dynamic A = discrete.A();
   const Scalar norm = std::max(Scalar(1), A.norm());
-  const Eigen::EigenSolver<Dynamic> solver(A, /*computeEigenvectors=*/false);
-  if (solver.info() != Eigen::Success) {
+  model::numerics::ComplexVector<Scalar> eigenvalues;
+  if (!model::numerics::eigenvalues<Scalar>(A, eigenvalues)) {
     ENDOHAPTICS_THROW(Error("to_continuous_zoh: eigenvalues of A did not converge"));
   }
-  for (Eigen::Index i = 0; i < solver.eigenvalues().size(); ++i) {
-    const std::complex<Scalar> lambda = solver.eigenvalues()[i];
+  for (Eigen::Index i = 0; i < eigenvalues.size(); ++i) {
+    const std::complex<Scalar> lambda = eigenvalues[i];
     if (std::abs(lambda) <= Scalar(100) * eps * norm) {
       ENDOHAPTICS_THROW(Error("to_continuous_zoh: A is singular (eigenvalue " +
                               endohaptics::detail::format_number(lambda) +
@@ -66,7 +53,7 @@ template <int Nx, int Nu, int Ny, typename Scalar>
   Dynamic M = Dynamic::Identity(Nx + Nu, Nx + Nu);
   M.topLeftCorner(Nx, Nx) = discrete.A();
   if constexpr (Nu > 0) M.topRightCorner(Nx, Nu) = discrete.B();
-  const Dynamic L = detail::force::matrix_log(M) / discrete.sample_time();
+  const Dynamic L = model::numerics::log<Scalar>(M) / discrete.sample_time();
   if (!L.allFinite()) {
     ENDOHAPTICS_THROW(Error("to_continuous_zoh: the matrix logarithm is not finite"));
   }

@@ -7,8 +7,6 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <Eigen/Eigenvalues>
-#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <complex>
@@ -17,9 +15,9 @@
 #include <string>
 #include <string_view>
 #include <type_traits>
-#include <unsupported/Eigen/MatrixFunctions>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/model/dense_numerics.hpp"
 
 namespace endohaptics::model {
 
@@ -28,10 +26,10 @@ namespace detail {
 using endohaptics::detail::format_number;  // round-trip digits in error messages
 
 //! Configuration-time numerics (eigenvalues, LU, the matrix exponential) run on dynamic-size
-//! matrices: each decomposition is then compiled once per Scalar, not once per model size (a
-//! fixed-size EigenSolver costs seconds of compile time for every size). Not on the tick path.
+//! matrices (model/dense_numerics.hpp): each decomposition is then compiled once per Scalar, not
+//! once per model size. Not on the tick path.
 template <typename Scalar>
-using DynamicMatrix = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
+using DynamicMatrix = numerics::Matrix<Scalar>;
 
 using endohaptics::detail::require_finite;
 
@@ -250,12 +248,11 @@ class StateSpace {
 
   //! Eigenvalues (poles) of A. Configuration time: throws Error if the QR iteration fails.
   [[nodiscard]] Eigenvalues eigenvalues() const {
-    const Eigen::EigenSolver<detail::DynamicMatrix<Scalar>> solver(
-        detail::DynamicMatrix<Scalar>(A_), /*computeEigenvectors=*/false);
-    if (solver.info() != Eigen::Success) {
+    numerics::ComplexVector<Scalar> values;
+    if (!numerics::eigenvalues<Scalar>(detail::DynamicMatrix<Scalar>(A_), values)) {
       ENDOHAPTICS_THROW(Error("StateSpace: eigenvalue computation of A did not converge"));
     }
-    return solver.eigenvalues();
+    return values;
   }
 
   //! max |lambda_i(A)|: the model is asymptotically stable when this is < 1.
@@ -267,22 +264,18 @@ class StateSpace {
   //! Steady-state gain C (I - A)^-1 B + D (ny x nu). Throws Error if I - A is singular
   //! (a pole at z = 1, e.g. an integrator).
   [[nodiscard]] MatrixD dc_gain() const {
-    const Eigen::FullPivLU<detail::DynamicMatrix<Scalar>> lu(
-        detail::DynamicMatrix<Scalar>(MatrixA::Identity(A_.rows(), A_.cols()) - A_));
-    if (!lu.isInvertible()) {
+    const auto lu = numerics::lu_solve<Scalar>(
+        detail::DynamicMatrix<Scalar>(MatrixA::Identity(A_.rows(), A_.cols()) - A_),
+        detail::DynamicMatrix<Scalar>(B_));
+    if (!lu.invertible) {
       ENDOHAPTICS_THROW(Error("StateSpace: DC gain undefined, I - A is singular (rank " +
-                              std::to_string(lu.rank()) + " of " + std::to_string(A_.rows()) +
+                              std::to_string(lu.rank) + " of " + std::to_string(A_.rows()) +
                               "; A has a pole at z = 1)"));
     }
     if constexpr (Nu == 0) {
       return MatrixD{};
     } else {
-      // A dynamic model without inputs: an empty gain (Eigen's solve has no empty case: with
-      // zero right-hand sides it binds a reference to a null pointer, which UBSan reports).
-      if constexpr (Nu == Eigen::Dynamic) {
-        if (B_.cols() == 0) return MatrixD::Zero(C_.rows(), 0);
-      }
-      const MatrixB X = lu.solve(detail::DynamicMatrix<Scalar>(B_));
+      const MatrixB X = lu.X;
       return C_ * X + D_;
     }
   }
@@ -429,7 +422,7 @@ template <int Nx, int Nu, int Ny, typename Scalar>
   detail::DynamicMatrix<Scalar> M = detail::DynamicMatrix<Scalar>::Zero(n, n);
   M.template topLeftCorner<Nx, Nx>() = continuous.A() * sample_time;
   if constexpr (Nu > 0) M.template topRightCorner<Nx, Nu>() = continuous.B() * sample_time;
-  const detail::DynamicMatrix<Scalar> E = M.exp();
+  const detail::DynamicMatrix<Scalar> E = numerics::exp<Scalar>(M);
   typename StateSpace<Nx, Nu, Ny, Scalar>::MatrixB Bd;
   if constexpr (Nu > 0) Bd = E.template topRightCorner<Nx, Nu>();
   return StateSpace<Nx, Nu, Ny, Scalar>(E.template topLeftCorner<Nx, Nx>(), Bd, continuous.C(),
@@ -447,25 +440,28 @@ template <int Nx, int Nu, int Ny, typename Scalar>
   const Scalar half = sample_time / Scalar(2);
   const typename SS::MatrixA I = SS::MatrixA::Identity();
   const detail::DynamicMatrix<Scalar> M = I - continuous.A() * half;
-  const Eigen::FullPivLU<detail::DynamicMatrix<Scalar>> lu(M);
-  if (!lu.isInvertible()) {
+  // [Ad, Bd] = M^-1 [I + A Ts/2, B Ts] in one solve.
+  detail::DynamicMatrix<Scalar> R(Nx, Nx + Nu);
+  R.leftCols(Nx) = I + continuous.A() * half;
+  if constexpr (Nu > 0) R.rightCols(Nu) = continuous.B() * sample_time;
+  const auto solved = numerics::lu_solve<Scalar>(M, R);
+  if (!solved.invertible) {
     ENDOHAPTICS_THROW(Error(
         "discretize_tustin: I - A Ts/2 is singular for Ts = " + detail::format_number(sample_time) +
         " s (A has an eigenvalue at 2/Ts)"));
   }
-  const typename SS::MatrixA Ad =
-      lu.solve(detail::DynamicMatrix<Scalar>(I + continuous.A() * half));
+  const typename SS::MatrixA Ad = solved.X.leftCols(Nx);
   typename SS::MatrixB Bd;
   typename SS::MatrixD Dd = continuous.D();
   if constexpr (Nu > 0) {
-    Bd = lu.solve(detail::DynamicMatrix<Scalar>(continuous.B() * sample_time));
+    Bd = solved.X.rightCols(Nu);
     Dd += continuous.C() * Bd / Scalar(2);
   }
-  // Cd = C M^-1, i.e. the solution of M^T Cd^T = C^T.
+  // Cd = C M^-1, i.e. the solution of M^T Cd^T = C^T (M^T is invertible with M).
   const typename SS::MatrixC Cd =
-      Eigen::FullPivLU<detail::DynamicMatrix<Scalar>>(detail::DynamicMatrix<Scalar>(M.transpose()))
-          .solve(detail::DynamicMatrix<Scalar>(continuous.C().transpose()))
-          .transpose();
+      numerics::lu_solve<Scalar>(detail::DynamicMatrix<Scalar>(M.transpose()),
+                                 detail::DynamicMatrix<Scalar>(continuous.C().transpose()))
+          .X.transpose();
   return SS(Ad, Bd, Cd, Dd, sample_time);
 }
 
