@@ -7,6 +7,8 @@
 #include <endohaptics/kinematics/cylindrical_mapper.hpp>
 #include <endohaptics/kinematics/denavit_hartenberg.hpp>
 
+namespace cylindrical_mapper_bench {
+
 namespace {
 
 using Mapper = endohaptics::kinematics::CylindricalMapper<double>;
@@ -54,3 +56,5 @@ void BM_DhChain_forward_touch_frames(benchmark::State& st) {
 BENCHMARK(BM_DhChain_forward_touch_frames);
 
 }  // namespace
+
+}  // namespace cylindrical_mapper_bench

@@ -9,6 +9,8 @@
 #include <endohaptics/estimation/force_estimator.hpp>
 #include <vector>
 
+namespace force_estimator_bench {
+
 namespace {
 
 namespace est = endohaptics::estimation;
@@ -157,3 +159,5 @@ void BM_Baseline2016_force_estimator_step(benchmark::State& st) {
 BENCHMARK(BM_Baseline2016_force_estimator_step);
 
 }  // namespace
+
+}  // namespace force_estimator_bench

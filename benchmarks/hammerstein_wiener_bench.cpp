@@ -9,6 +9,8 @@
 #include <endohaptics/model/presets_2016.hpp>
 #include <utility>
 
+namespace hammerstein_wiener_bench {
+
 namespace {
 
 namespace m = endohaptics::model;
@@ -104,3 +106,5 @@ void BM_Baseline2016_hammerstein_wiener_step(benchmark::State& st) {
 BENCHMARK(BM_Baseline2016_hammerstein_wiener_step);
 
 }  // namespace
+
+}  // namespace hammerstein_wiener_bench

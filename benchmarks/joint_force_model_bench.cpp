@@ -12,6 +12,8 @@
 #include <endohaptics/estimation/push_load_observer.hpp>
 #include <endohaptics/estimation/stall_hold.hpp>
 
+namespace joint_force_model_bench {
+
 namespace {
 
 namespace est = endohaptics::estimation;
@@ -57,3 +59,5 @@ void BM_JointModel_clamp_2016_preset(benchmark::State& st) {
 BENCHMARK(BM_JointModel_clamp_2016_preset);
 
 }  // namespace
+
+}  // namespace joint_force_model_bench

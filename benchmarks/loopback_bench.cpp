@@ -30,6 +30,8 @@
 #include <thread>
 #include <type_traits>
 
+namespace loopback_bench {
+
 namespace {
 
 namespace transport = endohaptics::transport;
@@ -239,3 +241,5 @@ BENCHMARK(BM_Loopback_max_rate_v2)
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+
+}  // namespace loopback_bench

@@ -12,6 +12,8 @@
 
 #include "legacy_json_codec.hpp"
 
+namespace packet_codec_bench {
+
 namespace {
 
 using Codec = endohaptics::protocol::PacketCodec<4>;
@@ -220,3 +222,5 @@ void BM_ReplayWindow_check_accept(benchmark::State& st) {
 BENCHMARK(BM_ReplayWindow_check_accept);
 
 }  // namespace
+
+}  // namespace packet_codec_bench

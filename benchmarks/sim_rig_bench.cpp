@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <endohaptics/sim/simulated_rig.hpp>
 
+namespace sim_rig_bench {
+
 namespace {
 
 namespace sim = endohaptics::sim;
@@ -36,3 +38,5 @@ void BM_SimulatedRig_advance_1ms_float(benchmark::State& st) { advance_1ms<float
 
 BENCHMARK(BM_SimulatedRig_advance_1ms);
 BENCHMARK(BM_SimulatedRig_advance_1ms_float);
+
+}  // namespace sim_rig_bench

@@ -12,6 +12,8 @@
 #include <endohaptics/model/state_space.hpp>
 #include <random>
 
+namespace steady_state_kalman_bench {
+
 namespace {
 
 using Model = endohaptics::model::StateSpace<6, 2, 1>;
@@ -129,3 +131,5 @@ void BM_SteadyStateKalman_construct(benchmark::State& st) {
 BENCHMARK(BM_SteadyStateKalman_construct);
 
 }  // namespace
+
+}  // namespace steady_state_kalman_bench

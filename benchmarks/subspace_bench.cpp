@@ -9,6 +9,8 @@
 #include <endohaptics/model/presets_2016.hpp>
 #include <random>
 
+namespace subspace_bench {
+
 namespace {
 
 namespace id = endohaptics::identification;
@@ -73,3 +75,5 @@ void BM_Subspace_identify_auto_order_2in_10k(benchmark::State& state) {
 BENCHMARK(BM_Subspace_identify_auto_order_2in_10k)->Unit(benchmark::kMillisecond);
 
 }  // namespace
+
+}  // namespace subspace_bench

@@ -13,6 +13,8 @@
 #include <endohaptics/transport/udp_transport.hpp>
 #include <thread>
 
+namespace teleop_loop_bench {
+
 namespace {
 
 namespace transport = endohaptics::transport;
@@ -150,3 +152,5 @@ void BM_BaselinePosix_udp_round_trip(benchmark::State& st) {
 BENCHMARK(BM_BaselinePosix_udp_round_trip)->UseRealTime();
 
 }  // namespace
+
+}  // namespace teleop_loop_bench
