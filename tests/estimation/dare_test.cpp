@@ -1,4 +1,5 @@
 #include "endohaptics/estimation/dare.hpp"
+#include "endohaptics/model/dense_numerics.hpp"
 
 #include <doctest/doctest.h>
 
@@ -36,7 +37,9 @@ Mat<Nx, Nx> riccati_map(const Mat<Nx, Nx>& A, const Mat<Ny, Nx>& C, const Mat<Nx
 
 // Dynamic-size decompositions: one instantiation for all sizes keeps this file quick to compile.
 double spectral_radius(const Eigen::MatrixXd& M) {
-  return Eigen::EigenSolver<Eigen::MatrixXd>(M, false).eigenvalues().cwiseAbs().maxCoeff();
+  Eigen::VectorXcd values;
+  REQUIRE(endohaptics::model::numerics::eigenvalues<double>(M, values));
+  return values.cwiseAbs().maxCoeff();
 }
 
 double smallest_eigenvalue(const Eigen::MatrixXd& symmetric) {
