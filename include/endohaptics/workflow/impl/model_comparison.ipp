@@ -4,6 +4,8 @@
 //! (core/separate_compilation.hpp).
 #pragma once
 
+#include <utility>
+
 #include "endohaptics/workflow/model_comparison.hpp"
 
 namespace endohaptics::workflow {
@@ -75,42 +77,36 @@ ENDOHAPTICS_DECL FileComparison compare_log(const files::ModelFile& model, const
   Eigen::MatrixXd y_hat_all(total, ny);
   Eigen::Index row = 0;
   for (const DataSet& d : log.segments) {
+    Eigen::MatrixXd y_hat;
     if (model.is_joint_model()) {  // a joint model: causal from its start state, no x0
-      const Eigen::MatrixXd y_hat = wf::with_context(
-          log.source, [&] { return Eigen::MatrixXd(simulate_joint_model(model, d.u)); });
-      const Eigen::Index skip = std::min(c.warmup_samples, d.y.rows() - 1);
-      const Eigen::Index keep = d.y.rows() - skip;
-      y_all.middleRows(row, keep) = d.y.bottomRows(keep);
-      y_hat_all.middleRows(row, keep) = y_hat.bottomRows(keep);
-      row += keep;
-      c.y.push_back(d.y);
-      c.y_hat.push_back(y_hat);
-      continue;
+      y_hat = wf::with_context(log.source,
+                               [&] { return Eigen::MatrixXd(simulate_joint_model(model, d.u)); });
+    } else {
+      const Eigen::MatrixXd u = apply_maps(in_maps, d.u);
+      Eigen::VectorXd x0 = Eigen::VectorXd::Zero(linear.state_size());
+      switch (options.initial_state) {
+        case InitialStateMode::oracle:
+          x0 = wf::with_context(log.source, [&] { return estimate_initial_state(linear, u, d.y); });
+          break;
+        case InitialStateMode::stored:
+          x0 = linear.state();
+          break;
+        case InitialStateMode::steady:
+          x0 = wf::with_context(log.source,
+                                [&] { return steady_initial_state(linear, u.row(0).transpose()); });
+          break;
+        case InitialStateMode::zero:
+          break;
+      }
+      y_hat = apply_maps(out_maps, simulate(linear, u, x0));
     }
-    const Eigen::MatrixXd u = apply_maps(in_maps, d.u);
-    Eigen::VectorXd x0 = Eigen::VectorXd::Zero(linear.state_size());
-    switch (options.initial_state) {
-      case InitialStateMode::oracle:
-        x0 = wf::with_context(log.source, [&] { return estimate_initial_state(linear, u, d.y); });
-        break;
-      case InitialStateMode::stored:
-        x0 = linear.state();
-        break;
-      case InitialStateMode::steady:
-        x0 = wf::with_context(log.source,
-                              [&] { return steady_initial_state(linear, u.row(0).transpose()); });
-        break;
-      case InitialStateMode::zero:
-        break;
-    }
-    const Eigen::MatrixXd y_hat = apply_maps(out_maps, simulate(linear, u, x0));
     const Eigen::Index skip = std::min(c.warmup_samples, d.y.rows() - 1);
     const Eigen::Index keep = d.y.rows() - skip;
     y_all.middleRows(row, keep) = d.y.bottomRows(keep);
     y_hat_all.middleRows(row, keep) = y_hat.bottomRows(keep);
     row += keep;
     c.y.push_back(d.y);
-    c.y_hat.push_back(y_hat);
+    c.y_hat.push_back(std::move(y_hat));
   }
   c.scored_samples = total;
   // A diverging model gives Inf/NaN: report fit -Inf rather than failing on the metric.
