@@ -24,8 +24,9 @@ set(allowed_workflow core protocol model estimation identification files)
 # (the bridge, through files/bridge_config.hpp) does not compile identification; the conversions
 # from identification results are in files/identified_model_file.hpp. An entry with a slash
 # names one header (files/json_text.hpp: the bounded JSON reading, itself only core).
-# An offline header's function bodies, <area>/impl/<name>.ipp (core/separate_compilation.hpp), are
-# checked like headers of the area; model_file's include only model_file.hpp.
+# <area>/impl/<name>.ipp (an offline header's function bodies, or the explicit instantiations of
+# the core's numerics: core/separate_compilation.hpp) are checked like headers of the area;
+# model_file's include only model_file.hpp.
 set(restricted_headers "files/model_file.hpp" "files/impl/model_file.ipp")
 set(allowed_header_files/model_file.hpp core model files/json_text.hpp files/impl/model_file.ipp)
 set(allowed_header_files/impl/model_file.ipp files/model_file.hpp)

@@ -37,6 +37,7 @@
 #include "endohaptics/identification/subspace.hpp"
 #include "endohaptics/kinematics/cylindrical_mapper.hpp"
 #include "endohaptics/kinematics/denavit_hartenberg.hpp"
+#include "endohaptics/model/dense_numerics.hpp"
 #include "endohaptics/model/friction_model.hpp"
 #include "endohaptics/model/hammerstein_wiener.hpp"
 #include "endohaptics/model/human_arm_model.hpp"

@@ -11,10 +11,11 @@
 //!
 //! ENDOHAPTICS_EXTERN_NUMERICS, separately: the core's heavy configuration-time templates
 //! (model/dense_numerics.hpp, estimation/dare.hpp) are declared `extern template` for double,
-//! and one translation unit compiles `model/impl/dense_numerics.ipp` and
-//! `estimation/impl/dare.ipp`, which instantiate them. This project's unit tests and sanitized
-//! benchmarks build that way (many translation units use them); its programs do not (only the
-//! bridge does: compiling them apart cost more than it saved, docs/development.md, step 13).
+//! and `model/impl/dense_numerics.ipp` and `estimation/impl/dare.ipp`, compiled once each,
+//! instantiate them (explicit instantiations only: no header includes them). This project's unit
+//! tests and sanitized benchmarks build that way (many translation units use them); its programs do
+//! not (only the bridge does: compiling them apart cost more than it saved, docs/development.md,
+//! step 13).
 #pragma once
 
 #if defined(ENDOHAPTICS_SEPARATE_COMPILATION)

@@ -306,8 +306,9 @@ extern template DynamicMatrix<double> filter_riccati_defect<double>(const Dynami
 //! steady-state a priori covariance of the Kalman filter for x+ = A x + w, z = C x + v,
 //! cov(w) = Q, cov(v) = R). Configuration time. Throws Error when an input is not finite, Q is
 //! not symmetric PSD, R is not symmetric PD, (A, C) is not detectable, the options are invalid,
-//! the iteration does not converge, or no stabilising solution exists (a mode on the unit
-//! circle that Q does not excite). Same P as scipy.linalg.solve_discrete_are(A.T, C.T, Q, R).
+//! the iteration or an eigenvalue computation does not converge, or no stabilising solution
+//! exists (a mode on the unit circle that Q does not excite). Same P as
+//! scipy.linalg.solve_discrete_are(A.T, C.T, Q, R).
 //! Computed in double (or Scalar if wider) and rounded to Scalar; tolerances use Scalar's eps.
 template <int Nx, int Ny, typename Scalar>
 [[nodiscard]] DareSolution<Nx, Scalar> solve_filter_dare(const Eigen::Matrix<Scalar, Nx, Nx>& A,

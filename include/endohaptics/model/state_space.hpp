@@ -440,10 +440,11 @@ template <int Nx, int Nu, int Ny, typename Scalar>
   const Scalar half = sample_time / Scalar(2);
   const typename SS::MatrixA I = SS::MatrixA::Identity();
   const detail::DynamicMatrix<Scalar> M = I - continuous.A() * half;
-  // [Ad, Bd] = M^-1 [I + A Ts/2, B Ts] in one solve.
-  detail::DynamicMatrix<Scalar> R(Nx, Nx + Nu);
+  // [Ad, Bd, M^-1] = M^-1 [I + A Ts/2, B Ts, I] in one solve.
+  detail::DynamicMatrix<Scalar> R(Nx, Nx + Nu + Nx);
   R.leftCols(Nx) = I + continuous.A() * half;
-  if constexpr (Nu > 0) R.rightCols(Nu) = continuous.B() * sample_time;
+  if constexpr (Nu > 0) R.middleCols(Nx, Nu) = continuous.B() * sample_time;
+  R.rightCols(Nx) = I;
   const auto solved = numerics::lu_solve<Scalar>(M, R);
   if (!solved.invertible) {
     ENDOHAPTICS_THROW(Error(
@@ -454,14 +455,10 @@ template <int Nx, int Nu, int Ny, typename Scalar>
   typename SS::MatrixB Bd;
   typename SS::MatrixD Dd = continuous.D();
   if constexpr (Nu > 0) {
-    Bd = solved.X.rightCols(Nu);
+    Bd = solved.X.middleCols(Nx, Nu);
     Dd += continuous.C() * Bd / Scalar(2);
   }
-  // Cd = C M^-1, i.e. the solution of M^T Cd^T = C^T (M^T is invertible with M).
-  const typename SS::MatrixC Cd =
-      numerics::lu_solve<Scalar>(detail::DynamicMatrix<Scalar>(M.transpose()),
-                                 detail::DynamicMatrix<Scalar>(continuous.C().transpose()))
-          .X.transpose();
+  const typename SS::MatrixC Cd = continuous.C() * solved.X.rightCols(Nx);  // C M^-1
   return SS(Ad, Bd, Cd, Dd, sample_time);
 }
 
