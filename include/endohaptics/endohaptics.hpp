@@ -41,6 +41,7 @@
 #include "endohaptics/model/friction_model.hpp"
 #include "endohaptics/model/hammerstein_wiener.hpp"
 #include "endohaptics/model/human_arm_model.hpp"
+#include "endohaptics/model/joint_model_bounds.hpp"
 #include "endohaptics/model/presets_2016.hpp"
 #include "endohaptics/model/state_space.hpp"
 #include "endohaptics/model/static_map.hpp"

@@ -96,7 +96,8 @@ TEST_CASE("joint-model files: both kinds round-trip through JSON and disk") {
         }).find("kind \"push_load_observer\" is a joint force model") != std::string::npos);
 }
 
-// model_file.hpp stays below estimation/ and repeats its parameter bounds: they must agree.
+// The model-file loader and the estimation types check the same bounds
+// (model/joint_model_bounds.hpp).
 static_assert(files::ModelFile::max_parameter == est::max_joint_model_parameter);
 static_assert(files::ModelFile::min_current_per_load == est::min_current_per_load);
 

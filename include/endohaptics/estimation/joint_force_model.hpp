@@ -7,20 +7,15 @@
 #include <concepts>
 #include <type_traits>
 
+#include "endohaptics/model/joint_model_bounds.hpp"
 #include "endohaptics/model/state_space.hpp"
 
 namespace endohaptics::estimation {
 
-//! Largest magnitude of a joint model's parameter (StallHold, PushLoadObserver) in its own unit
-//! (A, rad/s, s, N, N m, mN m, ... per unit): far beyond any surgical instrument, and small enough
-//! that no product of two parameters and a plausible signal overflows. A larger value is a
-//! corrupt or hostile model file, refused at configuration time rather than turning every tick's
-//! estimate into Inf (which the tick would reject, rendering no force at all).
-inline constexpr double max_joint_model_parameter = 1e6;
-//! Smallest |current_per_load| of a PushLoadObserver, A per load unit (it divides the current).
-//! Both bounds are repeated as files::ModelFile::max_parameter and min_current_per_load (the
-//! model-file header stays below this layer; a test checks that they agree).
-inline constexpr double min_current_per_load = 1e-9;
+// The parameter bounds of the joint models (model/joint_model_bounds.hpp), under the names the
+// estimation types use.
+using model::max_joint_model_parameter;
+using model::min_current_per_load;
 
 //! The signals of one joint (one motor) for one tick.
 template <typename Scalar = double>

@@ -32,6 +32,7 @@
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/files/json_text.hpp"
 #include "endohaptics/model/hammerstein_wiener.hpp"
+#include "endohaptics/model/joint_model_bounds.hpp"
 #include "endohaptics/model/state_space.hpp"
 #include "endohaptics/model/static_map.hpp"
 #include "endohaptics/model/static_nonlinearity.hpp"
@@ -126,10 +127,9 @@ struct ModelFile {
   //! Largest "states" accepted on load: A alone is states^2 numbers (8 MB at 1000).
   static constexpr int max_states = 1000;
   //! Largest magnitude of a joint-model parameter and smallest |current_per_load| accepted: the
-  //! bounds of estimation::max_joint_model_parameter and estimation::min_current_per_load,
-  //! repeated here because this header stays below estimation/ (a test checks they agree).
-  static constexpr double max_parameter = 1e6;
-  static constexpr double min_current_per_load = 1e-9;  //!< see max_parameter
+  //! bounds the estimation types check too (model/joint_model_bounds.hpp).
+  static constexpr double max_parameter = model::max_joint_model_parameter;
+  static constexpr double min_current_per_load = model::min_current_per_load;  //!< see above
   model::DynamicStateSpace<> state_space;  //!< A, B, C, D, sample time (s); state() = x0
   std::vector<SignalInfo> inputs{};        //!< nu entries
   std::vector<SignalInfo> outputs{};       //!< ny entries
