@@ -46,6 +46,10 @@ files::ModelFile observer_file() {
   p.output_offset = -0.002;
   p.output_slope = 0.1;
   p.process_variance = 1e-8;
+  p.back_current_per_load = 0.8;
+  p.back_current_offset = -0.1;
+  p.back_current_per_velocity = -0.004;
+  p.back_variance = 4e-4;
   return files::make_push_load_observer_file(p, 0.001, clamp_inputs, {{"grip_torque", "N m"}});
 }
 
@@ -85,7 +89,28 @@ TEST_CASE("joint-model files: both kinds round-trip through JSON and disk") {
   CHECK(q.current_per_load == 1.45);
   CHECK(q.initial_load == 0.04);
   CHECK(q.sample_time == 0.001);
+  CHECK(q.back_current_per_load == 0.8);
+  CHECK(q.back_current_offset == -0.1);
+  CHECK(q.back_current_per_velocity == -0.004);
+  CHECK(q.back_variance == 4e-4);
   CHECK_NOTHROW((void)est::PushLoadObserver<double>{q});
+  // A file written before the back-driven map existed loads without it (c_b = 0: the prior until
+  // the first push); one with only some of the four fields is refused.
+  json old_file = files::to_json(observer_file());
+  for (const char* key :
+       {"back_current_per_load", "back_current_offset", "back_current_per_velocity",
+        "back_variance"}) {
+    old_file["parameters"].erase(key);
+  }
+  const auto q_old = files::push_load_observer_parameters<est::PushLoadObserverParameters<double>>(
+      files::model_from_json(old_file));
+  CHECK(q_old.back_current_per_load == 0.0);
+  CHECK(q_old.current_per_load == 1.45);
+  json partial = files::to_json(observer_file());
+  partial["parameters"].erase("back_variance");
+  CHECK(error_of(partial) ==
+        "model file m.json: parameters: back_current_per_load, back_current_offset, "
+        "back_current_per_velocity and back_variance go together (all four or none)");
   // The wrong kind, and the linear loaders, refuse with the kind named.
   CHECK(message_of(
             [&] { (void)files::stall_hold_parameters<est::StallHoldParameters<double>>(o); }) ==
@@ -175,6 +200,14 @@ TEST_CASE("joint-model files: hostile and out-of-range content is refused naming
         "1e6], got -1e-300");
   CHECK(error_of(with("gain", -1e300)) ==
         "model file m.json: field \"parameters.gain\" must be in [-1e6, 1e6], got -1e+300");
+  CHECK(error_of(obs_with("back_current_per_load", 1e-12)) ==
+        "model file m.json: field \"parameters.back_current_per_load\" must be 0 or of magnitude "
+        "in [1e-9, 1e6], got 1e-12");
+  CHECK(error_of(obs_with("back_variance", 0.0)) ==
+        "model file m.json: field \"parameters.back_variance\" must be in (0, 1e6], got 0");
+  CHECK(error_of(obs_with("back_current_offset", -1e300)) ==
+        "model file m.json: field \"parameters.back_current_offset\" must be in [-1e6, 1e6], got "
+        "-1e+300");
   CHECK(error_of(obs_with("direction_threshold", 1.5)) ==
         "model file m.json: field \"parameters.direction_threshold\" must be in (0, 1], got 1.5");
   // The library's makers check the same rules.

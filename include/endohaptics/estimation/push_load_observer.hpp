@@ -4,7 +4,11 @@
 //! K2): a scalar Kalman filter on a random-walk load, updated only in the push regime through
 //! i_f = c_p load + d_p + b_p v, held otherwise; the regime from a Dahl-type direction state on
 //! the encoder increments (rate-independent, Dahl 1968) and the filtered velocity; an output map
-//! for the direction-dependent friction on the load side. Filters: second-order Butterworth
+//! for the direction-dependent friction on the load side. Before the first push (a run that starts
+//! back-driven), optionally an estimate from the back-driven current instead of the prior alone:
+//! z_b = (i_f - d_b - b_b v) / c_b fused with the prior (initial load, P0) by inverse variances,
+//! each sample afresh (z_b's error is a per-run bias, not white noise, so it is not accumulated);
+//! the first push starts the filter from that estimate. Filters: second-order Butterworth
 //! low-passes (bilinear transform) started at the steady state of the first sample. Per step
 //! about 40 flops; noexcept, allocation-free. Units: A, rad, rad/s, s; load in the fit's unit.
 #pragma once
@@ -21,7 +25,8 @@
 namespace endohaptics::estimation {
 
 //! Parameters of PushLoadObserver. Defaults: the research note's (UMN grasper, 1 kHz); c_p, d_p,
-//! b_p, noise, e0, e1 and the initial load come from fit_push_load_observer.
+//! b_p, noise, e0, e1, the initial load and the back-driven map (c_b, d_b, b_b, its error) come
+//! from fit_push_load_observer.
 template <typename Scalar = double>
 struct PushLoadObserverParameters {
   Scalar current_cutoff = Scalar(10);        //!< Hz, current low-pass (2nd-order Butterworth)
@@ -39,7 +44,12 @@ struct PushLoadObserverParameters {
   Scalar initial_variance = Scalar(1e-2);      //!< P0, load unit^2
   Scalar output_offset = Scalar(0);            //!< e0: friction on the load side while not pushing
   Scalar output_slope = Scalar(0);             //!< e1: its growth with the load
-  Scalar sample_time = Scalar(0.001);          //!< s, one advance()
+  //! c_b, A per load unit while back-driven; 0: no back-driven estimate before the first push
+  Scalar back_current_per_load = Scalar(0);
+  Scalar back_current_offset = Scalar(0);        //!< d_b, A
+  Scalar back_current_per_velocity = Scalar(0);  //!< b_b, A s/rad
+  Scalar back_variance = Scalar(1);  //!< load unit^2: mean square error of z_b (its bias included)
+  Scalar sample_time = Scalar(0.001);  //!< s, one advance()
 
   //! Throws Error naming the field, its value and the rule.
   void validate() const {
@@ -67,8 +77,12 @@ struct PushLoadObserverParameters {
     require(std::fabs(current_per_load) >= static_cast<Scalar>(min_current_per_load) &&
                 std::fabs(current_per_load) <= max,
             "current_per_load", current_per_load, "of magnitude in [1e-9, 1e6]");
-    for (const Scalar v :
-         {current_offset, current_per_velocity, initial_load, output_offset, output_slope}) {
+    require(back_current_per_load == 0 ||
+                (std::fabs(back_current_per_load) >= static_cast<Scalar>(min_current_per_load) &&
+                 std::fabs(back_current_per_load) <= max),
+            "back_current_per_load", back_current_per_load, "0 or of magnitude in [1e-9, 1e6]");
+    for (const Scalar v : {current_offset, current_per_velocity, initial_load, output_offset,
+                           output_slope, back_current_offset, back_current_per_velocity}) {
       require(std::fabs(v) <= max, "an offset, slope or initial load", v, "in [-1e6, 1e6]");
     }
     require(measurement_variance > 0 && measurement_variance <= max, "measurement_variance",
@@ -77,6 +91,8 @@ struct PushLoadObserverParameters {
             "in [0, 1e6]");
     require(initial_variance >= 0 && initial_variance <= max, "initial_variance", initial_variance,
             "in [0, 1e6]");
+    require(back_variance > 0 && back_variance <= max, "back_variance", back_variance,
+            "in (0, 1e6]");
   }
 };
 
@@ -88,8 +104,8 @@ class PushLoadObserver {
   using Parameters = PushLoadObserverParameters<Scalar>;  //!< the model's parameters
   using Signals = JointSignals<Scalar>;                   //!< one joint's signals for one tick
   //! (current filter z1, z2, velocity filter z1, z2, previous position, direction h, load, its
-  //! variance, regime -1/0/+1, started 0/1)
-  using State = Eigen::Matrix<Scalar, 10, 1>;
+  //! variance, regime -1/0/+1, started 0/1, pushed yet 0/1)
+  using State = Eigen::Matrix<Scalar, 11, 1>;
 
   //! Validates `p` (throws Error naming the field).
   explicit PushLoadObserver(const Parameters& p = {}) : p_((p.validate(), p)) {
@@ -134,8 +150,19 @@ class PushLoadObserver {
     x[8] = h >= p_.direction_threshold && vp > p_.velocity_threshold     ? Scalar(1)
            : h <= -p_.direction_threshold && vp < -p_.velocity_threshold ? Scalar(-1)
                                                                          : Scalar(0);
+    if (x[8] < 0 && x[10] == Scalar(0) && p_.back_current_per_load != Scalar(0) &&
+        p_.initial_variance > Scalar(0)) {
+      // Back-driven before any push: the prior and this sample's back-driven inversion, weighed by
+      // their inverse variances (not accumulated over samples: z_b's error is mostly a bias).
+      const Scalar z = (i_f - p_.back_current_offset - p_.back_current_per_velocity * v) /
+                       p_.back_current_per_load;
+      const Scalar w = p_.back_variance / (p_.back_variance + p_.initial_variance);
+      x[6] = w * p_.initial_load + (Scalar(1) - w) * z;
+      x[7] = w * p_.initial_variance;
+    }
     x[7] += p_.process_variance;
     if (x[8] > 0) {  // pushing: the current sees the load
+      x[10] = Scalar(1);
       const Scalar c = p_.current_per_load;
       const Scalar k = x[7] * c / (c * c * x[7] + p_.measurement_variance);
       x[6] += k * (i_f - c * x[6] - p_.current_offset - p_.current_per_velocity * v);

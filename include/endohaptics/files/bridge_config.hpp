@@ -509,13 +509,13 @@ void with_prefix(std::string_view source, std::string_view key, F&& validate) {
 //! Hammerstein-Wiener type (estimation::ClampModel2016, also identified "hammerstein_wiener" files
 //! of 6 states, 2 inputs, 1 output), estimation::StallHold or estimation::PushLoadObserver. A
 //! JointForceModel (noexcept, allocation-free, fixed size: a std::variant of the three). Its State
-//! is the model's own, padded with zeros to 10 numbers (the largest of the three); reset() is the
+//! is the model's own, padded with zeros to 11 numbers (the largest of the three); reset() is the
 //! model's own start state (ForceEstimator::reset, through RateStepper: the yaw model at x = 0,
 //! the observer with its filters waiting for the next sample and its initial load and variance).
 class ClampForceModel {
  public:
   using ScalarType = double;                              //!< floating-point type
-  using State = Eigen::Matrix<double, 10, 1>;             //!< the model's state, zero-padded
+  using State = Eigen::Matrix<double, 11, 1>;             //!< the model's state, zero-padded
   using Signals = estimation::JointSignals<double>;       //!< one joint's signals for one tick
   using Yaw = estimation::ClampModel2016<double>;         //!< the Hammerstein-Wiener kind
   using StallHold = estimation::StallHold<double>;        //!< kind "stall_hold"
@@ -536,7 +536,7 @@ class ClampForceModel {
   }
   template <typename M>
   static constexpr int size_of = static_cast<int>(M::State::RowsAtCompileTime);
-  static_assert(size_of<Yaw> <= 10 && size_of<StallHold> <= 10 && size_of<Observer> <= 10);
+  static_assert(size_of<Yaw> <= 11 && size_of<StallHold> <= 11 && size_of<Observer> <= 11);
 
  public:
   //! The Hammerstein-Wiener clamp model.

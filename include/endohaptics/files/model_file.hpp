@@ -115,6 +115,11 @@ struct PushLoadObserverSettings {
   double initial_variance = 1e-2;      //!< load unit^2, >= 0
   double output_offset = 0;            //!< load units
   double output_slope = 0;             //!< dimensionless
+  //! A per load unit while back-driven, 0 (none: files before it was added) or non-zero
+  double back_current_per_load = 0;
+  double back_current_offset = 0;        //!< A
+  double back_current_per_velocity = 0;  //!< A s/rad
+  double back_variance = 1;              //!< load unit^2, > 0
 };
 
 //! The content of a model file, validated on load and save. The model (or a Hammerstein-Wiener
@@ -314,6 +319,10 @@ template <typename Parameters>
   p.initial_variance = static_cast<S>(m.initial_variance);
   p.output_offset = static_cast<S>(m.output_offset);
   p.output_slope = static_cast<S>(m.output_slope);
+  p.back_current_per_load = static_cast<S>(m.back_current_per_load);
+  p.back_current_offset = static_cast<S>(m.back_current_offset);
+  p.back_current_per_velocity = static_cast<S>(m.back_current_per_velocity);
+  p.back_variance = static_cast<S>(m.back_variance);
   p.sample_time = static_cast<S>(f.state_space.sample_time());
   return p;
 }

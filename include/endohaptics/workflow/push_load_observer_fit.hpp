@@ -3,7 +3,9 @@
 //! squares (docs/research_force_models.md, K2): (a) on the push-regime samples, the filtered
 //! current on [load, 1, filtered velocity] gives c_p, d_p, b_p and the residual variance R_p;
 //! (b) with those, the observer runs causally on every experiment and (load - estimate) on
-//! [g, g estimate], g = (1 - regime) / 2, gives the load-side friction map e0, e1. Every
+//! [g, g estimate], g = (1 - regime) / 2, gives the load-side friction map e0, e1. Beside (a), the
+//! same least squares on the back-driven samples gives the map used before the first push (c_b,
+//! d_b, b_b and the mean square error of its inversion). Every
 //! experiment weighs the same (its normal equations divided by its length); a warm-up at the start
 //! of each is left out. Configuration time: allocates, throws endohaptics::Error.
 #pragma once
@@ -44,8 +46,8 @@ struct LoadObserverFit {
     const estimation::PushLoadObserver<double>& model, std::span<const LoadObserverData> data,
     double warmup);
 
-//! Fits c_p, d_p, b_p, R_p, the initial load (the training mean) and e0, e1 (see the file
-//! comment); the filters, thresholds, push sign, Q and P0 come from `prior`. Throws Error on
+//! Fits c_p, d_p, b_p, R_p, the initial load (the training mean), the back-driven map and e0, e1
+//! (see the file comment); the filters, thresholds, push sign, Q and P0 come from `prior`. Throws Error on
 //! empty or mismatched data, too few push samples, or a singular fit.
 [[nodiscard]] ENDOHAPTICS_DECL LoadObserverFit fit_push_load_observer(
     std::span<const LoadObserverData> data,

@@ -51,11 +51,14 @@ ENDOHAPTICS_DECL void validate_settings(const PushLoadObserverSettings& p, doubl
   require_parameter(std::fabs(p.current_per_load) >= ModelFile::min_current_per_load &&
                         std::fabs(p.current_per_load) <= max_parameter,
                     where, "current_per_load", p.current_per_load, "of magnitude in [1e-9, 1e6]");
-  const std::pair<const char*, double> finite[] = {{"current_offset", p.current_offset},
-                                                   {"current_per_velocity", p.current_per_velocity},
-                                                   {"initial_load", p.initial_load},
-                                                   {"output_offset", p.output_offset},
-                                                   {"output_slope", p.output_slope}};
+  const std::pair<const char*, double> finite[] = {
+      {"current_offset", p.current_offset},
+      {"current_per_velocity", p.current_per_velocity},
+      {"initial_load", p.initial_load},
+      {"output_offset", p.output_offset},
+      {"output_slope", p.output_slope},
+      {"back_current_offset", p.back_current_offset},
+      {"back_current_per_velocity", p.back_current_per_velocity}};
   for (const auto& [name, v] : finite)
     require_parameter(std::fabs(v) <= max_parameter, where, name, v, "in [-1e6, 1e6]");
   require_parameter(p.measurement_variance > 0 && p.measurement_variance <= max_parameter, where,
@@ -64,6 +67,13 @@ ENDOHAPTICS_DECL void validate_settings(const PushLoadObserverSettings& p, doubl
                     "process_variance", p.process_variance, "in [0, 1e6]");
   require_parameter(p.initial_variance >= 0 && p.initial_variance <= max_parameter, where,
                     "initial_variance", p.initial_variance, "in [0, 1e6]");
+  require_parameter(p.back_current_per_load == 0 ||
+                        (std::fabs(p.back_current_per_load) >= ModelFile::min_current_per_load &&
+                         std::fabs(p.back_current_per_load) <= max_parameter),
+                    where, "back_current_per_load", p.back_current_per_load,
+                    "0 or of magnitude in [1e-9, 1e6]");
+  require_parameter(p.back_variance > 0 && p.back_variance <= max_parameter, where, "back_variance",
+                    p.back_variance, "in (0, 1e6]");
 }
 
 ENDOHAPTICS_DECL model::DynamicStateSpace<> joint_model_placeholder(Eigen::Index nu,
@@ -355,6 +365,24 @@ ENDOHAPTICS_DECL ModelFile joint_model_from_json(const json& j, const std::strin
     get("initial_variance", p.initial_variance);
     get("output_offset", p.output_offset);
     get("output_slope", p.output_slope);
+    // The back-driven map came later: a file without it has none (c_b = 0), all four or none.
+    const char* back[] = {"back_current_per_load", "back_current_offset",
+                          "back_current_per_velocity", "back_variance"};
+    std::size_t present = 0;
+    for (const char* name : back) present += params.contains(name) ? 1U : 0U;
+    if (present != 0 && present != std::size(back)) {
+      fail(where +
+           ": parameters: back_current_per_load, back_current_offset, "
+           "back_current_per_velocity and back_variance go together (all four or none)");
+    }
+    if (present != 0) {
+      get("back_current_per_load", p.back_current_per_load);
+      get("back_current_offset", p.back_current_offset);
+      get("back_current_per_velocity", p.back_current_per_velocity);
+      get("back_variance", p.back_variance);
+    } else {
+      for (const char* name : back) known.emplace_back(name);
+    }
     m.push_load_observer = p;
   }
   for (const auto& [key, value] : params.items()) {
@@ -458,7 +486,11 @@ ENDOHAPTICS_DECL nlohmann::json to_json(const ModelFile& m) {
                        {"initial_load", p.initial_load},
                        {"initial_variance", p.initial_variance},
                        {"output_offset", p.output_offset},
-                       {"output_slope", p.output_slope}};
+                       {"output_slope", p.output_slope},
+                       {"back_current_per_load", p.back_current_per_load},
+                       {"back_current_offset", p.back_current_offset},
+                       {"back_current_per_velocity", p.back_current_per_velocity},
+                       {"back_variance", p.back_variance}};
   }
   if (!m.is_joint_model()) mf::add_linear_block(j, m);
   const ModelProvenance& p = m.provenance;

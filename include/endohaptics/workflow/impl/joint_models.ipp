@@ -185,7 +185,8 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
       {p.current_cutoff, p.velocity_cutoff, p.direction_scale, p.velocity_threshold,
        p.direction_threshold, p.push_sign, p.current_per_load, p.current_offset,
        p.current_per_velocity, p.measurement_variance, p.process_variance, p.initial_load,
-       p.initial_variance, p.output_offset, p.output_slope},
+       p.initial_variance, p.output_offset, p.output_slope, p.back_current_per_load,
+       p.back_current_offset, p.back_current_per_velocity, p.back_variance},
       ts, inputs, outputs, provenance);
   out.training_fit.clear();
   const estimation::PushLoadObserver<double> fitted(p);
@@ -209,8 +210,14 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
       detail::format_number(p.measurement_variance) + " A^2, load-side friction " +
       detail::format_number(p.output_offset) + " " + unit + " + " +
       detail::format_number(p.output_slope) + " x load, initial load " +
-      detail::format_number(p.initial_load) + " " + unit + "; priors: Q " +
-      detail::format_number(p.process_variance) + " per step, P0 " +
+      detail::format_number(p.initial_load) + " " + unit + ", " +
+      (p.back_current_per_load != 0.0
+           ? "before the first push the back-driven map " +
+                 detail::format_number(p.back_current_per_load) + " A/" + unit + ", offset " +
+                 detail::format_number(p.back_current_offset) + " A (its RMS error " +
+                 detail::format_number(std::sqrt(p.back_variance)) + " " + unit + ")"
+           : std::string("no back-driven map (the prior until the first push)")) +
+      "; priors: Q " + detail::format_number(p.process_variance) + " per step, P0 " +
       detail::format_number(p.initial_variance) + ", filters " +
       detail::format_number(p.current_cutoff) + "/" + detail::format_number(p.velocity_cutoff) +
       " Hz, q0 " + detail::format_number(p.direction_scale) + " rad";

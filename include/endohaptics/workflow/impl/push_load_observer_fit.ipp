@@ -62,7 +62,9 @@ fit_push_load_observer(std::span<const LoadObserverData> data,
     double i_f, v, y;
     double w;
   };
-  std::vector<Sample> pushing;
+  std::vector<Sample> pushing, back_driven;
+  Eigen::Matrix3d back_normal = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d back_rhs = Eigen::Vector3d::Zero();
   for (const auto& d : data) {
     estimation::PushLoadObserver<double> m(prior);
     const double w = 1.0 / static_cast<double>(d.current.size() - skip);
@@ -82,6 +84,11 @@ fit_push_load_observer(std::span<const LoadObserverData> data,
         normal += w * row * row.transpose();
         rhs += w * row * m.filtered_current();
         pushing.push_back({m.filtered_current(), m.filtered_velocity(), d.load[k], w});
+      } else if (m.regime() < 0) {
+        const Eigen::Vector3d row(d.load[k], 1.0, m.filtered_velocity());
+        back_normal += w * row * row.transpose();
+        back_rhs += w * row * m.filtered_current();
+        back_driven.push_back({m.filtered_current(), m.filtered_velocity(), d.load[k], w});
       }
     }
   }
@@ -109,6 +116,32 @@ fit_push_load_observer(std::span<const LoadObserverData> data,
   q.initial_load = load_sum / weight_sum;
   q.output_offset = 0.0;
   q.output_slope = 0.0;
+  // The back-driven map, for the estimate before the first push: the same least squares on the
+  // back-driven samples, its error as the mean square of the inversion z_b - load (the per-run
+  // bias included). Left out (c_b = 0) when there are too few samples or the slope is too small
+  // to invert (|c_b| below 1e-3 of |c_p|: the current does not see the load when back-driven).
+  q.back_current_per_load = 0.0;
+  if (back_driven.size() >= 10) {
+    const Eigen::Vector3d b =
+        (back_normal + 1e-9 * Eigen::Matrix3d::Identity()).ldlt().solve(back_rhs);
+    const double max = model::max_joint_model_parameter;
+    if (b.allFinite() && std::fabs(b[0]) >= 1e-3 * std::fabs(theta[0]) && std::fabs(b[0]) <= max &&
+        std::fabs(b[1]) <= max && std::fabs(b[2]) <= max) {
+      double square = 0.0, square_weight = 0.0;
+      for (const auto& p : back_driven) {
+        const double z = (p.i_f - b[1] - b[2] * p.v) / b[0];
+        square += p.w * (z - p.y) * (z - p.y);
+        square_weight += p.w;
+      }
+      const double variance = square / square_weight;
+      if (std::isfinite(variance) && variance > 0.0 && variance <= max) {
+        q.back_current_per_load = b[0];
+        q.back_current_offset = b[1];
+        q.back_current_per_velocity = b[2];
+        q.back_variance = variance;
+      }
+    }
+  }
   // (b) The load-side friction map on the causal run.
   Eigen::Matrix2d n2 = Eigen::Matrix2d::Zero();
   Eigen::Vector2d r2 = Eigen::Vector2d::Zero();
