@@ -53,6 +53,30 @@ void BM_JointModel_push_load_observer(benchmark::State& st) {
 }
 BENCHMARK(BM_JointModel_push_load_observer);
 
+// The observer's path before the first push, every step: the spindle turns back at 0.5 rad/s
+// forever (never pushing), the back-driven map fused with the prior on each sample.
+void BM_JointModel_push_load_observer_before_push(benchmark::State& st) {
+  est::PushLoadObserverParameters<double> p;
+  p.back_current_per_load = 0.8;
+  p.back_current_offset = -0.1;
+  p.back_variance = 4e-4;
+  est::PushLoadObserver<double> model(p);
+  const auto signals = sweep();
+  std::size_t k = 0;
+  double position = 0.0;
+  for (auto _ : st) {
+    position -= 5e-4;  // 0.5 rad/s at 1 kHz
+    const est::JointSignals<double> s{position, -0.5, signals[k].current, 0.0};
+    const auto status = model.advance(s);
+    const double f = model.force(s);
+    benchmark::DoNotOptimize(status);
+    benchmark::DoNotOptimize(f);
+    k = (k + 1) % sweep_length;
+  }
+  st.SetItemsProcessed(st.iterations());
+}
+BENCHMARK(BM_JointModel_push_load_observer_before_push);
+
 void BM_JointModel_clamp_2016_preset(benchmark::State& st) {
   run(st, est::models_2016<double>().clamp1);
 }
