@@ -97,9 +97,8 @@ TEST_CASE("joint-model files: both kinds round-trip through JSON and disk") {
   // A file written before the back-driven map existed loads without it (c_b = 0: the prior until
   // the first push); one with only some of the four fields is refused.
   json old_file = files::to_json(observer_file());
-  for (const char* key :
-       {"back_current_per_load", "back_current_offset", "back_current_per_velocity",
-        "back_variance"}) {
+  for (const char* key : {"back_current_per_load", "back_current_offset",
+                          "back_current_per_velocity", "back_variance"}) {
     old_file["parameters"].erase(key);
   }
   const auto q_old = files::push_load_observer_parameters<est::PushLoadObserverParameters<double>>(

@@ -47,8 +47,8 @@ struct LoadObserverFit {
     double warmup);
 
 //! Fits c_p, d_p, b_p, R_p, the initial load (the training mean), the back-driven map and e0, e1
-//! (see the file comment); the filters, thresholds, push sign, Q and P0 come from `prior`. Throws Error on
-//! empty or mismatched data, too few push samples, or a singular fit.
+//! (see the file comment); the filters, thresholds, push sign, Q and P0 come from `prior`. Throws
+//! Error on empty or mismatched data, too few push samples, or a singular fit.
 [[nodiscard]] ENDOHAPTICS_DECL LoadObserverFit fit_push_load_observer(
     std::span<const LoadObserverData> data,
     const estimation::PushLoadObserverParameters<double>& prior, double warmup = 1.0);
