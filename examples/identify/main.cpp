@@ -9,6 +9,7 @@
 // (workflow/format_defaults.hpp). Writes a JSON model.
 // Workflow: endohaptics/workflow/workflow.hpp; results: docs/identification_results.md.
 #include <fmt/format.h>
+#include <algorithm>
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
@@ -149,15 +150,23 @@ int main(int argc, char** argv) {
     options.deadzone = wf::parse_deadzone(deadzone, sel.inputs.size());
     // The joint models take (current, velocity) -> one output; from the format's defaults they
     // are left out (with a note) for other signal lists, asked for by --method they are an error.
-    if (!joint_kinds.empty() && (sel.inputs.size() != 2 || sel.outputs.size() != 1)) {
+    // (push_load_observer: or 3, the current command third).
+    const auto joint_inputs_ok = [&] {
+      const bool stall = std::find(joint_kinds.begin(), joint_kinds.end(),
+                                   files::ModelKind::stall_hold) != joint_kinds.end();
+      return sel.outputs.size() == 1 && sel.inputs.size() >= 2 &&
+             sel.inputs.size() <= (stall ? 2U : 3U);
+    };
+    if (!joint_kinds.empty() && !joint_inputs_ok()) {
       if (method_opt->count() > 0) {
         throw endohaptics::Error("--method " + method +
-                                 ": stall_hold and push_load_observer need 2 inputs (current, "
-                                 "velocity) and 1 output");
+                                 ": stall_hold needs 2 inputs (current, velocity) and 1 output; "
+                                 "push_load_observer 2 or 3 (current, velocity, current command)");
       }
       fmt::print(
-          "note: the format's joint models ({}) need 2 inputs (current, velocity) and 1 "
-          "output: not fitted\n",
+          "note: the format's joint models ({}) need 2 inputs (current, velocity; "
+          "push_load_observer: a third, the current command, optional) and 1 output: not "
+          "fitted\n",
           method);
       joint_kinds.clear();
     }

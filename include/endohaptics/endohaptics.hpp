@@ -10,6 +10,7 @@
 
 #include "endohaptics/core/clock.hpp"
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/estimation/current_offset_reference.hpp"
 #include "endohaptics/estimation/dare.hpp"
 #include "endohaptics/estimation/force_estimator.hpp"
 #include "endohaptics/estimation/force_models_2016.hpp"

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "endohaptics/estimation/current_offset_reference.hpp"
 #include "endohaptics/estimation/push_load_observer.hpp"
 #include "endohaptics/estimation/stall_hold.hpp"
 #include "endohaptics/files/bridge_config.hpp"
@@ -217,6 +218,48 @@ TEST_CASE("joint-model files: hostile and out-of-range content is refused naming
         }) ==
         "make_stall_hold_file: field \"parameters.output_time_constant\" must be in [0, 1e6] s, "
         "got inf");
+  // The stiffness and the current's offset reference (a third input, the command).
+  CHECK(error_of(obs_with("load_per_angle", 1e300)) ==
+        "model file m.json: field \"parameters.load_per_angle\" must be in [-1e6, 1e6], got "
+        "1e+300");
+  json half_reference = obs;
+  half_reference["parameters"]["command_gain"] = -2.06;
+  CHECK(error_of(half_reference) ==
+        "model file m.json: parameters: command_gain and reference_offset go together (both or "
+        "none)");
+  json two_inputs = half_reference;
+  two_inputs["parameters"]["reference_offset"] = -0.005;
+  CHECK(error_of(two_inputs) ==
+        "model file m.json: kind \"push_load_observer\" needs 3 inputs (current, velocity, "
+        "current command: its command_gain is not 0) and 1 output, got 2 and 1");
+  json with_command = two_inputs;
+  with_command["inputs"].push_back({{"name", "current_command"}, {"unit", "1"}});
+  const files::ModelFile referred = files::model_from_json(with_command, "m.json");
+  const auto ref =
+      files::current_offset_reference_parameters<est::CurrentOffsetReferenceParameters<double>>(
+          referred);
+  REQUIRE(ref.has_value());
+  CHECK(ref->command_gain == -2.06);
+  CHECK(ref->reference_offset == -0.005);
+  CHECK(files::to_json(referred) == with_command);
+  CHECK_FALSE(
+      files::current_offset_reference_parameters<est::CurrentOffsetReferenceParameters<double>>(
+          files::model_from_json(obs))
+          .has_value());
+  json zero_gain = with_command;
+  zero_gain["parameters"]["command_gain"] = 1e-12;
+  CHECK(error_of(zero_gain) ==
+        "model file m.json: field \"parameters.command_gain\" must be 0 or of magnitude in [1e-9, "
+        "1e6], got 1e-12");
+  // The bridge has no command: such a model is refused there, saying why.
+  TempDir dir("joint_reference");
+  write_text(dir.path() / "referred.json", with_command.dump());
+  write_text(dir.path() / "bridge.json", R"({"estimator": {"clamp_model": "referred.json"}})");
+  CHECK(message_of([&] {
+          (void)files::bridge_force_models(files::load_bridge_config(dir.path() / "bridge.json"));
+        })
+            .find("refers its current to the commanded current (a third input), which the sbRIO "
+                  "protocol does not carry") != std::string::npos);
   // Both joint models in one file is not a kind.
   files::ModelFile both = stall_hold_file();
   both.push_load_observer = files::PushLoadObserverSettings{};

@@ -86,7 +86,7 @@ TEST_CASE("joint models: a stall-hold file simulates as the estimation type, sco
   CHECK(message_of([&] { (void)wf::compare_log(model, other); }) ==
         "hits.csv: prepared at 0.02 s, the stall_hold model runs at 0.01 s");
   CHECK(message_of([&] { (void)wf::simulate_joint_model(model, Eigen::MatrixXd::Zero(5, 3)); }) ==
-        "simulate_joint_model: 3 input columns, the joint models take 2 (current, velocity)");
+        "simulate_joint_model: 3 input columns, the model takes 2 (current, velocity)");
 }
 
 TEST_CASE("joint models: fit_joint_model recovers the stall-hold gain and side from logs") {

@@ -108,6 +108,61 @@ TEST_CASE("push-load observer: before the first push, the load from the back-dri
   CHECK(std::fabs(moved[4000] - with_map[4000]) > 0.01);
 }
 
+TEST_CASE("push-load observer: the load follows the angle after the first push (stiffness)") {
+  // The load steps per stroke (0.03, 0.05, 0.07) and grows by 0.01 per rad of travel in the push
+  // direction (a jaw-side spring); back-driven the current says nothing (synthetic()'s -0.03 A).
+  auto stiff = [](unsigned seed) {
+    auto d = synthetic(seed);
+    for (Eigen::Index k = 0; k < d.load.size(); ++k) {
+      d.load[k] += 0.01 * d.position[k];
+      if (d.current[k] > 0.0) d.current[k] += 1.45 * 0.01 * d.position[k];  // pushing
+    }
+    return d;
+  };
+  const std::vector<wf::LoadObserverData> data{stiff(1), stiff(2)};
+  const auto fit = wf::fit_push_load_observer(data, est::PushLoadObserverParameters<double>{}, 1.0);
+  CHECK(fit.parameters.load_per_angle == doctest::Approx(0.01).epsilon(0.35));
+  auto rigid = fit.parameters;
+  rigid.load_per_angle = 0.0;
+  const auto without = wf::load_observer_rmse(est::PushLoadObserver<double>(rigid), data, 1.0);
+  MESSAGE("stiffness " << fit.parameters.load_per_angle << ": RMSE " << fit.mean_rmse
+                       << ", without it " << (without[0] + without[1]) / 2);
+  CHECK(fit.mean_rmse < 0.8 * (without[0] + without[1]) / 2);
+}
+
+TEST_CASE("push-load observer: the current referred to its command carries over a sensor offset") {
+  // The amplifier makes the current follow the command, i = -2.06 u; the training session measures
+  // it as it is, the test session 0.015 A low (a current-measurement offset: 0.01 load units).
+  auto session = [](unsigned seed, double offset) {
+    auto d = back_drivable(seed, false, 0.0);
+    d.command = d.current / -2.06;
+    d.current.array() += offset;
+    return d;
+  };
+  const std::vector<wf::LoadObserverData> train{session(1, 0.0), session(2, 0.0)};
+  const std::vector<wf::LoadObserverData> test{session(3, -0.015)};
+  const auto fit =
+      wf::fit_push_load_observer(train, est::PushLoadObserverParameters<double>{}, 1.0);
+  REQUIRE(fit.reference.has_value());
+  CHECK(fit.reference->command_gain == doctest::Approx(-2.06).epsilon(0.01));
+  CHECK(std::fabs(fit.reference->reference_offset) < 0.002);
+  const est::PushLoadObserver<double> model(fit.parameters);
+  const double referred = wf::load_observer_rmse(model, test, 1.0, fit.reference)[0];
+  const double measured = wf::load_observer_rmse(model, test, 1.0)[0];
+  MESSAGE("test session 0.015 A low: RMSE " << referred << " referred to the command, " << measured
+                                            << " as measured");
+  CHECK(referred < 0.5 * measured);
+  // No command in the data: no reference, the current as measured.
+  auto plain = train;
+  for (auto& d : plain) d.command.resize(0);
+  CHECK_FALSE(
+      wf::fit_push_load_observer(plain, est::PushLoadObserverParameters<double>{}, 1.0).reference);
+  // A model with a reference needs the command.
+  CHECK(message_of([&] {
+          (void)wf::simulate_load_observer(model, plain[0], fit.reference);
+        }).starts_with("simulate_load_observer: the model refers the current to the command"));
+}
+
 TEST_CASE("push-load observer: the fit recovers the push-regime current model") {
   const std::vector<wf::LoadObserverData> data{synthetic(1), synthetic(2)};
   est::PushLoadObserverParameters<double> prior;
@@ -148,8 +203,8 @@ TEST_CASE("push-load observer: filters start at the first sample, allocation-fre
   p = {};
   p.initial_load = 1e308;  // finite, but the estimate would be Inf on every tick
   CHECK(message_of([&] { est::PushLoadObserver<double> bad(p); }) ==
-        "PushLoadObserverParameters: an offset, slope or initial load must be in [-1e6, 1e6], got "
-        "1e+308");
+        "PushLoadObserverParameters: an offset, slope, stiffness or initial load must be in "
+        "[-1e6, 1e6], got 1e+308");
   p = {};
   p.current_per_load = 1e-12;
   CHECK(message_of([&] { est::PushLoadObserver<double> bad(p); }) ==
@@ -168,9 +223,10 @@ TEST_CASE("push-load observer: filters start at the first sample, allocation-fre
 
 TEST_CASE("push-load observer on the UMN grasper, one session to the other, scored causally" *
           doctest::skip(!endohaptics::test::has_shared_data("umn-mis-tool-2018"))) {
-  // Five runs per session (first in name order) to keep the sanitized test short; the current
-  // and the motor encoder only (no absolute position: only increments are used); grip torque in
-  // mN m as logged; RMSE on every sample after 1 s of warm-up, state from reset.
+  // Five runs per session, spread evenly in name order (frequencies and levels both vary), to keep
+  // the sanitized test short; the current, its command and the motor encoder only (no absolute
+  // position: only increments are used); grip torque in mN m as logged; RMSE on every sample
+  // after 1 s of warm-up, state from reset.
   auto session = [](const char* folder) {
     std::vector<std::filesystem::path> paths;
     for (const auto& e : std::filesystem::directory_iterator(
@@ -179,48 +235,80 @@ TEST_CASE("push-load observer on the UMN grasper, one session to the other, scor
     }
     std::sort(paths.begin(), paths.end());
     std::vector<wf::LoadObserverData> out;
-    for (std::size_t i = 0; i < 5 && i < paths.size(); ++i) {
-      const auto log = endohaptics::files::read_umn_mis_2018(paths[i].string());
-      out.push_back(
-          {log.signal("current"), log.signal("motor_position"), log.signal("grip_torque")});
+    for (std::size_t i = 0; i < 5 && paths.size() > 1; ++i) {
+      const auto log =
+          endohaptics::files::read_umn_mis_2018(paths[(i * (paths.size() - 1) + 2) / 4].string());
+      out.push_back({log.signal("current"), log.signal("motor_position"), log.signal("grip_torque"),
+                     log.signal("current_command")});
     }
     return out;
   };
   const auto l2 = session("Tool_4_Maryland_L_2");
   const auto l4 = session("Tool_4_Maryland_L_4");
-  est::PushLoadObserverParameters<double> prior;
-  prior.initial_variance = 100.0;  // mN m^2
-  prior.process_variance = 1e-2;   // (1e-8 N m^2 in mN m)
-  // Pushing is positive motor motion (the jaws close against the reaction; the research note's
-  // reading of the data, not chosen on the test runs).
-  prior.push_sign = 1.0;
-  const auto fit = wf::fit_push_load_observer(l2, prior, 1.0);
-  const auto test = wf::load_observer_rmse(est::PushLoadObserver<double>(fit.parameters), l4, 1.0);
-  double mean = 0.0;
-  for (const double r : test) mean += r / static_cast<double>(test.size());
-  MESSAGE("trained on L_2 (5 runs): RMSE " << fit.mean_rmse << " mN m; on L_4 (5 runs): " << mean
-                                           << " mN m");
-  // 6.1 mN m trained, 6.7 mN m on the other session (the static regression baseline: 37-46 mN m
-  // across sessions; the issue's target: 5 mN m on another instrument).
-  CHECK(mean < 9.0);
-  // The other way. L_2's runs start at the top of the stroke, back-driven for the first half
-  // stroke: there the back-driven map, not the training mean, gives the load.
-  const auto fit4 = wf::fit_push_load_observer(l4, prior, 1.0);
-  REQUIRE(fit4.parameters.back_current_per_load != 0.0);
-  auto held = fit4.parameters;
-  held.back_current_per_load = 0.0;
-  auto mean_of = [&](const est::PushLoadObserverParameters<double>& q) {
-    const auto r = wf::load_observer_rmse(est::PushLoadObserver<double>(q), l2, 1.0);
+  // The priors as fit_joint_model sets them: P0 the variance of the training loads, Q = (0.03 x
+  // the largest |load|)^2 per second. Pushing is positive motor motion (the jaws close against the
+  // reaction; the research note's reading of the data, not chosen on the test runs).
+  const auto prior_of = [](const std::vector<wf::LoadObserverData>& train) {
+    double sum = 0.0, sum2 = 0.0, peak = 0.0, n = 0.0;
+    for (const auto& d : train) {
+      sum += d.load.sum();
+      sum2 += d.load.squaredNorm();
+      peak = std::max(peak, d.load.cwiseAbs().maxCoeff());
+      n += static_cast<double>(d.load.size());
+    }
+    est::PushLoadObserverParameters<double> p;
+    p.initial_variance = sum2 / n - (sum / n) * (sum / n);
+    p.process_variance = (0.03 * peak) * (0.03 * peak) * p.sample_time;
+    p.push_sign = 1.0;
+    return p;
+  };
+  const auto mean_of = [](const std::vector<double>& r) {
     double m = 0.0;
     for (const double x : r) m += x / static_cast<double>(r.size());
     return m;
   };
-  const double with_map = mean_of(fit4.parameters), prior_only = mean_of(held);
-  MESSAGE("trained on L_4 (5 runs): on L_2 (5 runs) " << with_map
-                                                      << " mN m; held at the prior until the first "
-                                                         "push: "
-                                                      << prior_only << " mN m");
-  CHECK(with_map < prior_only - 0.8);  // measured 7.9 against 9.1 mN m
+  const auto without_command = [](std::vector<wf::LoadObserverData> d) {
+    for (auto& e : d) e.command.resize(0);
+    return d;
+  };
+  // Trained on one session, scored on the other: the current referred to its command, and as
+  // measured (fitted again without the command).
+  const auto cross = [&](const std::vector<wf::LoadObserverData>& train,
+                         const std::vector<wf::LoadObserverData>& test) {
+    const auto fit = wf::fit_push_load_observer(train, prior_of(train), 1.0);
+    REQUIRE(fit.reference.has_value());
+    const auto plain = wf::fit_push_load_observer(without_command(train), prior_of(train), 1.0);
+    REQUIRE_FALSE(plain.reference.has_value());
+    return std::pair{mean_of(wf::load_observer_rmse(est::PushLoadObserver<double>(fit.parameters),
+                                                    test, 1.0, fit.reference)),
+                     mean_of(wf::load_observer_rmse(est::PushLoadObserver<double>(plain.parameters),
+                                                    test, 1.0))};
+  };
+  const auto [to_l4, to_l4_plain] = cross(l2, l4);
+  const auto [to_l2, to_l2_plain] = cross(l4, l2);
+  MESSAGE("L_2 -> L_4 (5 runs each): " << to_l4 << " mN m referred to the command, " << to_l4_plain
+                                       << " as measured; L_4 -> L_2: " << to_l2 << " / "
+                                       << to_l2_plain << " mN m");
+  // Measured 11.9 / 7.9 and 8.6 / 8.7 mN m. L_2's five runs reach 40 % of the reaction torque,
+  // L_4's 100 %: that way the model extrapolates, and the reference (fitted on L_2 alone) costs;
+  // the other way it gains (research note, K6; the static regression baseline: 37-46 mN m across
+  // sessions; the issue's target: 5 mN m on another instrument).
+  CHECK(to_l4 < 13.0);
+  CHECK(to_l2 < 9.5);
+  CHECK(to_l2 < to_l2_plain);
+  // L_2's runs start at the top of the stroke, back-driven for the first half stroke: there the
+  // back-driven map, not the training mean, gives the load.
+  const auto fit4 = wf::fit_push_load_observer(l4, prior_of(l4), 1.0);
+  REQUIRE(fit4.parameters.back_current_per_load != 0.0);
+  auto held = fit4.parameters;
+  held.back_current_per_load = 0.0;
+  const double with_map = mean_of(wf::load_observer_rmse(
+      est::PushLoadObserver<double>(fit4.parameters), l2, 1.0, fit4.reference));
+  const double prior_only =
+      mean_of(wf::load_observer_rmse(est::PushLoadObserver<double>(held), l2, 1.0, fit4.reference));
+  MESSAGE("L_4 -> L_2: " << with_map << " mN m; held at the prior until the first push: "
+                         << prior_only << " mN m");
+  CHECK(with_map < prior_only - 3.0);  // measured 8.6 against 14.3 mN m
 }
 
 }  // namespace workflow_push_load_observer_fit_test

@@ -3,14 +3,16 @@
 //! motor current only while the motor pushes against it (docs/research_force_models.md, structure
 //! K2): a scalar Kalman filter on a random-walk load, updated only in the push regime through
 //! i_f = c_p load + d_p + b_p v, held otherwise; the regime from a Dahl-type direction state on
-//! the encoder increments (rate-independent, Dahl 1968) and the filtered velocity; an output map
-//! for the direction-dependent friction on the load side. Before the first push (a run that starts
-//! back-driven), optionally an estimate from the back-driven current instead of the prior alone:
-//! z_b = (i_f - d_b - b_b v) / c_b fused with the prior (initial load, P0) by inverse variances,
-//! each sample afresh (z_b's error is a per-run bias, not white noise, so it is not accumulated);
-//! the first push starts the filter from that estimate. Filters: second-order Butterworth
-//! low-passes (bilinear transform) started at the steady state of the first sample. Per step
-//! about 40 flops; noexcept, allocation-free. Units: A, rad, rad/s, s; load in the fit's unit.
+//! the encoder increments (rate-independent, Dahl 1968) and the filtered velocity; after the
+//! first push, the load also follows the encoder travel, load += k_q dq (a stiffness on the jaw
+//! side: the grip torque changes along the stroke where the current cannot see it; K5); an output
+//! map for the direction-dependent friction on the load side. Before the first push (a run that
+//! starts back-driven), optionally an estimate from the back-driven current instead of the prior
+//! alone: z_b = (i_f - d_b - b_b v) / c_b fused with the prior (initial load, P0) by inverse
+//! variances, each sample afresh (z_b's error is a per-run bias, not white noise, so it is not
+//! accumulated); the first push starts the filter from that estimate. Filters: second-order
+//! Butterworth low-passes (bilinear transform) started at the steady state of the first sample. Per
+//! step about 40 flops; noexcept, allocation-free. Units: A, rad, rad/s, s; load in the fit's unit.
 #pragma once
 
 #include <Eigen/Core>
@@ -25,8 +27,8 @@
 namespace endohaptics::estimation {
 
 //! Parameters of PushLoadObserver. Defaults: the research note's (UMN grasper, 1 kHz); c_p, d_p,
-//! b_p, noise, e0, e1, the initial load and the back-driven map (c_b, d_b, b_b, its error) come
-//! from fit_push_load_observer.
+//! b_p, noise, e0, e1, the initial load, the back-driven map (c_b, d_b, b_b, its error) and k_q
+//! come from fit_push_load_observer.
 template <typename Scalar = double>
 struct PushLoadObserverParameters {
   Scalar current_cutoff = Scalar(10);        //!< Hz, current low-pass (2nd-order Butterworth)
@@ -49,6 +51,9 @@ struct PushLoadObserverParameters {
   Scalar back_current_offset = Scalar(0);        //!< d_b, A
   Scalar back_current_per_velocity = Scalar(0);  //!< b_b, A s/rad
   Scalar back_variance = Scalar(1);  //!< load unit^2: mean square error of z_b (its bias included)
+  //! k_q, load units per rad: after the first push, load += k_q dq (dq positive in the push
+  //! direction); 0: the load a pure random walk
+  Scalar load_per_angle = Scalar(0);
   Scalar sample_time = Scalar(0.001);  //!< s, one advance()
 
   //! Throws Error naming the field, its value and the rule.
@@ -81,9 +86,11 @@ struct PushLoadObserverParameters {
                 (std::fabs(back_current_per_load) >= static_cast<Scalar>(min_current_per_load) &&
                  std::fabs(back_current_per_load) <= max),
             "back_current_per_load", back_current_per_load, "0 or of magnitude in [1e-9, 1e6]");
-    for (const Scalar v : {current_offset, current_per_velocity, initial_load, output_offset,
-                           output_slope, back_current_offset, back_current_per_velocity}) {
-      require(std::fabs(v) <= max, "an offset, slope or initial load", v, "in [-1e6, 1e6]");
+    for (const Scalar v :
+         {current_offset, current_per_velocity, initial_load, output_offset, output_slope,
+          back_current_offset, back_current_per_velocity, load_per_angle}) {
+      require(std::fabs(v) <= max, "an offset, slope, stiffness or initial load", v,
+              "in [-1e6, 1e6]");
     }
     require(measurement_variance > 0 && measurement_variance <= max, "measurement_variance",
             measurement_variance, "in (0, 1e6]");
@@ -160,6 +167,7 @@ class PushLoadObserver {
       x[6] = w * p_.initial_load + (Scalar(1) - w) * z;
       x[7] = w * p_.initial_variance;
     }
+    if (x[10] != Scalar(0)) x[6] += p_.load_per_angle * p_.push_sign * delta;  // stiffness
     x[7] += p_.process_variance;
     if (x[8] > 0) {  // pushing: the current sees the load
       x[10] = Scalar(1);

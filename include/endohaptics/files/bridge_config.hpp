@@ -634,6 +634,13 @@ inline constexpr int bridge_clamp_states = 6;
         using P = estimation::StallHoldParameters<double>;
         return ClampForceModel(estimation::StallHold<double>(stall_hold_parameters<P>(file)));
       }
+      if (file.push_load_observer->command_gain != 0) {
+        ENDOHAPTICS_THROW(Error(
+            where +
+            ": the push_load_observer refers its current to the commanded current (a third "
+            "input), which the sbRIO protocol does not carry: identify the bridge's model from "
+            "the current and the velocity only"));
+      }
       using P = estimation::PushLoadObserverParameters<double>;
       return ClampForceModel(
           estimation::PushLoadObserver<double>(push_load_observer_parameters<P>(file)));

@@ -120,6 +120,11 @@ struct PushLoadObserverSettings {
   double back_current_offset = 0;        //!< A
   double back_current_per_velocity = 0;  //!< A s/rad
   double back_variance = 1;              //!< load unit^2, > 0
+  double load_per_angle = 0;             //!< k_q, load units per rad (0 in older files)
+  //! G, A per command unit, of the current's offset reference (current_offset_reference.hpp): 0
+  //! (none: two inputs) or non-zero (then a third input, the commanded current)
+  double command_gain = 0;
+  double reference_offset = 0;  //!< b_ref, A
 };
 
 //! The content of a model file, validated on load and save. The model (or a Hammerstein-Wiener
@@ -323,7 +328,23 @@ template <typename Parameters>
   p.back_current_offset = static_cast<S>(m.back_current_offset);
   p.back_current_per_velocity = static_cast<S>(m.back_current_per_velocity);
   p.back_variance = static_cast<S>(m.back_variance);
+  p.load_per_angle = static_cast<S>(m.load_per_angle);
   p.sample_time = static_cast<S>(f.state_space.sample_time());
+  return p;
+}
+
+//! The current's offset reference of a "push_load_observer" file as `Parameters`
+//! (estimation::CurrentOffsetReferenceParameters<S>), or none when its command_gain is 0.
+template <typename Parameters>
+[[nodiscard]] std::optional<Parameters> current_offset_reference_parameters(const ModelFile& f) {
+  detail::model_file::require_kind(f, ModelKind::push_load_observer,
+                                   "current_offset_reference_parameters");
+  const PushLoadObserverSettings& m = *f.push_load_observer;
+  if (m.command_gain == 0) return std::nullopt;
+  using S = decltype(Parameters{}.command_gain);
+  Parameters p;
+  p.command_gain = static_cast<S>(m.command_gain);
+  p.reference_offset = static_cast<S>(m.reference_offset);
   return p;
 }
 

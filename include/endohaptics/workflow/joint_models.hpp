@@ -43,8 +43,9 @@ namespace endohaptics::workflow {
 push_load_observer_parameters(const files::ModelFile& f);
 
 //! A joint-model file (kind stall_hold or push_load_observer) run causally on one segment from
-//! its start state: `u` is N x 2 (current A, velocity rad/s), one output value per row. Throws
-//! Error on another kind, another input count, or a non-finite signal or result (naming the row).
+//! its start state: `u` is N x 2 (current A, velocity rad/s), or N x 3 with the current command
+//! for an observer that refers its current to it; one output value per row. Throws Error on
+//! another kind, another input count, or a non-finite signal or result (naming the row).
 [[nodiscard]] ENDOHAPTICS_DECL Eigen::VectorXd simulate_joint_model(const files::ModelFile& model,
                                                                     const Eigen::MatrixXd& u);
 
@@ -56,12 +57,13 @@ struct JointModelFit {
 };
 
 //! Fits a joint model of `kind` on `logs` (prepared for scoring: what a controller has; inputs
-//! current and velocity, one output; every segment longer than the warm-up), at the logs' sample
-//! time. StallHold: the priors of StallHoldParameters (table 5.2's dead zone, 0.05 rad/s, 30 ms,
-//! 0.3 s), the gain and the loaded side by least squares (fit_stall_hold). PushLoadObserver: the
-//! priors of PushLoadObserverParameters, P0 = the variance of the training output, Q = (0.03 max
-//! |output|)^2 Ts per step (a random walk of 3 % of the range per root second; 1e-8 (N m)^2 per
-//! ms for the UMN grasper, the research note's), both push signs fitted
+//! current and velocity, one output; for the observer optionally a third input, the current
+//! command, to which the current is then referred; every segment longer than the warm-up), at the
+//! logs' sample time. StallHold: the priors of StallHoldParameters (table 5.2's dead zone, 0.05
+//! rad/s, 30 ms, 0.3 s), the gain and the loaded side by least squares (fit_stall_hold).
+//! PushLoadObserver: the priors of PushLoadObserverParameters, P0 = the variance of the training
+//! output, Q = (0.03 max |output|)^2 Ts per step (a random walk of 3 % of the range per root
+//! second; 1e-8 (N m)^2 per ms for the UMN grasper, the research note's), both push signs fitted
 //! (fit_push_load_observer), the one in which the motor works against the load kept (the
 //! current's magnitude grows with the load at the training-mean load), then the better causal
 //! training RMSE. Throws Error on another kind or unusable data.

@@ -58,7 +58,9 @@ ENDOHAPTICS_DECL void validate_settings(const PushLoadObserverSettings& p, doubl
       {"output_offset", p.output_offset},
       {"output_slope", p.output_slope},
       {"back_current_offset", p.back_current_offset},
-      {"back_current_per_velocity", p.back_current_per_velocity}};
+      {"back_current_per_velocity", p.back_current_per_velocity},
+      {"load_per_angle", p.load_per_angle},
+      {"reference_offset", p.reference_offset}};
   for (const auto& [name, v] : finite)
     require_parameter(std::fabs(v) <= max_parameter, where, name, v, "in [-1e6, 1e6]");
   require_parameter(p.measurement_variance > 0 && p.measurement_variance <= max_parameter, where,
@@ -74,6 +76,16 @@ ENDOHAPTICS_DECL void validate_settings(const PushLoadObserverSettings& p, doubl
                     "0 or of magnitude in [1e-9, 1e6]");
   require_parameter(p.back_variance > 0 && p.back_variance <= max_parameter, where, "back_variance",
                     p.back_variance, "in (0, 1e6]");
+  require_parameter(
+      p.command_gain == 0 || (std::fabs(p.command_gain) >= ModelFile::min_current_per_load &&
+                              std::fabs(p.command_gain) <= max_parameter),
+      where, "command_gain", p.command_gain, "0 or of magnitude in [1e-9, 1e6]");
+}
+
+// The inputs a joint model takes: (current, velocity), and for a push_load_observer that refers
+// its current to the command, that command third.
+inline std::size_t joint_model_inputs(const ModelFile& m) {
+  return m.push_load_observer && m.push_load_observer->command_gain != 0 ? 3 : 2;
 }
 
 ENDOHAPTICS_DECL model::DynamicStateSpace<> joint_model_placeholder(Eigen::Index nu,
@@ -107,16 +119,20 @@ ENDOHAPTICS_DECL void validate(const ModelFile& m, const std::string& where) {
   }
   if (m.is_joint_model()) {
     const std::string kind(to_string(m.kind()));
-    if (m.inputs.size() != 2 || m.outputs.size() != 1) {
-      fail(where + ": kind \"" + kind + "\" needs 2 inputs (current, velocity) and 1 output, got " +
-           std::to_string(m.inputs.size()) + " and " + std::to_string(m.outputs.size()));
+    const std::size_t nu = joint_model_inputs(m);
+    if (m.inputs.size() != nu || m.outputs.size() != 1) {
+      fail(where + ": kind \"" + kind + "\" needs " +
+           (nu == 3 ? "3 inputs (current, velocity, current command: its command_gain is not 0)"
+                    : "2 inputs (current, velocity)") +
+           " and 1 output, got " + std::to_string(m.inputs.size()) + " and " +
+           std::to_string(m.outputs.size()));
     }
     if (m.is_hammerstein_wiener()) {
       fail(where + ": kind \"" + kind + "\" has no input or output nonlinearity");
     }
-    if (ss.state_size() != 1 || ss.input_size() != 2 || ss.output_size() != 1 ||
-        !ss.A().isZero(0.0) || !ss.B().isZero(0.0) || !ss.C().isZero(0.0) || !ss.D().isZero(0.0) ||
-        !ss.state().isZero(0.0)) {
+    if (ss.state_size() != 1 || ss.input_size() != static_cast<Eigen::Index>(nu) ||
+        ss.output_size() != 1 || !ss.A().isZero(0.0) || !ss.B().isZero(0.0) ||
+        !ss.C().isZero(0.0) || !ss.D().isZero(0.0) || !ss.state().isZero(0.0)) {
       fail(where + ": kind \"" + kind +
            "\": the linear block must be the placeholder (1 state, 2 inputs, 1 output, all zero)");
     }
@@ -322,9 +338,14 @@ ENDOHAPTICS_DECL ModelFile joint_model_from_json(const json& j, const std::strin
            "\" (its parameters are in \"parameters\")");
     }
   }
-  if (inputs.size() != 2 || outputs.size() != 1) {
-    fail(where + ": kind \"" + kind + "\" needs 2 inputs (current, velocity) and 1 output, got " +
-         std::to_string(inputs.size()) + " and " + std::to_string(outputs.size()));
+  // 3 inputs only for a push_load_observer that refers its current to the command (validate()
+  // checks that against its parameters below).
+  const std::size_t most = kind == "push_load_observer" ? 3 : 2;
+  if (inputs.size() < 2 || inputs.size() > most || outputs.size() != 1) {
+    fail(where + ": kind \"" + kind + "\" needs 2 inputs (current, velocity" +
+         (most == 3 ? std::string("; 3 with the current command") : std::string()) +
+         ") and 1 output, got " + std::to_string(inputs.size()) + " and " +
+         std::to_string(outputs.size()));
   }
   const json& params = field(j, "parameters", where);
   if (!params.is_object()) fail(where + ": field \"parameters\" is not an object");
@@ -334,10 +355,14 @@ ENDOHAPTICS_DECL ModelFile joint_model_from_json(const json& j, const std::strin
     out = number(field(params, name, where + ": parameters"), where,
                  std::string("parameters.") + name);
   };
-  ModelFile m{
-      .state_space = with_context(where, [&] { return joint_model_placeholder(2, sample_time); }),
-      .inputs = std::move(inputs),
-      .outputs = std::move(outputs)};
+  ModelFile m{.state_space = with_context(where,
+                                          [&] {
+                                            return joint_model_placeholder(
+                                                static_cast<Eigen::Index>(inputs.size()),
+                                                sample_time);
+                                          }),
+              .inputs = std::move(inputs),
+              .outputs = std::move(outputs)};
   if (kind == "stall_hold") {
     StallHoldSettings p;
     get("current_deadzone", p.current_deadzone);
@@ -382,6 +407,23 @@ ENDOHAPTICS_DECL ModelFile joint_model_from_json(const json& j, const std::strin
       get("back_variance", p.back_variance);
     } else {
       for (const char* name : back) known.emplace_back(name);
+    }
+    // Later still, each optional (absent: 0, none): the stiffness, and the current's offset
+    // reference to the command (both of its fields or none).
+    if (params.contains("load_per_angle")) {
+      get("load_per_angle", p.load_per_angle);
+    } else {
+      known.emplace_back("load_per_angle");
+    }
+    if (params.contains("command_gain") != params.contains("reference_offset")) {
+      fail(where + ": parameters: command_gain and reference_offset go together (both or none)");
+    }
+    if (params.contains("command_gain")) {
+      get("command_gain", p.command_gain);
+      get("reference_offset", p.reference_offset);
+    } else {
+      known.emplace_back("command_gain");
+      known.emplace_back("reference_offset");
     }
     m.push_load_observer = p;
   }
@@ -490,7 +532,12 @@ ENDOHAPTICS_DECL nlohmann::json to_json(const ModelFile& m) {
                        {"back_current_per_load", p.back_current_per_load},
                        {"back_current_offset", p.back_current_offset},
                        {"back_current_per_velocity", p.back_current_per_velocity},
-                       {"back_variance", p.back_variance}};
+                       {"back_variance", p.back_variance},
+                       {"load_per_angle", p.load_per_angle}};
+    if (p.command_gain != 0) {
+      j["parameters"]["command_gain"] = p.command_gain;
+      j["parameters"]["reference_offset"] = p.reference_offset;
+    }
   }
   if (!m.is_joint_model()) mf::add_linear_block(j, m);
   const ModelProvenance& p = m.provenance;
@@ -597,13 +644,16 @@ ENDOHAPTICS_DECL ModelFile make_push_load_observer_file(const PushLoadObserverSe
                                                         std::vector<SignalInfo> outputs,
                                                         ModelProvenance provenance) {
   namespace mf = detail::model_file;
-  ModelFile f{
-      .state_space = mf::with_context("make_push_load_observer_file",
-                                      [&] { return mf::joint_model_placeholder(2, sample_time); }),
-      .inputs = std::move(inputs),
-      .outputs = std::move(outputs),
-      .provenance = std::move(provenance),
-      .push_load_observer = settings};
+  ModelFile f{.state_space = mf::with_context("make_push_load_observer_file",
+                                              [&] {
+                                                return mf::joint_model_placeholder(
+                                                    static_cast<Eigen::Index>(inputs.size()),
+                                                    sample_time);
+                                              }),
+              .inputs = std::move(inputs),
+              .outputs = std::move(outputs),
+              .provenance = std::move(provenance),
+              .push_load_observer = settings};
   if (f.provenance.date.empty()) f.provenance.date = utc_date_today();
   mf::validate(f, "make_push_load_observer_file");
   return f;

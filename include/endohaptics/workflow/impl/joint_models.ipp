@@ -29,9 +29,15 @@ ENDOHAPTICS_DECL Eigen::VectorXd simulate_joint_model(const files::ModelFile& mo
     detail::fail("simulate_joint_model: the model file is of kind \"" +
                  std::string(files::to_string(model.kind())) + "\", not a joint model");
   }
-  if (u.cols() != 2) {
+  const auto reference = model.push_load_observer
+                             ? files::current_offset_reference_parameters<
+                                   estimation::CurrentOffsetReferenceParameters<double>>(model)
+                             : std::nullopt;
+  if (u.cols() != (reference ? 3 : 2)) {
     detail::fail("simulate_joint_model: " + std::to_string(u.cols()) +
-                 " input columns, the joint models take 2 (current, velocity)");
+                 " input columns, the model " +
+                 (reference ? "takes 3 (current, velocity, current command)"
+                            : "takes 2 (current, velocity)"));
   }
   const double ts = model.state_space.sample_time();
   Eigen::VectorXd y(u.rows());
@@ -51,10 +57,17 @@ ENDOHAPTICS_DECL Eigen::VectorXd simulate_joint_model(const files::ModelFile& mo
     return y;
   }
   estimation::PushLoadObserver<double> m(push_load_observer_parameters(model));
+  std::optional<estimation::CurrentOffsetReference<double>> r;
+  if (reference) r.emplace(*reference);
   double position = 0.0;  // the encoder angle up to a constant: only increments are used
   for (Eigen::Index k = 0; k < u.rows(); ++k) {
     position += u(k, 1) * ts;
-    const estimation::JointSignals<double> s{position, u(k, 1), u(k, 0), 0.0};
+    double current = u(k, 0);
+    if (r) {  // referred to the command (the third column)
+      check(r->advance(current, u(k, 2)), k);
+      current = r->corrected();
+    }
+    const estimation::JointSignals<double> s{position, u(k, 1), current, 0.0};
     check(m.advance(s), k);
     y[k] = m.force(s);
   }
@@ -78,17 +91,24 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
                                                const std::vector<files::SignalInfo>& outputs,
                                                double warmup) {
   if (logs.empty()) detail::fail("fit_joint_model: no logs");
-  if (inputs.size() != 2 || outputs.size() != 1) {
-    detail::fail("fit_joint_model: " + std::string(files::to_string(kind)) +
-                 " needs 2 inputs (current, velocity) and 1 output, got " +
-                 std::to_string(inputs.size()) + " and " + std::to_string(outputs.size()));
+  const std::size_t most = kind == files::ModelKind::push_load_observer ? 3 : 2;
+  if (inputs.size() < 2 || inputs.size() > most || outputs.size() != 1) {
+    detail::fail(
+        "fit_joint_model: " + std::string(files::to_string(kind)) +
+        " needs 2 inputs (current, velocity" +
+        (most == 3 ? std::string("; a third, the current command, is optional") : std::string()) +
+        ") and 1 output, got " + std::to_string(inputs.size()) + " and " +
+        std::to_string(outputs.size()));
   }
   const double ts = logs.front().sample_time;
   const auto skip = static_cast<Eigen::Index>(std::ceil(warmup / ts));
   files::ModelProvenance provenance;
   provenance.method = std::string(files::to_string(kind));
   for (const PreparedLog& log : logs) provenance.files.push_back(log.source);
-  JointModelFit out{.model = files::make_stall_hold_file({}, ts, inputs, outputs)};
+  // A placeholder until the kind's own file is made below (of the first two inputs: a stall_hold
+  // file takes two).
+  JointModelFit out{
+      .model = files::make_stall_hold_file({}, ts, {inputs.begin(), inputs.begin() + 2}, outputs)};
   if (kind == files::ModelKind::stall_hold) {
     std::vector<StallHoldData> data;
     for (const PreparedLog& log : logs) {
@@ -129,7 +149,8 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
   for (const PreparedLog& log : logs) {
     for (const DataSet& d : log.segments) {
       if (d.u.rows() <= skip + 1) continue;
-      LoadObserverData e{d.u.col(0), Eigen::VectorXd(d.u.rows()), d.y.col(0)};
+      LoadObserverData e{d.u.col(0), Eigen::VectorXd(d.u.rows()), d.y.col(0),
+                         d.u.cols() > 2 ? Eigen::VectorXd(d.u.col(2)) : Eigen::VectorXd()};
       double position = 0.0;
       for (Eigen::Index k = 0; k < d.u.rows(); ++k) {
         position += d.u(k, 1) * ts;  // as simulate_joint_model: only increments matter
@@ -181,19 +202,43 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
   }
   if (!best) detail::fail("fit_joint_model: push_load_observer: " + failures);
   const auto& p = best->parameters;
-  out.model = files::make_push_load_observer_file(
-      {p.current_cutoff, p.velocity_cutoff, p.direction_scale, p.velocity_threshold,
-       p.direction_threshold, p.push_sign, p.current_per_load, p.current_offset,
-       p.current_per_velocity, p.measurement_variance, p.process_variance, p.initial_load,
-       p.initial_variance, p.output_offset, p.output_slope, p.back_current_per_load,
-       p.back_current_offset, p.back_current_per_velocity, p.back_variance},
-      ts, inputs, outputs, provenance);
+  const auto& reference = best->reference;
+  files::PushLoadObserverSettings settings{p.current_cutoff,
+                                           p.velocity_cutoff,
+                                           p.direction_scale,
+                                           p.velocity_threshold,
+                                           p.direction_threshold,
+                                           p.push_sign,
+                                           p.current_per_load,
+                                           p.current_offset,
+                                           p.current_per_velocity,
+                                           p.measurement_variance,
+                                           p.process_variance,
+                                           p.initial_load,
+                                           p.initial_variance,
+                                           p.output_offset,
+                                           p.output_slope,
+                                           p.back_current_per_load,
+                                           p.back_current_offset,
+                                           p.back_current_per_velocity,
+                                           p.back_variance,
+                                           p.load_per_angle,
+                                           0.0,
+                                           0.0};
+  if (reference) {
+    settings.command_gain = reference->command_gain;
+    settings.reference_offset = reference->reference_offset;
+  }
+  // Without a reference (no command, or a constant one) the model takes current and velocity.
+  const std::vector<files::SignalInfo> model_inputs(inputs.begin(),
+                                                    inputs.begin() + (reference ? 3 : 2));
+  out.model = files::make_push_load_observer_file(settings, ts, model_inputs, outputs, provenance);
   out.training_fit.clear();
   const estimation::PushLoadObserver<double> fitted(p);
   for (const LoadObserverData& d : data) {
     const auto n = d.load.size() - skip;
     out.training_fit.push_back(
-        detail::fit_percent(d.load.tail(n), simulate_load_observer(fitted, d).tail(n)));
+        detail::fit_percent(d.load.tail(n), simulate_load_observer(fitted, d, reference).tail(n)));
   }
   double fit_sum = 0.0;
   for (const double f : out.training_fit) fit_sum += f;
@@ -217,6 +262,13 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
                  detail::format_number(p.back_current_offset) + " A (its RMS error " +
                  detail::format_number(std::sqrt(p.back_variance)) + " " + unit + ")"
            : std::string("no back-driven map (the prior until the first push)")) +
+      ", stiffness " + detail::format_number(p.load_per_angle) + " " + unit +
+      "/rad of travel after the first push, " +
+      (reference
+           ? "current referred to the command: " + detail::format_number(reference->command_gain) +
+                 " A per command unit, " + "reference offset " +
+                 detail::format_number(reference->reference_offset) + " A"
+           : std::string("current as measured (no command)")) +
       "; priors: Q " + detail::format_number(p.process_variance) + " per step, P0 " +
       detail::format_number(p.initial_variance) + ", filters " +
       detail::format_number(p.current_cutoff) + "/" + detail::format_number(p.velocity_cutoff) +

@@ -8,13 +8,66 @@
 
 namespace endohaptics::workflow {
 
+namespace detail {
+
+// The experiment's current referred to its command (causal), or as measured without a reference.
+inline Eigen::VectorXd referred_current(const LoadObserverData& d,
+                                        const CurrentReference& reference) {
+  if (!reference) return d.current;
+  if (d.command.size() != d.current.size()) {
+    ENDOHAPTICS_THROW(
+        Error("simulate_load_observer: the model refers the current to the command, "
+              "but the experiment has " +
+              std::to_string(d.command.size()) + " command samples for " +
+              std::to_string(d.current.size()) + " current samples"));
+  }
+  estimation::CurrentOffsetReference<double> r(*reference);
+  Eigen::VectorXd out(d.current.size());
+  for (Eigen::Index k = 0; k < d.current.size(); ++k) {
+    if (r.advance(d.current[k], d.command[k]) != model::StepStatus::ok) {
+      ENDOHAPTICS_THROW(Error("simulate_load_observer: non-finite current or command at sample " +
+                              std::to_string(k)));
+    }
+    out[k] = r.corrected();
+  }
+  return out;
+}
+
+}  // namespace detail
+
+ENDOHAPTICS_DECL CurrentReference fit_current_reference(std::span<const LoadObserverData> data) {
+  double sxy = 0.0, sxx = 0.0;
+  for (const auto& d : data) {
+    if (d.command.size() == 0 || d.command.size() != d.current.size()) return std::nullopt;
+    const double n = static_cast<double>(d.current.size());
+    const Eigen::ArrayXd u = d.command.array() - d.command.mean();
+    const Eigen::ArrayXd i = d.current.array() - d.current.mean();
+    sxy += (u * i).sum() / n;
+    sxx += u.square().sum() / n;
+  }
+  if (!(sxx > 0.0)) return std::nullopt;  // the command never varies
+  estimation::CurrentOffsetReferenceParameters<double> p;
+  p.command_gain = sxy / sxx;
+  double offset = 0.0;
+  for (const auto& d : data) offset += (d.current - p.command_gain * d.command).mean();
+  p.reference_offset = offset / static_cast<double>(data.size());
+  const double max = model::max_joint_model_parameter;
+  if (!std::isfinite(p.command_gain) || std::fabs(p.command_gain) < model::min_current_per_load ||
+      std::fabs(p.command_gain) > max || !(std::fabs(p.reference_offset) <= max)) {
+    return std::nullopt;
+  }
+  return p;
+}
+
 ENDOHAPTICS_DECL Eigen::VectorXd simulate_load_observer(
-    const estimation::PushLoadObserver<double>& model, const LoadObserverData& d) {
+    const estimation::PushLoadObserver<double>& model, const LoadObserverData& d,
+    const CurrentReference& reference) {
   estimation::PushLoadObserver<double> m = model;
   m.reset();
+  const Eigen::VectorXd current = detail::referred_current(d, reference);
   Eigen::VectorXd y(d.current.size());
   for (Eigen::Index k = 0; k < d.current.size(); ++k) {
-    const estimation::JointSignals<double> s{d.position[k], 0.0, d.current[k], 0.0};
+    const estimation::JointSignals<double> s{d.position[k], 0.0, current[k], 0.0};
     if (m.advance(s) != model::StepStatus::ok) {
       ENDOHAPTICS_THROW(Error("simulate_load_observer: non-finite signal or result at sample " +
                               std::to_string(k)));
@@ -26,11 +79,11 @@ ENDOHAPTICS_DECL Eigen::VectorXd simulate_load_observer(
 
 ENDOHAPTICS_DECL std::vector<double> load_observer_rmse(
     const estimation::PushLoadObserver<double>& model, std::span<const LoadObserverData> data,
-    double warmup) {
+    double warmup, const CurrentReference& reference) {
   const auto skip = static_cast<Eigen::Index>(std::ceil(warmup / model.sample_time()));
   std::vector<double> out;
   for (const auto& d : data) {
-    const Eigen::VectorXd y_hat = simulate_load_observer(model, d);
+    const Eigen::VectorXd y_hat = simulate_load_observer(model, d, reference);
     const auto n = d.load.size() - skip;
     out.push_back(
         std::sqrt((d.load.tail(n) - y_hat.tail(n)).squaredNorm() / static_cast<double>(n)));
@@ -39,10 +92,23 @@ ENDOHAPTICS_DECL std::vector<double> load_observer_rmse(
 }
 
 ENDOHAPTICS_DECL LoadObserverFit
-fit_push_load_observer(std::span<const LoadObserverData> data,
+fit_push_load_observer(std::span<const LoadObserverData> measured,
                        const estimation::PushLoadObserverParameters<double>& prior, double warmup) {
-  if (data.empty()) ENDOHAPTICS_THROW(Error("fit_push_load_observer: no data"));
+  if (measured.empty()) ENDOHAPTICS_THROW(Error("fit_push_load_observer: no data"));
   prior.validate();
+  // The current's offset reference first (when the data carry the command); everything below
+  // works on the referred current, as the fitted model will see it.
+  const CurrentReference reference = fit_current_reference(measured);
+  std::vector<LoadObserverData> referred;
+  if (reference) {
+    for (const auto& d : measured) {
+      if (d.position.size() != d.current.size()) break;  // reported below
+      referred.push_back({detail::referred_current(d, reference), d.position, d.load, {}});
+    }
+  }
+  const std::span<const LoadObserverData> data = reference && referred.size() == measured.size()
+                                                     ? std::span<const LoadObserverData>(referred)
+                                                     : measured;
   const auto skip = static_cast<Eigen::Index>(std::ceil(warmup / prior.sample_time));
   for (std::size_t e = 0; e < data.size(); ++e) {
     const auto& d = data[e];
@@ -56,7 +122,7 @@ fit_push_load_observer(std::span<const LoadObserverData> data,
   // (a) The push regime and the filtered signals do not depend on the fitted values.
   Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
   Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-  double load_sum = 0.0, weight_sum = 0.0;
+  double load_sum = 0.0, load_sq_sum = 0.0, weight_sum = 0.0;
   std::size_t push = 0, total = 0;
   struct Sample {
     double i_f, v, y;
@@ -77,6 +143,7 @@ fit_push_load_observer(std::span<const LoadObserverData> data,
       if (k < skip) continue;
       ++total;
       load_sum += w * d.load[k];
+      load_sq_sum += w * d.load[k] * d.load[k];
       weight_sum += w;
       if (m.regime() > 0) {
         ++push;
@@ -142,29 +209,65 @@ fit_push_load_observer(std::span<const LoadObserverData> data,
       }
     }
   }
-  // (b) The load-side friction map on the causal run.
-  Eigen::Matrix2d n2 = Eigen::Matrix2d::Zero();
-  Eigen::Vector2d r2 = Eigen::Vector2d::Zero();
-  for (const auto& d : data) {
-    estimation::PushLoadObserver<double> m(q);
-    const double w = 1.0 / static_cast<double>(d.current.size() - skip);
-    for (Eigen::Index k = 0; k < d.current.size(); ++k) {
-      const estimation::JointSignals<double> s{d.position[k], 0.0, d.current[k], 0.0};
-      (void)m.advance(s);
-      if (k < skip) continue;
-      const double tau = m.force(s);  // e0 = e1 = 0: the load estimate itself
-      const double g = (1.0 - m.regime()) / 2.0;
-      const Eigen::Vector2d row(g, g * tau);
-      n2 += w * row * row.transpose();
-      r2 += w * row * (d.load[k] - tau);
+  // (b) The load-side friction map on the causal run, for a given stiffness k_q; the causal mean
+  // RMSE on the training data with it.
+  const auto fit_output_map = [&](estimation::PushLoadObserverParameters<double> r) {
+    r.output_offset = 0.0;
+    r.output_slope = 0.0;
+    Eigen::Matrix2d n2 = Eigen::Matrix2d::Zero();
+    Eigen::Vector2d r2 = Eigen::Vector2d::Zero();
+    for (const auto& d : data) {
+      estimation::PushLoadObserver<double> m(r);
+      const double w = 1.0 / static_cast<double>(d.current.size() - skip);
+      for (Eigen::Index k = 0; k < d.current.size(); ++k) {
+        const estimation::JointSignals<double> s{d.position[k], 0.0, d.current[k], 0.0};
+        (void)m.advance(s);
+        if (k < skip) continue;
+        const double tau = m.force(s);  // e0 = e1 = 0: the load estimate itself
+        const double g = (1.0 - m.regime()) / 2.0;
+        const Eigen::Vector2d row(g, g * tau);
+        n2 += w * row * row.transpose();
+        r2 += w * row * (d.load[k] - tau);
+      }
     }
+    const Eigen::Vector2d e = (n2 + 1e-12 * Eigen::Matrix2d::Identity()).ldlt().solve(r2);
+    const double max = model::max_joint_model_parameter;
+    if (e.allFinite() && std::fabs(e[0]) <= max && std::fabs(e[1]) <= max) {
+      r.output_offset = e[0];
+      r.output_slope = e[1];
+    }
+    double mean = 0.0;
+    for (const double x : load_observer_rmse(estimation::PushLoadObserver<double>(r), data, warmup))
+      mean += x / static_cast<double>(data.size());
+    return std::pair{r, mean};
+  };
+  // k_q on a grid scaled by the load's spread (factors of its standard deviation per rad of travel
+  // in the push direction; 0, the random walk alone, first), the best causal training score kept.
+  // A least-squares slope of the truth on the travel since the last push is confounded with the
+  // load-side friction step at each reversal (research note, K5).
+  const double spread =
+      std::sqrt(std::fmax(load_sq_sum / weight_sum - q.initial_load * q.initial_load, 0.0));
+  auto [best, best_rmse] = fit_output_map(q);
+  for (const double factor : {-0.5, -0.25, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0, 1.5}) {
+    auto candidate = q;
+    candidate.load_per_angle = factor * spread;
+    if (!(std::fabs(candidate.load_per_angle) <= model::max_joint_model_parameter)) continue;
+#if defined(__cpp_exceptions)
+    try {  // a stiffness that drives the estimate to Inf on these data is no candidate
+#endif
+      auto [fitted, rmse] = fit_output_map(candidate);
+      if (std::isfinite(rmse) && rmse < best_rmse) {
+        best = fitted;
+        best_rmse = rmse;
+      }
+#if defined(__cpp_exceptions)
+    } catch (const Error&) {
+    }
+#endif
   }
-  const Eigen::Vector2d e = (n2 + 1e-12 * Eigen::Matrix2d::Identity()).ldlt().solve(r2);
-  if (e.allFinite()) {
-    q.output_offset = e[0];
-    q.output_slope = e[1];
-  }
+  q = best;
   q.validate();
+  fit.reference = reference;
   fit.push_fraction = static_cast<double>(push) / static_cast<double>(total);
   fit.rmse = load_observer_rmse(estimation::PushLoadObserver<double>(q), data, warmup);
   double sum = 0.0;

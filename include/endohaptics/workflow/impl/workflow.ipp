@@ -380,9 +380,14 @@ ENDOHAPTICS_DECL ModelChoice choose_family(
   const auto logs_of = [&](std::size_t family) -> const std::vector<PreparedLog>& {
     return subspace != nullptr && family == 0 ? score_logs : joint_logs;
   };
-  ModelChoice choice{.model = subspace != nullptr
-                                  ? subspace->chosen().model
-                                  : files::make_stall_hold_file({}, 1.0, inputs, outputs)};
+  ModelChoice choice{
+      .model = subspace != nullptr
+                   ? subspace->chosen().model
+                   : files::make_stall_hold_file(  // a placeholder
+                         {}, 1.0,
+                         {inputs.begin(),
+                          inputs.begin() + std::min<std::ptrdiff_t>(2, std::ssize(inputs))},
+                         outputs)};
   for (std::size_t f = 0; f < families; ++f) {
     FamilyScore score;
     score.family =
