@@ -144,11 +144,11 @@ TEST_CASE("Preparation::score: inputs held and filtered forward only, output as 
 
 TEST_CASE("format defaults: the fixed command lines' settings") {
   const wf::FormatDefaults umn = wf::format_defaults(files::LogFormat::umn_mis_2018);
-  CHECK(umn.inputs == std::vector<std::string>{"current", "motor_velocity"});
+  CHECK(umn.inputs == std::vector<std::string>{"current", "motor_velocity", "current_command"});
   CHECK(umn.outputs == std::vector<std::string>{"grip_torque"});
   CHECK(umn.sample_time == 0.01);
   CHECK(umn.method == "moesp,static,push_load_observer");
-  CHECK(wf::default_deadzone(umn, umn.inputs) == "auto,none");
+  CHECK(wf::default_deadzone(umn, umn.inputs) == "auto,none,none");
   const wf::FormatDefaults aau = wf::format_defaults(files::LogFormat::endowrist_2016);
   CHECK(aau.outputs == std::vector<std::string>{"force"});
   CHECK(aau.sample_time == 0.02);

@@ -32,7 +32,10 @@ ENDOHAPTICS_DECL FormatDefaults format_defaults(files::LogFormat format) {
       // least-squares map both fitted, the better admissible causal score wins. Most dynamic
       // models of these logs are near-integrating and refused; then the static map is chosen
       // (docs/identification_results.md).
-      d.inputs = {"current", "motor_velocity"};
+      // The current command third: the observer refers the measured current to it (its offset
+      // differs by 0.015 A between the sessions, research note K6); the linear families take it
+      // as one more input.
+      d.inputs = {"current", "motor_velocity", "current_command"};
       d.outputs = {"grip_torque"};
       d.sample_time = 0.01;
       d.preprocessing.cutoff = 10.0;
