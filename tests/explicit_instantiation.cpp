@@ -41,6 +41,8 @@ template class eh::estimation::StallHold<double>;
 template class eh::estimation::StallHold<float>;
 template class eh::estimation::PushLoadObserver<double>;
 template class eh::estimation::PushLoadObserver<float>;
+template class eh::estimation::CurrentOffsetReference<double>;
+template class eh::estimation::CurrentOffsetReference<float>;
 
 // ForceEstimator. The rate policies (rate::SameRate, Decimate, Resample) are not templates:
 // their code is the stepper ForceEstimator instantiates, so ForceEstimator gets one argument
