@@ -159,9 +159,10 @@ int main(int argc, char** argv) {
     };
     if (!joint_kinds.empty() && !joint_inputs_ok()) {
       if (method_opt->count() > 0) {
-        throw endohaptics::Error("--method " + method +
-                                 ": stall_hold needs 2 inputs (current, velocity) and 1 output; "
-                                 "push_load_observer 2 or 3 (current, velocity, current command)");
+        throw endohaptics::Error(
+            "--method " + method +
+            ": joint models need 1 output and the inputs (current, velocity): stall_hold "
+            "those 2, push_load_observer 2 or 3 (current, velocity, current command)");
       }
       fmt::print(
           "note: the format's joint models ({}) need 2 inputs (current, velocity; "
@@ -315,11 +316,13 @@ int main(int argc, char** argv) {
                                           : "");
     if (joint_chosen) {
       fmt::print(
-          "{}\nits grid: Ts {} s, inputs {} (current) and {} (velocity), no low-pass "
+          "{}\nits grid: Ts {} s, inputs {} (current) and {} (velocity){}, no low-pass "
           "beyond its own filters; the state starts from the model's reset (filters at the "
           "first sample)\n",
           choice.joint_summary, choice.model.state_space.sample_time(), sel.inputs[0],
-          sel.inputs[1]);
+          sel.inputs[1],
+          sel.inputs.size() > 2 ? " and " + sel.inputs[2] + " (the current command)"
+                                : std::string());
     } else {
       fmt::print("chosen model: order {}, spectral radius {:.5f}\n",
                  choice.model.state_space.state_size(), result.chosen().spectral_radius);

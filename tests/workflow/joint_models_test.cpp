@@ -3,6 +3,7 @@
 // the family choice by inner cross-validation, and the formats' defaults.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <endohaptics/workflow/workflow.hpp>
 #include <string>
@@ -144,6 +145,89 @@ TEST_CASE("joint models: the family is chosen by inner cross-validation on the t
           (void)wf::choose_family(nullptr, {}, {}, {}, logs, inputs, outputs,
                                   wf::WorkflowOptions{});
         }) == "identify: no model family to fit");
+}
+
+TEST_CASE("joint models: an observer with the current command third, and hostile input lists") {
+  // A grasper at 1 kHz sweeping +-0.5 rad at 0.5 Hz against a load that steps per run; the
+  // amplifier makes the current follow the command, i = -2.06 u, measured 0.01 A high.
+  auto log_of = [](double load, const std::string& name, bool constant_command) {
+    const int n = 6000;
+    Eigen::MatrixXd u(n, 3);
+    Eigen::MatrixXd y(n, 1);
+    for (int k = 0; k < n; ++k) {
+      const double w = 2 * 3.141592653589793 * 0.5;
+      const double v = 0.5 * w * std::cos(w * 1e-3 * k);
+      const double current = v > 0 ? 1.45 * load + 0.07 : -0.03;
+      u.row(k) << current + 0.01, v, constant_command ? 0.0 : current / -2.06;
+      y(k, 0) = load;
+    }
+    wf::PreparedLog log;
+    log.source = name;
+    log.sample_time = 0.001;
+    log.preparation = wf::Preparation::score;
+    log.segments.push_back({u, y});
+    log.start_time.push_back(0.0);
+    return log;
+  };
+  const std::vector<files::SignalInfo> three{
+      {"current", "A"}, {"motor_velocity", "rad/s"}, {"current_command", "1"}};
+  const std::vector<files::SignalInfo> load{{"grip_torque", "N m"}};
+  const std::vector<wf::PreparedLog> logs{log_of(0.04, "a", false), log_of(0.06, "b", false)};
+  const wf::JointModelFit fit =
+      wf::fit_joint_model(files::ModelKind::push_load_observer, logs, three, load, 0.5);
+  REQUIRE(fit.model.push_load_observer.has_value());
+  CHECK(fit.model.inputs.size() == 3);
+  CHECK(fit.model.push_load_observer->command_gain == doctest::Approx(-2.06).epsilon(0.01));
+  CHECK(fit.model.push_load_observer->reference_offset == doctest::Approx(0.01).epsilon(0.01));
+  CHECK(fit.summary.find("current referred to the command") != std::string::npos);
+  // Replayed through the file: the same as the estimation types composed by hand.
+  const Eigen::MatrixXd& u = logs[1].segments[0].u;
+  const Eigen::VectorXd y = wf::simulate_joint_model(fit.model, u);
+  est::CurrentOffsetReference<double> reference(
+      *files::current_offset_reference_parameters<est::CurrentOffsetReferenceParameters<double>>(
+          fit.model));
+  est::PushLoadObserver<double> observer(wf::push_load_observer_parameters(fit.model));
+  double position = 0.0, largest = 0.0;
+  for (Eigen::Index k = 0; k < u.rows(); ++k) {
+    position += u(k, 1) * 0.001;
+    REQUIRE(reference.advance(u(k, 0), u(k, 2)) == endohaptics::model::StepStatus::ok);
+    const est::JointSignals<double> s{position, u(k, 1), reference.corrected(), 0.0};
+    REQUIRE(observer.advance(s) == endohaptics::model::StepStatus::ok);
+    largest = std::max(largest, std::fabs(observer.force(s) - y[k]));
+  }
+  CHECK(largest == 0.0);
+  CHECK(message_of([&] { (void)wf::simulate_joint_model(fit.model, u.leftCols(2)); }) ==
+        "simulate_joint_model: 2 input columns, the model takes 3 (current, velocity, current "
+        "command)");
+  // A command that never varies: no reference can be fitted, said so.
+  const std::vector<wf::PreparedLog> flat{log_of(0.04, "a", true), log_of(0.06, "b", true)};
+  CHECK(message_of([&] {
+          (void)wf::fit_joint_model(files::ModelKind::push_load_observer, flat, three, load, 0.5);
+        }).find("current_command, or it does not vary") != std::string::npos);
+  // The roles are positional: the command in the velocity's place is refused, naming the order.
+  const std::vector<files::SignalInfo> swapped{three[0], three[2], three[1]};
+  CHECK(message_of([&] {
+          (void)wf::fit_joint_model(files::ModelKind::push_load_observer, logs, swapped, load, 0.5);
+        }) ==
+        "fit_joint_model: push_load_observer takes (current, velocity, current command) in that "
+        "order; got (current, current_command, motor_velocity)");
+  // Logs with other columns than the inputs named.
+  CHECK(message_of([&] {
+          (void)wf::fit_joint_model(files::ModelKind::push_load_observer, logs,
+                                    {three[0], three[1]}, load, 0.5);
+        }) ==
+        "fit_joint_model: a: a segment of 3 input and 1 output columns, for 2 inputs and 1 "
+        "output");
+  // A file with a third input but no reference, or an offset without a gain, is refused.
+  files::PushLoadObserverSettings plain = *fit.model.push_load_observer;
+  plain.command_gain = 0.0;
+  CHECK(message_of([&] {
+          (void)files::make_push_load_observer_file(plain, 0.001, three, load);
+        }).find("needs 2 inputs (current, velocity) and 1 output, got 3") != std::string::npos);
+  CHECK(message_of([&] {
+          (void)files::make_push_load_observer_file(plain, 0.001, {three[0], three[1]}, load);
+        }).find("\"parameters.reference_offset\" must be 0 when command_gain is 0") !=
+        std::string::npos);
 }
 
 TEST_CASE("joint models: the formats' defaults offer them, --method names them") {

@@ -19,7 +19,7 @@
 
 namespace endohaptics::estimation {
 
-//! Parameters of CurrentOffsetReference, from fit_current_offset_reference
+//! Parameters of CurrentOffsetReference, from fit_current_reference
 //! (workflow/push_load_observer_fit.hpp).
 template <typename Scalar = double>
 struct CurrentOffsetReferenceParameters {
@@ -78,7 +78,10 @@ class CurrentOffsetReference {
 
   [[nodiscard]] const State& state() const noexcept { return x_; }  //!< see State
   void reset(const State& x) noexcept { x_ = x; }                   //!< sets the state
-  void reset() noexcept { x_.setZero(); }                           //!< no samples yet
+  void reset() noexcept {                                           //!< no samples yet
+    x_.setZero();
+    corrected_ = Scalar(0);
+  }
 
  private:
   Parameters p_;

@@ -635,9 +635,8 @@ inline constexpr int bridge_clamp_states = 6;
         return ClampForceModel(estimation::StallHold<double>(stall_hold_parameters<P>(file)));
       }
       if (file.push_load_observer->command_gain != 0) {
-        ENDOHAPTICS_THROW(Error(
-            where +
-            ": the push_load_observer refers its current to the commanded current (a third "
+        ENDOHAPTICS_THROW(Error(  // with_context below adds the file's name
+            "the push_load_observer refers its current to the commanded current (a third "
             "input), which the sbRIO protocol does not carry: identify the bridge's model from "
             "the current and the velocity only"));
       }

@@ -153,7 +153,8 @@ struct ModelFile {
   std::optional<StallHoldSettings> stall_hold{};
   //! Kind "push_load_observer": its parameters; `state_space` a placeholder as for stall_hold
   //! (2 inputs: current A, encoder velocity rad/s, whose running sum times the sample time stands
-  //! for the encoder angle: the observer uses only its increments; 1 output: the load).
+  //! for the encoder angle: the observer uses only its increments; with a non-zero command_gain
+  //! a third, the current command; 1 output: the load).
   std::optional<PushLoadObserverSettings> push_load_observer{};
 
   //! True when the file describes a Hammerstein-Wiener model ("kind": "hammerstein_wiener").
@@ -229,8 +230,9 @@ ENDOHAPTICS_DECL void add_linear_block(json& j, const ModelFile& m);
 ENDOHAPTICS_DECL ModelProvenance provenance_from_json(const json& j, const std::string& where);
 
 //! A joint-model kind ("stall_hold", "push_load_observer") from `j`: its "parameters" object
-//! (every field required, unknown fields refused), no linear-block fields, 2 inputs and 1
-//! output; validated. Throws Error naming the field.
+//! (every field required except those added later, unknown fields refused), no linear-block
+//! fields, 2 inputs (push_load_observer with a command reference: 3) and 1 output; validated.
+//! Throws Error naming the field.
 ENDOHAPTICS_DECL ModelFile joint_model_from_json(const json& j, const std::string& kind,
                                                  double sample_time, std::vector<SignalInfo> inputs,
                                                  std::vector<SignalInfo> outputs,

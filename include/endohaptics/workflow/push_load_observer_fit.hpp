@@ -15,6 +15,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <span>
 #include <string>
@@ -61,7 +62,8 @@ struct LoadObserverFit {
 //! G and b_ref of the current's offset reference from experiments that all carry the command: G
 //! by least squares of the current on the command within each experiment (each its own
 //! intercept, each weighing the same), b_ref the mean over the experiments of their mean of
-//! current - G command. None when an experiment has no command or the command does not vary.
+//! current - G command. None when an experiment has no command, the command does not vary, or G
+//! or b_ref is not finite or out of the model file's bounds (|G| in [1e-9, 1e6], |b_ref| <= 1e6).
 [[nodiscard]] ENDOHAPTICS_DECL CurrentReference
 fit_current_reference(std::span<const LoadObserverData> data);
 

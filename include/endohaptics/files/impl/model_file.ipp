@@ -80,6 +80,9 @@ ENDOHAPTICS_DECL void validate_settings(const PushLoadObserverSettings& p, doubl
       p.command_gain == 0 || (std::fabs(p.command_gain) >= ModelFile::min_current_per_load &&
                               std::fabs(p.command_gain) <= max_parameter),
       where, "command_gain", p.command_gain, "0 or of magnitude in [1e-9, 1e6]");
+  // Without a reference its offset has no meaning (and to_json would drop it): 0.
+  require_parameter(p.command_gain != 0 || p.reference_offset == 0, where, "reference_offset",
+                    p.reference_offset, "0 when command_gain is 0");
 }
 
 // The inputs a joint model takes: (current, velocity), and for a push_load_observer that refers
@@ -134,7 +137,8 @@ ENDOHAPTICS_DECL void validate(const ModelFile& m, const std::string& where) {
         ss.output_size() != 1 || !ss.A().isZero(0.0) || !ss.B().isZero(0.0) ||
         !ss.C().isZero(0.0) || !ss.D().isZero(0.0) || !ss.state().isZero(0.0)) {
       fail(where + ": kind \"" + kind +
-           "\": the linear block must be the placeholder (1 state, 2 inputs, 1 output, all zero)");
+           "\": the linear block must be the placeholder (1 state, one column per input, 1 "
+           "output, all zero)");
     }
     if (m.stall_hold) validate_settings(*m.stall_hold, where);
     if (m.push_load_observer) validate_settings(*m.push_load_observer, ss.sample_time(), where);

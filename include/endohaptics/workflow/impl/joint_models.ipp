@@ -100,6 +100,26 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
         ") and 1 output, got " + std::to_string(inputs.size()) + " and " +
         std::to_string(outputs.size()));
   }
+  // The roles are positional: current, velocity, and for the observer the current command
+  // third (named so: a velocity or any other signal there would be taken for the command).
+  if (inputs.size() == 3 && (inputs[2].name.find("command") == std::string::npos ||
+                             inputs[1].name.find("command") != std::string::npos)) {
+    detail::fail(
+        "fit_joint_model: push_load_observer takes (current, velocity, current command) "
+        "in that order; got (" +
+        inputs[0].name + ", " + inputs[1].name + ", " + inputs[2].name + ")");
+  }
+  for (const PreparedLog& log : logs) {
+    for (const DataSet& d : log.segments) {
+      if (d.u.cols() != static_cast<Eigen::Index>(inputs.size()) || d.y.cols() != 1) {
+        detail::fail("fit_joint_model: " + log.source + ": a segment of " +
+                     std::to_string(d.u.cols()) + " input and " + std::to_string(d.y.cols()) +
+                     " output columns, for " + std::to_string(inputs.size()) +
+                     " inputs and 1 "
+                     "output");
+      }
+    }
+  }
   const double ts = logs.front().sample_time;
   const auto skip = static_cast<Eigen::Index>(std::ceil(warmup / ts));
   files::ModelProvenance provenance;
@@ -150,7 +170,7 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
     for (const DataSet& d : log.segments) {
       if (d.u.rows() <= skip + 1) continue;
       LoadObserverData e{d.u.col(0), Eigen::VectorXd(d.u.rows()), d.y.col(0),
-                         d.u.cols() > 2 ? Eigen::VectorXd(d.u.col(2)) : Eigen::VectorXd()};
+                         inputs.size() == 3 ? Eigen::VectorXd(d.u.col(2)) : Eigen::VectorXd()};
       double position = 0.0;
       for (Eigen::Index k = 0; k < d.u.rows(); ++k) {
         position += d.u(k, 1) * ts;  // as simulate_joint_model: only increments matter
@@ -203,6 +223,14 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
   if (!best) detail::fail("fit_joint_model: push_load_observer: " + failures);
   const auto& p = best->parameters;
   const auto& reference = best->reference;
+  if (inputs.size() == 3 && !reference) {
+    detail::fail(
+        "fit_joint_model: push_load_observer: the current does not follow the third "
+        "input, " +
+        inputs[2].name +
+        ", or it does not vary (no current-per-command slope can be fitted): leave it "
+        "out");
+  }
   files::PushLoadObserverSettings settings{p.current_cutoff,
                                            p.velocity_cutoff,
                                            p.direction_scale,
@@ -229,10 +257,7 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
     settings.command_gain = reference->command_gain;
     settings.reference_offset = reference->reference_offset;
   }
-  // Without a reference (no command, or a constant one) the model takes current and velocity.
-  const std::vector<files::SignalInfo> model_inputs(inputs.begin(),
-                                                    inputs.begin() + (reference ? 3 : 2));
-  out.model = files::make_push_load_observer_file(settings, ts, model_inputs, outputs, provenance);
+  out.model = files::make_push_load_observer_file(settings, ts, inputs, outputs, provenance);
   out.training_fit.clear();
   const estimation::PushLoadObserver<double> fitted(p);
   for (const LoadObserverData& d : data) {

@@ -236,9 +236,22 @@ fit_push_load_observer(std::span<const LoadObserverData> measured,
       r.output_offset = e[0];
       r.output_slope = e[1];
     }
+    // The mean RMSE, Inf when the model's estimate is not finite on some sample (no exception:
+    // the grid below skips such a candidate in builds without exceptions too).
     double mean = 0.0;
-    for (const double x : load_observer_rmse(estimation::PushLoadObserver<double>(r), data, warmup))
-      mean += x / static_cast<double>(data.size());
+    for (const auto& d : data) {
+      estimation::PushLoadObserver<double> m(r);
+      double square = 0.0;
+      for (Eigen::Index k = 0; k < d.current.size(); ++k) {
+        const estimation::JointSignals<double> s{d.position[k], 0.0, d.current[k], 0.0};
+        if (m.advance(s) != model::StepStatus::ok) {
+          return std::pair{r, std::numeric_limits<double>::infinity()};
+        }
+        if (k >= skip) square += (d.load[k] - m.force(s)) * (d.load[k] - m.force(s));
+      }
+      mean += std::sqrt(square / static_cast<double>(d.current.size() - skip)) /
+              static_cast<double>(data.size());
+    }
     return std::pair{r, mean};
   };
   // k_q on a grid scaled by the load's spread (factors of its standard deviation per rad of travel
@@ -252,18 +265,11 @@ fit_push_load_observer(std::span<const LoadObserverData> measured,
     auto candidate = q;
     candidate.load_per_angle = factor * spread;
     if (!(std::fabs(candidate.load_per_angle) <= model::max_joint_model_parameter)) continue;
-#if defined(__cpp_exceptions)
-    try {  // a stiffness that drives the estimate to Inf on these data is no candidate
-#endif
-      auto [fitted, rmse] = fit_output_map(candidate);
-      if (std::isfinite(rmse) && rmse < best_rmse) {
-        best = fitted;
-        best_rmse = rmse;
-      }
-#if defined(__cpp_exceptions)
-    } catch (const Error&) {
+    auto [fitted, rmse] = fit_output_map(candidate);  // Inf: the estimate diverged, no candidate
+    if (std::isfinite(rmse) && rmse < best_rmse) {
+      best = fitted;
+      best_rmse = rmse;
     }
-#endif
   }
   q = best;
   q.validate();
