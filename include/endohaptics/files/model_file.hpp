@@ -350,6 +350,42 @@ template <typename Parameters>
   return p;
 }
 
+//! The other way: the settings of a "push_load_observer" file from `p`
+//! (estimation::PushLoadObserverParameters<S>; its sample time goes to the file's
+//! "sample_time_s"), with the current's offset reference `reference`
+//! (estimation::CurrentOffsetReferenceParameters<S>, or none). Field for field beside
+//! push_load_observer_parameters, so that a field added to one is seen missing in the other.
+template <typename Parameters, typename Reference>
+[[nodiscard]] PushLoadObserverSettings push_load_observer_settings(
+    const Parameters& p, const std::optional<Reference>& reference) {
+  PushLoadObserverSettings m;
+  m.current_cutoff = static_cast<double>(p.current_cutoff);
+  m.velocity_cutoff = static_cast<double>(p.velocity_cutoff);
+  m.direction_scale = static_cast<double>(p.direction_scale);
+  m.velocity_threshold = static_cast<double>(p.velocity_threshold);
+  m.direction_threshold = static_cast<double>(p.direction_threshold);
+  m.push_sign = static_cast<double>(p.push_sign);
+  m.current_per_load = static_cast<double>(p.current_per_load);
+  m.current_offset = static_cast<double>(p.current_offset);
+  m.current_per_velocity = static_cast<double>(p.current_per_velocity);
+  m.measurement_variance = static_cast<double>(p.measurement_variance);
+  m.process_variance = static_cast<double>(p.process_variance);
+  m.initial_load = static_cast<double>(p.initial_load);
+  m.initial_variance = static_cast<double>(p.initial_variance);
+  m.output_offset = static_cast<double>(p.output_offset);
+  m.output_slope = static_cast<double>(p.output_slope);
+  m.back_current_per_load = static_cast<double>(p.back_current_per_load);
+  m.back_current_offset = static_cast<double>(p.back_current_offset);
+  m.back_current_per_velocity = static_cast<double>(p.back_current_per_velocity);
+  m.back_variance = static_cast<double>(p.back_variance);
+  m.load_per_angle = static_cast<double>(p.load_per_angle);
+  if (reference) {
+    m.command_gain = static_cast<double>(reference->command_gain);
+    m.reference_offset = static_cast<double>(reference->reference_offset);
+  }
+  return m;
+}
+
 //! Today's date in UTC, "YYYY-MM-DD" (for ModelProvenance::date).
 [[nodiscard]] ENDOHAPTICS_DECL std::string utc_date_today();
 

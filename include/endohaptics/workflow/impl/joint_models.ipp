@@ -23,6 +23,24 @@ ENDOHAPTICS_DECL estimation::PushLoadObserverParameters<double> push_load_observ
   return files::push_load_observer_parameters<estimation::PushLoadObserverParameters<double>>(f);
 }
 
+namespace detail {
+
+// A segment as the push-load observer sees it: the current, the encoder angle as the running sum
+// of the velocity (column 1) times `ts` (up to a constant: the observer uses only increments),
+// the load `y` (may be empty when only simulating) and, with a third column, the command.
+inline LoadObserverData load_observer_data(const Eigen::MatrixXd& u, Eigen::VectorXd y, double ts) {
+  LoadObserverData e{u.col(0), Eigen::VectorXd(u.rows()), std::move(y),
+                     u.cols() > 2 ? Eigen::VectorXd(u.col(2)) : Eigen::VectorXd()};
+  double position = 0.0;
+  for (Eigen::Index k = 0; k < u.rows(); ++k) {
+    position += u(k, 1) * ts;
+    e.position[k] = position;
+  }
+  return e;
+}
+
+}  // namespace detail
+
 ENDOHAPTICS_DECL Eigen::VectorXd simulate_joint_model(const files::ModelFile& model,
                                                       const Eigen::MatrixXd& u) {
   if (!model.is_joint_model()) {
@@ -39,39 +57,22 @@ ENDOHAPTICS_DECL Eigen::VectorXd simulate_joint_model(const files::ModelFile& mo
                  (reference ? "takes 3 (current, velocity, current command)"
                             : "takes 2 (current, velocity)"));
   }
-  const double ts = model.state_space.sample_time();
-  Eigen::VectorXd y(u.rows());
-  const auto check = [&](model::StepStatus status, Eigen::Index k) {
-    if (status != model::StepStatus::ok) {
-      detail::fail("simulate_joint_model: " + std::string(files::to_string(model.kind())) +
-                   ": non-finite signal or result at sample " + std::to_string(k));
-    }
-  };
   if (model.stall_hold) {
     estimation::StallHold<double> m(stall_hold_parameters(model));
+    Eigen::VectorXd y(u.rows());
     for (Eigen::Index k = 0; k < u.rows(); ++k) {
       const estimation::JointSignals<double> s{0.0, u(k, 1), u(k, 0), 0.0};
-      check(m.advance(s), k);
+      if (m.advance(s) != model::StepStatus::ok) {
+        detail::fail("simulate_joint_model: stall_hold: non-finite signal or result at sample " +
+                     std::to_string(k));
+      }
       y[k] = m.force(s);
     }
     return y;
   }
-  estimation::PushLoadObserver<double> m(push_load_observer_parameters(model));
-  std::optional<estimation::CurrentOffsetReference<double>> r;
-  if (reference) r.emplace(*reference);
-  double position = 0.0;  // the encoder angle up to a constant: only increments are used
-  for (Eigen::Index k = 0; k < u.rows(); ++k) {
-    position += u(k, 1) * ts;
-    double current = u(k, 0);
-    if (r) {  // referred to the command (the third column)
-      check(r->advance(current, u(k, 2)), k);
-      current = r->corrected();
-    }
-    const estimation::JointSignals<double> s{position, u(k, 1), current, 0.0};
-    check(m.advance(s), k);
-    y[k] = m.force(s);
-  }
-  return y;
+  return simulate_load_observer(
+      estimation::PushLoadObserver<double>(push_load_observer_parameters(model)),
+      detail::load_observer_data(u, Eigen::VectorXd(), model.state_space.sample_time()), reference);
 }
 
 namespace detail {
@@ -125,10 +126,6 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
   files::ModelProvenance provenance;
   provenance.method = std::string(files::to_string(kind));
   for (const PreparedLog& log : logs) provenance.files.push_back(log.source);
-  // A placeholder until the kind's own file is made below (of the first two inputs: a stall_hold
-  // file takes two).
-  JointModelFit out{
-      .model = files::make_stall_hold_file({}, ts, {inputs.begin(), inputs.begin() + 2}, outputs)};
   if (kind == files::ModelKind::stall_hold) {
     std::vector<StallHoldData> data;
     for (const PreparedLog& log : logs) {
@@ -146,11 +143,11 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
                        : p.side == estimation::StallHoldSide::negative ? "negative"
                                                                        : "both";
     provenance.fit_percent = {fit.mean_fit_percent};
-    out.model = files::make_stall_hold_file(
-        {p.current_deadzone, p.velocity_threshold, p.velocity_time_constant, p.output_time_constant,
-         p.gain, side},
-        ts, inputs, outputs, provenance);
-    out.training_fit = fit.fit_percent;
+    JointModelFit out{.model = files::make_stall_hold_file(
+                          {p.current_deadzone, p.velocity_threshold, p.velocity_time_constant,
+                           p.output_time_constant, p.gain, side},
+                          ts, inputs, outputs, provenance),
+                      .training_fit = fit.fit_percent};
     out.summary = "stall_hold: dead zone " + detail::format_number(p.current_deadzone) +
                   " A, held at |v| <= " + detail::format_number(p.velocity_threshold) +
                   " rad/s, velocity filter " + detail::format_number(p.velocity_time_constant) +
@@ -169,13 +166,7 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
   for (const PreparedLog& log : logs) {
     for (const DataSet& d : log.segments) {
       if (d.u.rows() <= skip + 1) continue;
-      LoadObserverData e{d.u.col(0), Eigen::VectorXd(d.u.rows()), d.y.col(0),
-                         inputs.size() == 3 ? Eigen::VectorXd(d.u.col(2)) : Eigen::VectorXd()};
-      double position = 0.0;
-      for (Eigen::Index k = 0; k < d.u.rows(); ++k) {
-        position += d.u(k, 1) * ts;  // as simulate_joint_model: only increments matter
-        e.position[k] = position;
-      }
+      LoadObserverData e = detail::load_observer_data(d.u, d.y.col(0), ts);
       peak = std::max(peak, e.load.cwiseAbs().maxCoeff());
       sum += e.load.sum();
       sum2 += e.load.squaredNorm();
@@ -231,34 +222,9 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
         ", or it does not vary (no current-per-command slope can be fitted): leave it "
         "out");
   }
-  files::PushLoadObserverSettings settings{p.current_cutoff,
-                                           p.velocity_cutoff,
-                                           p.direction_scale,
-                                           p.velocity_threshold,
-                                           p.direction_threshold,
-                                           p.push_sign,
-                                           p.current_per_load,
-                                           p.current_offset,
-                                           p.current_per_velocity,
-                                           p.measurement_variance,
-                                           p.process_variance,
-                                           p.initial_load,
-                                           p.initial_variance,
-                                           p.output_offset,
-                                           p.output_slope,
-                                           p.back_current_per_load,
-                                           p.back_current_offset,
-                                           p.back_current_per_velocity,
-                                           p.back_variance,
-                                           p.load_per_angle,
-                                           0.0,
-                                           0.0};
-  if (reference) {
-    settings.command_gain = reference->command_gain;
-    settings.reference_offset = reference->reference_offset;
-  }
-  out.model = files::make_push_load_observer_file(settings, ts, inputs, outputs, provenance);
-  out.training_fit.clear();
+  JointModelFit out{
+      .model = files::make_push_load_observer_file(files::push_load_observer_settings(p, reference),
+                                                   ts, inputs, outputs, provenance)};
   const estimation::PushLoadObserver<double> fitted(p);
   for (const LoadObserverData& d : data) {
     const auto n = d.load.size() - skip;

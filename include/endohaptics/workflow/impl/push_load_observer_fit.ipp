@@ -12,12 +12,12 @@ namespace detail {
 
 // The experiment's current referred to its command (causal), or as measured without a reference.
 inline Eigen::VectorXd referred_current(const LoadObserverData& d,
-                                        const CurrentReference& reference) {
+                                        const CurrentReference& reference, const char* where) {
   if (!reference) return d.current;
   if (d.command.size() != d.current.size()) {
     ENDOHAPTICS_THROW(
-        Error("simulate_load_observer: the model refers the current to the command, "
-              "but the experiment has " +
+        Error(std::string(where) +
+              ": the model refers the current to the command, but the experiment has " +
               std::to_string(d.command.size()) + " command samples for " +
               std::to_string(d.current.size()) + " current samples"));
   }
@@ -25,7 +25,7 @@ inline Eigen::VectorXd referred_current(const LoadObserverData& d,
   Eigen::VectorXd out(d.current.size());
   for (Eigen::Index k = 0; k < d.current.size(); ++k) {
     if (r.advance(d.current[k], d.command[k]) != model::StepStatus::ok) {
-      ENDOHAPTICS_THROW(Error("simulate_load_observer: non-finite current or command at sample " +
+      ENDOHAPTICS_THROW(Error(std::string(where) + ": non-finite current or command at sample " +
                               std::to_string(k)));
     }
     out[k] = r.corrected();
@@ -64,7 +64,7 @@ ENDOHAPTICS_DECL Eigen::VectorXd simulate_load_observer(
     const CurrentReference& reference) {
   estimation::PushLoadObserver<double> m = model;
   m.reset();
-  const Eigen::VectorXd current = detail::referred_current(d, reference);
+  const Eigen::VectorXd current = detail::referred_current(d, reference, "simulate_load_observer");
   Eigen::VectorXd y(d.current.size());
   for (Eigen::Index k = 0; k < d.current.size(); ++k) {
     const estimation::JointSignals<double> s{d.position[k], 0.0, current[k], 0.0};
@@ -96,22 +96,9 @@ fit_push_load_observer(std::span<const LoadObserverData> measured,
                        const estimation::PushLoadObserverParameters<double>& prior, double warmup) {
   if (measured.empty()) ENDOHAPTICS_THROW(Error("fit_push_load_observer: no data"));
   prior.validate();
-  // The current's offset reference first (when the data carry the command); everything below
-  // works on the referred current, as the fitted model will see it.
-  const CurrentReference reference = fit_current_reference(measured);
-  std::vector<LoadObserverData> referred;
-  if (reference) {
-    for (const auto& d : measured) {
-      if (d.position.size() != d.current.size()) break;  // reported below
-      referred.push_back({detail::referred_current(d, reference), d.position, d.load, {}});
-    }
-  }
-  const std::span<const LoadObserverData> data = reference && referred.size() == measured.size()
-                                                     ? std::span<const LoadObserverData>(referred)
-                                                     : measured;
   const auto skip = static_cast<Eigen::Index>(std::ceil(warmup / prior.sample_time));
-  for (std::size_t e = 0; e < data.size(); ++e) {
-    const auto& d = data[e];
+  for (std::size_t e = 0; e < measured.size(); ++e) {
+    const auto& d = measured[e];
     if (d.position.size() != d.current.size() || d.load.size() != d.current.size() ||
         d.current.size() <= skip + 1) {
       ENDOHAPTICS_THROW(Error("fit_push_load_observer: experiment " + std::to_string(e) +
@@ -119,6 +106,20 @@ fit_push_load_observer(std::span<const LoadObserverData> measured,
                               "than the warm-up"));
     }
   }
+  // The current's offset reference first (when the data carry the command); everything below
+  // works on the referred current, as the fitted model will see it.
+  const CurrentReference reference = fit_current_reference(measured);
+  std::vector<LoadObserverData> referred;
+  if (reference) {
+    for (const auto& d : measured) {
+      referred.push_back({detail::referred_current(d, reference, "fit_push_load_observer"),
+                          d.position,
+                          d.load,
+                          {}});
+    }
+  }
+  const std::span<const LoadObserverData> data =
+      reference ? std::span<const LoadObserverData>(referred) : measured;
   // (a) The push regime and the filtered signals do not depend on the fitted values.
   Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
   Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
@@ -209,48 +210,55 @@ fit_push_load_observer(std::span<const LoadObserverData> measured,
       }
     }
   }
-  // (b) The load-side friction map on the causal run, for a given stiffness k_q; the causal mean
-  // RMSE on the training data with it.
+  // (b) The load-side friction map on the causal run, for a given stiffness k_q, and the causal
+  // mean RMSE on the training data with it, from one run per experiment: the residual r = load -
+  // estimate (e0 = e1 = 0) and the row x = [g, g estimate], g = (1 - regime) / 2, give the normal
+  // equations of r on x and, per experiment, its squared error for any e = (e0, e1):
+  // sum r^2 - 2 e'sum x r + e'(sum x x')e. Inf when the estimate is not finite on some sample (no
+  // exception: the grid below skips such a candidate in builds without exceptions too).
   const auto fit_output_map = [&](estimation::PushLoadObserverParameters<double> r) {
     r.output_offset = 0.0;
     r.output_slope = 0.0;
+    struct Sums {
+      double rr = 0.0;
+      Eigen::Vector2d xr = Eigen::Vector2d::Zero();
+      Eigen::Matrix2d xx = Eigen::Matrix2d::Zero();
+    };
+    std::vector<Sums> sums(data.size());
     Eigen::Matrix2d n2 = Eigen::Matrix2d::Zero();
     Eigen::Vector2d r2 = Eigen::Vector2d::Zero();
-    for (const auto& d : data) {
+    for (std::size_t e = 0; e < data.size(); ++e) {
+      const auto& d = data[e];
       estimation::PushLoadObserver<double> m(r);
-      const double w = 1.0 / static_cast<double>(d.current.size() - skip);
-      for (Eigen::Index k = 0; k < d.current.size(); ++k) {
-        const estimation::JointSignals<double> s{d.position[k], 0.0, d.current[k], 0.0};
-        (void)m.advance(s);
-        if (k < skip) continue;
-        const double tau = m.force(s);  // e0 = e1 = 0: the load estimate itself
-        const double g = (1.0 - m.regime()) / 2.0;
-        const Eigen::Vector2d row(g, g * tau);
-        n2 += w * row * row.transpose();
-        r2 += w * row * (d.load[k] - tau);
-      }
-    }
-    const Eigen::Vector2d e = (n2 + 1e-12 * Eigen::Matrix2d::Identity()).ldlt().solve(r2);
-    const double max = model::max_joint_model_parameter;
-    if (e.allFinite() && std::fabs(e[0]) <= max && std::fabs(e[1]) <= max) {
-      r.output_offset = e[0];
-      r.output_slope = e[1];
-    }
-    // The mean RMSE, Inf when the model's estimate is not finite on some sample (no exception:
-    // the grid below skips such a candidate in builds without exceptions too).
-    double mean = 0.0;
-    for (const auto& d : data) {
-      estimation::PushLoadObserver<double> m(r);
-      double square = 0.0;
       for (Eigen::Index k = 0; k < d.current.size(); ++k) {
         const estimation::JointSignals<double> s{d.position[k], 0.0, d.current[k], 0.0};
         if (m.advance(s) != model::StepStatus::ok) {
           return std::pair{r, std::numeric_limits<double>::infinity()};
         }
-        if (k >= skip) square += (d.load[k] - m.force(s)) * (d.load[k] - m.force(s));
+        if (k < skip) continue;
+        const double tau = m.force(s);
+        const double g = (1.0 - m.regime()) / 2.0;
+        const Eigen::Vector2d x(g, g * tau);
+        const double res = d.load[k] - tau;
+        sums[e].rr += res * res;
+        sums[e].xr += x * res;
+        sums[e].xx += x * x.transpose();
       }
-      mean += std::sqrt(square / static_cast<double>(d.current.size() - skip)) /
-              static_cast<double>(data.size());
+      const double w = 1.0 / static_cast<double>(d.current.size() - skip);
+      n2 += w * sums[e].xx;
+      r2 += w * sums[e].xr;
+    }
+    Eigen::Vector2d e = (n2 + 1e-12 * Eigen::Matrix2d::Identity()).ldlt().solve(r2);
+    const double max = model::max_joint_model_parameter;
+    if (!e.allFinite() || std::fabs(e[0]) > max || std::fabs(e[1]) > max) e.setZero();
+    r.output_offset = e[0];
+    r.output_slope = e[1];
+    double mean = 0.0;
+    for (std::size_t i = 0; i < data.size(); ++i) {
+      const double square = sums[i].rr - 2.0 * e.dot(sums[i].xr) + e.dot(sums[i].xx * e);
+      mean +=
+          std::sqrt(std::fmax(square, 0.0) / static_cast<double>(data[i].current.size() - skip)) /
+          static_cast<double>(data.size());
     }
     return std::pair{r, mean};
   };

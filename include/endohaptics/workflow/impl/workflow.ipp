@@ -380,30 +380,23 @@ ENDOHAPTICS_DECL ModelChoice choose_family(
   const auto logs_of = [&](std::size_t family) -> const std::vector<PreparedLog>& {
     return subspace != nullptr && family == 0 ? score_logs : joint_logs;
   };
-  ModelChoice choice{
-      .model = subspace != nullptr
-                   ? subspace->chosen().model
-                   : files::make_stall_hold_file(  // a placeholder
-                         {}, 1.0,
-                         {inputs.begin(),
-                          inputs.begin() + std::min<std::ptrdiff_t>(2, std::ssize(inputs))},
-                         outputs)};
+  // The scores first; the ModelChoice is made with the chosen family's model at the end.
+  std::vector<FamilyScore> scores(families);
   for (std::size_t f = 0; f < families; ++f) {
-    FamilyScore score;
-    score.family =
+    scores[f].family =
         subspace != nullptr && f == 0
             ? subspace_name
             : std::string(files::to_string(joint_kinds[f - (subspace != nullptr ? 1 : 0)]));
-    choice.families.push_back(score);
   }
-  if (families > 1) choice.folds = inner_folds(n_files);
+  std::vector<std::vector<std::size_t>> inner;
+  if (families > 1) inner = inner_folds(n_files);
   // One training file and several families: no file to hold out, so each family is fitted and
   // scored on that file (the training score; stated in the report by an empty `folds`).
-  const bool training_only = families > 1 && choice.folds.empty();
+  const bool training_only = families > 1 && inner.empty();
   const std::vector<std::vector<std::size_t>> all_files{{0}};
-  const auto& folds = training_only ? all_files : choice.folds;
+  const auto& folds = training_only ? all_files : inner;
   for (std::size_t f = 0; f < families && !folds.empty(); ++f) {
-    FamilyScore& score = choice.families[f];
+    FamilyScore& score = scores[f];
     double fit_sum = 0.0, rmse_sum = 0.0;
     for (const auto& held_out : folds) {
       std::vector<std::size_t> train;
@@ -440,21 +433,26 @@ ENDOHAPTICS_DECL ModelChoice choose_family(
     score.mean_rmse = rmse_sum / k;
     if (!std::isfinite(score.mean_fit)) score.mean_fit = -std::numeric_limits<double>::infinity();
   }
-  choice.best = 0;
+  std::size_t best = 0;
   for (std::size_t f = 1; f < families; ++f) {
-    if (choice.families[f].mean_fit > choice.families[choice.best].mean_fit) choice.best = f;
+    if (scores[f].mean_fit > scores[best].mean_fit) best = f;
   }
-  choice.family = choice.families[choice.best].family;
-  if (subspace != nullptr && choice.best == 0) {
-    choice.model = subspace->chosen().model;
-    choice.files = subspace->chosen().files;
-    return choice;
+  if (subspace != nullptr && best == 0) {
+    return ModelChoice{.model = subspace->chosen().model,
+                       .family = scores[best].family,
+                       .families = std::move(scores),
+                       .best = best,
+                       .folds = std::move(inner),
+                       .files = subspace->chosen().files};
   }
-  const files::ModelKind kind = joint_kinds[choice.best - (subspace != nullptr ? 1 : 0)];
-  const JointModelFit fit =
-      fit_joint_model(kind, joint_logs, inputs, outputs, options.scoring.warmup);
-  choice.model = fit.model;
-  choice.joint_summary = fit.summary;
+  const files::ModelKind kind = joint_kinds[best - (subspace != nullptr ? 1 : 0)];
+  JointModelFit fit = fit_joint_model(kind, joint_logs, inputs, outputs, options.scoring.warmup);
+  ModelChoice choice{.model = std::move(fit.model),
+                     .family = scores[best].family,
+                     .families = std::move(scores),
+                     .best = best,
+                     .folds = std::move(inner),
+                     .joint_summary = std::move(fit.summary)};
   for (const PreparedLog& log : joint_logs) {
     choice.files.push_back(compare_log(choice.model, log, options.scoring));
   }
