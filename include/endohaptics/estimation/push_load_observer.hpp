@@ -17,11 +17,11 @@
 
 #include <Eigen/Core>
 #include <cmath>
-#include <numbers>
 #include <string>
 
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/estimation/joint_force_model.hpp"
+#include "endohaptics/model/butterworth_biquad.hpp"
 #include "endohaptics/model/state_space.hpp"
 
 namespace endohaptics::estimation {
@@ -116,8 +116,8 @@ class PushLoadObserver {
 
   //! Validates `p` (throws Error naming the field).
   explicit PushLoadObserver(const Parameters& p = {}) : p_((p.validate(), p)) {
-    current_ = biquad(p_.current_cutoff);
-    velocity_ = biquad(p_.velocity_cutoff);
+    current_ = model::ButterworthBiquad<Scalar>::lowpass(p_.current_cutoff, p_.sample_time);
+    velocity_ = model::ButterworthBiquad<Scalar>::lowpass(p_.velocity_cutoff, p_.sample_time);
     reset();
   }
 
@@ -138,15 +138,15 @@ class PushLoadObserver {
     }
     State x = x_;
     if (x[9] == Scalar(0)) {  // first sample: filters at its steady state, no motion yet
-      start(current_, s.current, x[0], x[1]);
-      start(velocity_, Scalar(0), x[2], x[3]);
+      current_.start(s.current, x[0], x[1]);
+      velocity_.start(Scalar(0), x[2], x[3]);
       x[4] = s.position;
       x[9] = Scalar(1);
     }
     const Scalar delta = s.position - x[4];
     x[4] = s.position;
-    const Scalar i_f = step(current_, s.current, x[0], x[1]);
-    const Scalar v = step(velocity_, delta / p_.sample_time, x[2], x[3]);
+    const Scalar i_f = current_.step(s.current, x[0], x[1]);
+    const Scalar v = velocity_.step(delta / p_.sample_time, x[2], x[3]);
     // Direction state: moves towards sign(delta) by |delta| / q0 of the way (at most all of it).
     if (delta != Scalar(0)) {
       const Scalar w = std::fmin(Scalar(1), std::fabs(delta) / p_.direction_scale);
@@ -201,37 +201,9 @@ class PushLoadObserver {
   }  //!< rad/s
 
  private:
-  struct Biquad {
-    Scalar b0{}, b1{}, b2{}, a1{}, a2{};
-  };
-  // Second-order Butterworth low-pass by the bilinear transform with prewarping (unity DC gain).
-  Biquad biquad(Scalar cutoff) const noexcept {
-    const Scalar k = std::tan(std::numbers::pi_v<Scalar> * cutoff * p_.sample_time);
-    const Scalar root2 = std::numbers::sqrt2_v<Scalar>;
-    const Scalar norm = Scalar(1) / (Scalar(1) + root2 * k + k * k);
-    Biquad b;
-    b.b0 = k * k * norm;
-    b.b1 = 2 * b.b0;
-    b.b2 = b.b0;
-    b.a1 = 2 * (k * k - Scalar(1)) * norm;
-    b.a2 = (Scalar(1) - root2 * k + k * k) * norm;
-    return b;
-  }
-  // Direct form II transposed; the steady state for a constant input u is output u.
-  static void start(const Biquad& f, Scalar u, Scalar& z1, Scalar& z2) noexcept {
-    z1 = u * (Scalar(1) - f.b0);
-    z2 = u * (f.b2 - f.a2);
-  }
-  static Scalar step(const Biquad& f, Scalar u, Scalar& z1, Scalar& z2) noexcept {
-    const Scalar y = f.b0 * u + z1;
-    z1 = f.b1 * u - f.a1 * y + z2;
-    z2 = f.b2 * u - f.a2 * y;
-    return y;
-  }
-
   Parameters p_;
-  Biquad current_{};
-  Biquad velocity_{};
+  model::ButterworthBiquad<Scalar> current_{};
+  model::ButterworthBiquad<Scalar> velocity_{};
   State x_ = State::Zero();
   Scalar last_filtered_current_{};
   Scalar last_filtered_velocity_{};

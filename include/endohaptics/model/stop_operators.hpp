@@ -1,0 +1,105 @@
+//! @file
+//! StopOperators: N stop (elastic-play) operators of the Prandtl-Ishlinskii hysteresis model
+//! (Krasnosel'skii and Pokrovskii, "Systems with Hysteresis", 1989; Kuhnen, "Modeling,
+//! identification and compensation of complex hysteretic nonlinearities", 2003): for a threshold
+//! r the play output z follows z = min(max(z, q - r), q + r) and the normalised stop output is
+//! s = (q - z) / r in [-1, 1]: rate-independent, it depends only on the travel since the last
+//! reversals, not on the absolute position. Units: q in rad (any unit, thresholds in the same).
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+#include <string>
+
+#include "endohaptics/core/error.hpp"
+
+namespace endohaptics::model {
+
+//! N stop operators with increasing thresholds (see the file comment). Before the first motion
+//! the history is unknown: every output stays 0 until the position has travelled `start_travel`
+//! from where it started; then the operators start as if the motion before the start had run the
+//! other way (each saturated at minus the sign of the first move: a tool that starts at rest at
+//! one end of its stroke, where the previous motion ended). The state is a plain vector so that a
+//! model can keep it inside its own; step() is noexcept and allocation-free.
+template <typename Scalar, int N>
+class StopOperators {
+  static_assert(N >= 1, "StopOperators needs at least one threshold");
+
+ public:
+  using Thresholds = Eigen::Matrix<Scalar, N, 1>;  //!< r_1 < ... < r_N, > 0
+  using Values = Eigen::Matrix<Scalar, N, 1>;      //!< s_1 ... s_N, each in [-1, 1]
+  //! (play outputs z_1 ... z_N, start position, phase: 0 no sample yet, 1 waiting for the first
+  //! travel, 2 running)
+  using State = Eigen::Matrix<Scalar, N + 2, 1>;
+
+  //! Throws Error unless the thresholds are finite, > 0 and strictly increasing and
+  //! `start_travel` is finite and >= 0.
+  StopOperators(const Thresholds& thresholds, Scalar start_travel)
+      : r_(thresholds), inverse_(thresholds.cwiseInverse()), start_travel_(start_travel) {
+    validate(thresholds, start_travel);
+  }
+
+  //! The checks of the constructor, for parameter structs that hold the values.
+  static void validate(const Thresholds& r, Scalar start_travel) {
+    for (int j = 0; j < N; ++j) {
+      const bool ok = std::isfinite(r[j]) && r[j] > 0 && (j == 0 || r[j] > r[j - 1]);
+      if (!ok) {
+        ENDOHAPTICS_THROW(Error("StopOperators: threshold " + std::to_string(j) +
+                                " must be finite, > 0 and above the one before, got " +
+                                endohaptics::detail::format_number(r[j])));
+      }
+    }
+    if (!(std::isfinite(start_travel) && start_travel >= 0)) {
+      ENDOHAPTICS_THROW(Error("StopOperators: start_travel must be finite and >= 0, got " +
+                              endohaptics::detail::format_number(start_travel)));
+    }
+  }
+
+  [[nodiscard]] const Thresholds& thresholds() const noexcept { return r_; }    //!< as given
+  [[nodiscard]] Scalar start_travel() const noexcept { return start_travel_; }  //!< as given
+
+  //! The state before any sample.
+  [[nodiscard]] static State initial_state() noexcept { return State::Zero(); }
+
+  //! One position sample `q`: updates `x` and writes the outputs to `s`. Precondition: q finite.
+  void step(State& x, Scalar q, Values& s) const noexcept {
+    if (x[N + 1] == Scalar(0)) {  // first sample: remember where the motion starts
+      x[N] = q;
+      x[N + 1] = Scalar(1);
+    }
+    if (x[N + 1] == Scalar(1)) {
+      const Scalar travel = q - x[N];
+      if (std::fabs(travel) < start_travel_ || travel == Scalar(0)) {
+        s.setZero();
+        return;
+      }
+      // Saturated at -sign(first move) at the start position: z_j = start + sign r_j.
+      const Scalar sign = travel > 0 ? Scalar(1) : Scalar(-1);
+      for (int j = 0; j < N; ++j) x[j] = x[N] + sign * r_[j];
+      x[N + 1] = Scalar(2);
+    }
+    for (int j = 0; j < N; ++j) {
+      if (q - x[j] > r_[j]) {
+        x[j] = q - r_[j];
+      } else if (x[j] - q > r_[j]) {
+        x[j] = q + r_[j];
+      }
+      s[j] = (q - x[j]) * inverse_[j];
+    }
+  }
+
+  //! The outputs of state `x` without a new sample (0 before the first travel).
+  [[nodiscard]] Values values(const State& x, Scalar q) const noexcept {
+    Values s = Values::Zero();
+    if (x[N + 1] != Scalar(2)) return s;
+    for (int j = 0; j < N; ++j) s[j] = (q - x[j]) * inverse_[j];
+    return s;
+  }
+
+ private:
+  Thresholds r_;
+  Thresholds inverse_;  // 1 / r_j: the outputs multiply (a division costs several multiplies)
+  Scalar start_travel_;
+};
+
+}  // namespace endohaptics::model

@@ -1,0 +1,122 @@
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <endohaptics/model/stop_operators.hpp>
+#include <random>
+#include <vector>
+
+#include "test_support.hpp"
+
+namespace model_stop_operators_test {
+
+namespace md = endohaptics::model;
+using endohaptics::test::message_of;
+using Stops = md::StopOperators<double, 3>;
+
+namespace {
+
+// The outputs along a path of positions, from the initial state.
+std::vector<Stops::Values> run(const Stops& stops, const std::vector<double>& path) {
+  Stops::State x = Stops::initial_state();
+  std::vector<Stops::Values> out;
+  for (const double q : path) {
+    Stops::Values s;
+    stops.step(x, q, s);
+    out.push_back(s);
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("stop operators: zero until the first travel, then saturated against the first move") {
+  const Stops stops(Stops::Thresholds(0.1, 0.2, 0.4), 0.01);
+  // At rest, then 5 mrad up (below the start travel), then to 0.01 rad: the operators start as if
+  // the motion before had come down, each at -1 at the start position.
+  const auto s = run(stops, {1.0, 1.0, 1.005, 1.01, 1.05});
+  CHECK(s[0].isZero(0.0));
+  CHECK(s[2].isZero(0.0));
+  // At 1.01: travel 0.01 from the start, each s_j = -1 + 0.01 / r_j.
+  CHECK(s[3][0] == doctest::Approx(-1.0 + 0.01 / 0.1));
+  CHECK(s[3][1] == doctest::Approx(-1.0 + 0.01 / 0.2));
+  CHECK(s[3][2] == doctest::Approx(-1.0 + 0.01 / 0.4));
+  CHECK(s[4][0] == doctest::Approx(-1.0 + 0.05 / 0.1));
+  // The first move down instead: +1 at the start.
+  const auto d = run(stops, {1.0, 0.98});
+  CHECK(d[1][0] == doctest::Approx(1.0 - 0.02 / 0.1));
+  // A start travel of 0 starts at the first motion whatever its size.
+  const Stops eager(Stops::Thresholds(0.1, 0.2, 0.4), 0.0);
+  const auto e = run(eager, {0.0, 0.0, 1e-6});
+  CHECK(e[1].isZero(0.0));
+  CHECK(e[2][0] == doctest::Approx(-1.0 + 1e-5));
+}
+
+TEST_CASE("stop operators: the travel since the last reversal, clipped to [-1, 1] (a triangle)") {
+  const Stops stops(Stops::Thresholds(0.1, 0.2, 0.4), 0.0);
+  std::vector<double> path;
+  for (int k = 0; k <= 100; ++k) path.push_back(0.01 * k);       // up 1 rad
+  for (int k = 1; k <= 30; ++k) path.push_back(1.0 - 0.01 * k);  // down 0.3 rad
+  const auto s = run(stops, path);
+  // After 1 rad up every operator is saturated at +1.
+  CHECK(s[100].isApproxToConstant(1.0, 1e-12));
+  // Down from the reversal: s_r = 1 - travel / r until -1 (the play is 2 r wide).
+  CHECK(s[130][0] == doctest::Approx(-1.0));
+  CHECK(s[130][1] == doctest::Approx(1.0 - 0.3 / 0.2));
+  CHECK(s[130][2] == doctest::Approx(1.0 - 0.3 / 0.4));
+  CHECK(s[110][2] == doctest::Approx(1.0 - 0.1 / 0.4));
+  CHECK(s[120][0] == doctest::Approx(-1.0));
+}
+
+TEST_CASE("stop operators: bounded, rate-independent and blind to the absolute position") {
+  const Stops stops(Stops::Thresholds(0.05, 0.2, 0.5), 0.005);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> step(-0.03, 0.03);
+  std::vector<double> coarse{0.0};
+  for (int k = 0; k < 5000; ++k) coarse.push_back(coarse.back() + step(rng));
+  // The same path with every step cut in four (a four times faster sampling of it).
+  std::vector<double> fine{0.0};
+  for (std::size_t k = 1; k < coarse.size(); ++k) {
+    for (int i = 1; i <= 4; ++i) {
+      fine.push_back(coarse[k - 1] + 0.25 * i * (coarse[k] - coarse[k - 1]));
+    }
+  }
+  std::vector<double> shifted = coarse;
+  for (double& q : shifted) q += 123.4;
+  const auto a = run(stops, coarse);
+  const auto b = run(stops, fine);
+  const auto c = run(stops, shifted);
+  double rate = 0.0, shift = 0.0;
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    CHECK(a[k].cwiseAbs().maxCoeff() <= 1.0 + 1e-12);
+    // Play operators are exact on piecewise-linear paths: the subdivided path ends each coarse
+    // step at the same outputs.
+    rate = std::max(rate, (a[k] - b[4 * k]).cwiseAbs().maxCoeff());
+    shift = std::max(shift, (a[k] - c[k]).cwiseAbs().maxCoeff());
+  }
+  CHECK(rate < 1e-9);
+  CHECK(shift < 1e-9);
+}
+
+TEST_CASE("stop operators: thresholds must increase, errors name the value") {
+  CHECK(message_of([] { Stops bad(Stops::Thresholds(0.1, 0.1, 0.4), 0.0); }) ==
+        "StopOperators: threshold 1 must be finite, > 0 and above the one before, got 0.1");
+  CHECK(message_of([] { Stops bad(Stops::Thresholds(0.0, 0.1, 0.4), 0.0); }) ==
+        "StopOperators: threshold 0 must be finite, > 0 and above the one before, got 0");
+  CHECK(message_of([] {
+          Stops bad(Stops::Thresholds(0.1, 0.2, std::nan("")), 0.0);
+        }).starts_with("StopOperators: threshold 2 must be finite"));
+  CHECK(message_of([] { Stops bad(Stops::Thresholds(0.1, 0.2, 0.4), -1.0); }) ==
+        "StopOperators: start_travel must be finite and >= 0, got -1");
+}
+
+TEST_CASE("stop operators: float") {
+  const md::StopOperators<float, 2> stops({0.1F, 0.2F}, 0.0F);
+  md::StopOperators<float, 2>::State x = md::StopOperators<float, 2>::initial_state();
+  md::StopOperators<float, 2>::Values s;
+  stops.step(x, 0.0F, s);
+  stops.step(x, 0.05F, s);
+  CHECK(s[0] == doctest::Approx(-0.5F));
+  CHECK(stops.values(x, 0.05F)[1] == doctest::Approx(-0.75F));
+}
+
+}  // namespace model_stop_operators_test
