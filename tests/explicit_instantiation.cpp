@@ -41,6 +41,13 @@ template class eh::estimation::StallHold<double>;
 template class eh::estimation::StallHold<float>;
 template class eh::estimation::PushLoadObserver<double>;
 template class eh::estimation::PushLoadObserver<float>;
+template class eh::estimation::BidirectionalLoadObserver<double>;
+template class eh::estimation::BidirectionalLoadObserver<float>;
+template struct eh::estimation::BidirectionalLoadObserverParameters<double>;
+template class eh::model::StopOperators<double, 8>;
+template class eh::model::StopOperators<float, 3>;
+template struct eh::model::ButterworthBiquad<double>;
+template struct eh::model::ButterworthBiquad<float>;
 template class eh::estimation::CurrentOffsetReference<double>;
 template class eh::estimation::CurrentOffsetReference<float>;
 

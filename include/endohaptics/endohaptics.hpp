@@ -10,6 +10,7 @@
 
 #include "endohaptics/core/clock.hpp"
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/estimation/bidirectional_load_observer.hpp"
 #include "endohaptics/estimation/current_offset_reference.hpp"
 #include "endohaptics/estimation/dare.hpp"
 #include "endohaptics/estimation/force_estimator.hpp"
@@ -38,6 +39,7 @@
 #include "endohaptics/identification/subspace.hpp"
 #include "endohaptics/kinematics/cylindrical_mapper.hpp"
 #include "endohaptics/kinematics/denavit_hartenberg.hpp"
+#include "endohaptics/model/butterworth_biquad.hpp"
 #include "endohaptics/model/dense_numerics.hpp"
 #include "endohaptics/model/friction_model.hpp"
 #include "endohaptics/model/hammerstein_wiener.hpp"
@@ -47,6 +49,7 @@
 #include "endohaptics/model/state_space.hpp"
 #include "endohaptics/model/static_map.hpp"
 #include "endohaptics/model/static_nonlinearity.hpp"
+#include "endohaptics/model/stop_operators.hpp"
 #include "endohaptics/protocol/packet_codec.hpp"
 #include "endohaptics/sim/closed_loop.hpp"
 #include "endohaptics/sim/delay_line.hpp"

@@ -1,8 +1,8 @@
 //! @file
-//! Bounds on the parameters of the joint force models (estimation::StallHold and
-//! estimation::PushLoadObserver), defined once for their own validation and for the model-file
-//! loader (files/model_file.hpp), which sits below estimation/ and checks a file before any
-//! estimation type exists. Configuration time only.
+//! Bounds and sizes of the joint force models (estimation::StallHold,
+//! estimation::PushLoadObserver, estimation::BidirectionalLoadObserver), defined once for their
+//! own validation and for the model-file loader (files/model_file.hpp), which sits below
+//! estimation/ and checks a file before any estimation type exists. Configuration time only.
 #pragma once
 
 namespace endohaptics::model {
@@ -15,5 +15,7 @@ namespace endohaptics::model {
 inline constexpr double max_joint_model_parameter = 1e6;
 //! Smallest |current_per_load| of a PushLoadObserver, A per load unit (it divides the current).
 inline constexpr double min_current_per_load = 1e-9;
+//! Stop operators of a BidirectionalLoadObserver (its model files hold this many thresholds).
+inline constexpr int bidirectional_observer_stops = 8;
 
 }  // namespace endohaptics::model

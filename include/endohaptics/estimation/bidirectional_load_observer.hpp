@@ -1,0 +1,285 @@
+//! @file
+//! BidirectionalLoadObserver: a JointForceModel for a cable-driven instrument whose motor current
+//! shows the load in both directions of motion, each offset by a friction the instrument does not
+//! share with another (docs/research_force_models.md, K7). A two-state Kalman filter on the load
+//! L (random walk) and the friction f (per-instrument constant) takes the current inverted through
+//! a forward map while the tool moves forward, z = L + f, and through a backward map while it moves
+//! back, z = L - kappa f (kappa = the ratio of the maps' gains: a friction current that adds to one
+//! direction subtracts from the other), so that motion both ways cancels the friction (the
+//! midpoint of the two currents). Each map is affine in the load with a gain and offset that
+//! follow the stroke (the widest stop operator): i_f = (g + g' s_N) L + o + o' s_N. The output adds
+//! the load's hysteresis along the stroke, a Prandtl-Ishlinskii sum of stop operators on the
+//! encoder (model/stop_operators.hpp): y = L + e0 + sum_j (a_j + b_j L) s_j. Front end as
+//! PushLoadObserver: Butterworth current and velocity filters, a Dahl direction state and a
+//! velocity threshold decide forward (+1), backward (-1) or rest (0, no update). About 120 flops
+//! per step; noexcept, allocation-free. Units: A, rad, rad/s, s; load in the fit's unit.
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+#include <string>
+
+#include "endohaptics/core/error.hpp"
+#include "endohaptics/estimation/joint_force_model.hpp"
+#include "endohaptics/model/butterworth_biquad.hpp"
+#include "endohaptics/model/state_space.hpp"
+#include "endohaptics/model/stop_operators.hpp"
+
+namespace endohaptics::estimation {
+
+// The number of stop operators of the model files (model/joint_model_bounds.hpp).
+using model::bidirectional_observer_stops;
+
+//! Parameters of BidirectionalLoadObserver. Defaults: the front end and the stop thresholds of
+//! the research note (UMN grasper, 1 kHz, a stroke of about 1 rad at the spindle); the maps, the
+//! noise and the output shape come from fit_bidirectional_load_observer.
+template <typename Scalar = double, int N = bidirectional_observer_stops>
+struct BidirectionalLoadObserverParameters {
+  using Stops = model::StopOperators<Scalar, N>;  //!< the output's hysteresis basis
+  using Vector = Eigen::Matrix<Scalar, N, 1>;     //!< one value per stop operator
+
+  Scalar current_cutoff = Scalar(10);        //!< Hz, current low-pass (2nd-order Butterworth)
+  Scalar velocity_cutoff = Scalar(20);       //!< Hz, velocity low-pass (of the encoder difference)
+  Scalar direction_scale = Scalar(0.05);     //!< rad, q0: travel that flips the direction state
+  Scalar velocity_threshold = Scalar(0.05);  //!< rad/s: slower is rest (no update)
+  Scalar direction_threshold = Scalar(0.5);  //!< |h| at or above: moving that way
+  //! rad, r_1 < ... < r_N; the widest should stay below half the stroke so that it saturates
+  Vector stop_thresholds = (Vector() << Scalar(0.005), Scalar(0.02), Scalar(0.05), Scalar(0.1),
+                            Scalar(0.2), Scalar(0.3), Scalar(0.4), Scalar(0.5))
+                               .finished();
+  Scalar start_travel = Scalar(0.005);            //!< rad the tool moves before the operators start
+  Scalar forward_gain = Scalar(1);                //!< g_f, A per load unit while moving forward
+  Scalar forward_gain_stroke = Scalar(0);         //!< g'_f, A per load unit per unit of s_N
+  Scalar forward_offset = Scalar(0);              //!< o_f, A
+  Scalar forward_offset_stroke = Scalar(0);       //!< o'_f, A per unit of s_N
+  Scalar backward_gain = Scalar(-1);              //!< g_b, A per load unit while moving back
+  Scalar backward_gain_stroke = Scalar(0);        //!< g'_b
+  Scalar backward_offset = Scalar(0);             //!< o_b, A
+  Scalar backward_offset_stroke = Scalar(0);      //!< o'_b
+  Scalar forward_variance = Scalar(1);            //!< R_f, load unit^2: of one forward inversion z
+  Scalar backward_variance = Scalar(1);           //!< R_b, load unit^2: of one backward inversion
+  Scalar load_process_variance = Scalar(0);       //!< Q_L, load unit^2 per step
+  Scalar friction_variance = Scalar(1);           //!< P_f0, load unit^2: friction prior
+  Scalar friction_process_variance = Scalar(0);   //!< Q_f, load unit^2 per step
+  Scalar initial_load = Scalar(0);                //!< L0, load units
+  Scalar initial_variance = Scalar(1);            //!< P_L0, load unit^2
+  Scalar output_offset = Scalar(0);               //!< e0, load units
+  Vector output_shape = Vector::Zero();           //!< a_j, load units
+  Vector output_shape_per_load = Vector::Zero();  //!< b_j, dimensionless
+  Scalar sample_time = Scalar(0.001);             //!< s, one advance()
+
+  //! kappa = g_f / g_b: how a friction shift of the forward inversion shows in the backward one.
+  [[nodiscard]] Scalar friction_ratio() const noexcept { return forward_gain / backward_gain; }
+
+  //! Throws Error naming the field, its value and the rule.
+  void validate() const {
+    auto require = [](bool ok, const char* field, Scalar value, const char* rule) {
+      if (!ok) {
+        ENDOHAPTICS_THROW(Error(std::string("BidirectionalLoadObserverParameters: ") + field +
+                                " must be " + rule + ", got " +
+                                endohaptics::detail::format_number(value)));
+      }
+    };
+    const Scalar nyquist = Scalar(0.5) / sample_time;
+    const auto max = static_cast<Scalar>(max_joint_model_parameter);  // comparisons fail for NaN
+    require(std::isfinite(sample_time) && sample_time > 0, "sample_time", sample_time,
+            "finite and > 0 s");
+    require(current_cutoff > 0 && current_cutoff < nyquist, "current_cutoff", current_cutoff,
+            "in (0, Nyquist) Hz");
+    require(velocity_cutoff > 0 && velocity_cutoff < nyquist, "velocity_cutoff", velocity_cutoff,
+            "in (0, Nyquist) Hz");
+    require(std::isfinite(direction_scale) && direction_scale > 0 && direction_scale <= max,
+            "direction_scale", direction_scale, "in (0, 1e6] rad");
+    require(velocity_threshold >= 0 && velocity_threshold <= max, "velocity_threshold",
+            velocity_threshold, "in [0, 1e6] rad/s");
+    require(direction_threshold > 0 && direction_threshold <= 1, "direction_threshold",
+            direction_threshold, "in (0, 1]");
+    for (int j = 0; j < N; ++j) {
+      require(stop_thresholds[j] <= max, "stop_thresholds", stop_thresholds[j], "at most 1e6");
+    }
+    require(start_travel <= max, "start_travel", start_travel, "at most 1e6 rad");
+    Stops::validate(stop_thresholds, start_travel);
+    const auto gain_ok = [max](Scalar g, Scalar stroke) {
+      // |g| - |g'| > 0: the map's gain keeps its sign over the stroke (s_N in [-1, 1])
+      return std::fabs(g) >= static_cast<Scalar>(min_current_per_load) && std::fabs(g) <= max &&
+             std::fabs(stroke) <= max && std::fabs(stroke) < std::fabs(g);
+    };
+    require(gain_ok(forward_gain, forward_gain_stroke), "forward_gain", forward_gain,
+            "of magnitude in [1e-9, 1e6] and above |forward_gain_stroke|");
+    require(gain_ok(backward_gain, backward_gain_stroke), "backward_gain", backward_gain,
+            "of magnitude in [1e-9, 1e6] and above |backward_gain_stroke|");
+    require(std::fabs(friction_ratio()) <= max, "forward_gain / backward_gain", friction_ratio(),
+            "of magnitude at most 1e6");
+    for (const Scalar v : {forward_offset, forward_offset_stroke, backward_offset,
+                           backward_offset_stroke, initial_load, output_offset}) {
+      require(std::fabs(v) <= max, "an offset or the initial load", v, "in [-1e6, 1e6]");
+    }
+    for (int j = 0; j < N; ++j) {
+      require(std::fabs(output_shape[j]) <= max, "output_shape", output_shape[j], "in [-1e6, 1e6]");
+      require(std::fabs(output_shape_per_load[j]) <= max, "output_shape_per_load",
+              output_shape_per_load[j], "in [-1e6, 1e6]");
+    }
+    require(forward_variance > 0 && forward_variance <= max, "forward_variance", forward_variance,
+            "in (0, 1e6]");
+    require(backward_variance > 0 && backward_variance <= max, "backward_variance",
+            backward_variance, "in (0, 1e6]");
+    for (const Scalar v :
+         {load_process_variance, friction_variance, friction_process_variance, initial_variance}) {
+      require(v >= 0 && v <= max, "a process or prior variance", v, "in [0, 1e6]");
+    }
+  }
+};
+
+//! The bidirectional load observer (see the file comment).
+template <typename Scalar = double, int N = bidirectional_observer_stops>
+class BidirectionalLoadObserver {
+ public:
+  using ScalarType = Scalar;                                          //!< floating-point type
+  using Parameters = BidirectionalLoadObserverParameters<Scalar, N>;  //!< its parameters
+  using Signals = JointSignals<Scalar>;                               //!< one tick's signals
+  using Stops = model::StopOperators<Scalar, N>;                      //!< the hysteresis basis
+  using StopValues = typename Stops::Values;                          //!< s_1 ... s_N
+  //! Layout of State: the filters, the direction, the regime, the load and friction filter, then
+  //! the stop operators' state (Stops::State).
+  enum Index : int {
+    current_z1,         //!< current filter, first delay value (direct form II transposed)
+    current_z2,         //!< current filter, second delay value
+    velocity_z1,        //!< velocity filter, first delay value
+    velocity_z2,        //!< velocity filter, second delay value
+    previous_position,  //!< rad, the last sample's
+    direction,          //!< Dahl direction h in [-1, 1]
+    regime_index,       //!< +1 forward, -1 backward, 0 rest
+    started,            //!< 0 before the first sample, then 1
+    load,               //!< L, load units
+    friction,           //!< f, load units of the forward inversion
+    p_ll,               //!< covariance of (L, f): var L
+    p_lf,               //!< cov(L, f)
+    p_ff,               //!< var f
+    stops_begin         //!< Stops::State from here
+  };
+
+  //! (see Index) plus the N + 2 numbers of the stop operators.
+  using State = Eigen::Matrix<Scalar, stops_begin + N + 2, 1>;
+
+  //! Validates `p` (throws Error naming the field).
+  explicit BidirectionalLoadObserver(const Parameters& p = {})
+      : p_((p.validate(), p)), stops_(p.stop_thresholds, p.start_travel) {
+    current_ = model::ButterworthBiquad<Scalar>::lowpass(p_.current_cutoff, p_.sample_time);
+    velocity_ = model::ButterworthBiquad<Scalar>::lowpass(p_.velocity_cutoff, p_.sample_time);
+    kappa_ = p_.friction_ratio();
+    reset();
+  }
+
+  [[nodiscard]] const Parameters& parameters() const noexcept { return p_; }    //!< as given
+  [[nodiscard]] Scalar sample_time() const noexcept { return p_.sample_time; }  //!< s
+  [[nodiscard]] bool memoryless() const noexcept { return false; }              //!< false: a state
+
+  //! The load estimate with its hysteresis along the stroke: L + e0 + sum_j (a_j + b_j L) s_j.
+  [[nodiscard]] Scalar force(const Signals&) const noexcept {
+    const StopValues s = stop_values();
+    const Scalar l = x_[load];
+    return l + p_.output_offset + p_.output_shape.dot(s) + l * p_.output_shape_per_load.dot(s);
+  }
+
+  //! One sample_time. Non-finite signals: state untouched, StepStatus::non_finite_input.
+  model::StepStatus advance(const Signals& sig) noexcept {
+    if (!std::isfinite(sig.current) || !std::isfinite(sig.position)) {
+      return model::StepStatus::non_finite_input;
+    }
+    State x = x_;
+    if (x[started] == Scalar(0)) {  // first sample: filters at its steady state, no motion yet
+      current_.start(sig.current, x[current_z1], x[current_z2]);
+      velocity_.start(Scalar(0), x[velocity_z1], x[velocity_z2]);
+      x[previous_position] = sig.position;
+      x[started] = Scalar(1);
+    }
+    const Scalar delta = sig.position - x[previous_position];
+    x[previous_position] = sig.position;
+    const Scalar i_f = current_.step(sig.current, x[current_z1], x[current_z2]);
+    const Scalar v = velocity_.step(delta / p_.sample_time, x[velocity_z1], x[velocity_z2]);
+    if (delta != Scalar(0)) {  // Dahl: towards sign(delta) by |delta| / q0 of the way
+      const Scalar w = std::fmin(Scalar(1), std::fabs(delta) / p_.direction_scale);
+      x[direction] += w * ((delta > 0 ? Scalar(1) : Scalar(-1)) - x[direction]);
+    }
+    x[regime_index] = x[direction] >= p_.direction_threshold && v > p_.velocity_threshold     ? 1
+                      : x[direction] <= -p_.direction_threshold && v < -p_.velocity_threshold ? -1
+                                                                                              : 0;
+    typename Stops::State z = x.template segment<N + 2>(stops_begin);
+    StopValues s;
+    stops_.step(z, sig.position, s);
+    x.template segment<N + 2>(stops_begin) = z;
+    // Predict: the load a random walk, the friction (nearly) constant.
+    x[p_ll] += p_.load_process_variance;
+    x[p_ff] += p_.friction_process_variance;
+    if (x[regime_index] != Scalar(0)) {
+      const bool forward = x[regime_index] > 0;
+      const Scalar stroke = s[N - 1];
+      const Scalar gain = forward ? p_.forward_gain + p_.forward_gain_stroke * stroke
+                                  : p_.backward_gain + p_.backward_gain_stroke * stroke;
+      const Scalar offset = forward ? p_.forward_offset + p_.forward_offset_stroke * stroke
+                                    : p_.backward_offset + p_.backward_offset_stroke * stroke;
+      const Scalar z_load = (i_f - offset) / gain;  // gain != 0: validate() keeps |g| > |g'|
+      const Scalar h = forward ? Scalar(1) : -kappa_;
+      const Scalar r = forward ? p_.forward_variance : p_.backward_variance;
+      // Measurement z = L + h f + noise (variance r): the Kalman update of (L, f).
+      const Scalar ph0 = x[p_ll] + h * x[p_lf];
+      const Scalar ph1 = x[p_lf] + h * x[p_ff];
+      const Scalar innovation_variance = ph0 + h * ph1 + r;
+      const Scalar k0 = ph0 / innovation_variance;
+      const Scalar k1 = ph1 / innovation_variance;
+      const Scalar innovation = z_load - x[load] - h * x[friction];
+      x[load] += k0 * innovation;
+      x[friction] += k1 * innovation;
+      x[p_ll] -= k0 * ph0;
+      x[p_lf] -= k0 * ph1;
+      x[p_ff] -= k1 * ph1;
+    }
+    if (!x.allFinite()) return model::StepStatus::non_finite_result;
+    x_ = x;
+    last_filtered_current_ = i_f;
+    last_filtered_velocity_ = v;
+    return model::StepStatus::ok;
+  }
+
+  [[nodiscard]] const State& state() const noexcept { return x_; }  //!< see State
+  //! Sets the state; reset() starts over (filters wait for the next first sample).
+  void reset(const State& x) noexcept { x_ = x; }
+  //! Back to the start: initial load and variances, no friction, filters and operators unstarted.
+  void reset() noexcept {
+    x_.setZero();
+    x_[load] = p_.initial_load;
+    x_[p_ll] = p_.initial_variance;
+    x_[p_ff] = p_.friction_variance;
+    x_.template segment<N + 2>(stops_begin) = Stops::initial_state();
+  }
+
+  //! The regime of the last step: +1 forward, -1 backward, 0 at rest or reversing.
+  [[nodiscard]] Scalar regime() const noexcept { return x_[regime_index]; }
+  //! The load estimate L (without the output's hysteresis), load units.
+  [[nodiscard]] Scalar load_estimate() const noexcept { return x_[load]; }
+  //! The friction estimate f, load units of the forward inversion.
+  [[nodiscard]] Scalar friction_estimate() const noexcept { return x_[friction]; }
+  //! The stop operators' outputs at the last sample (0 before the first travel).
+  [[nodiscard]] StopValues stop_values() const noexcept {
+    return stops_.values(x_.template segment<N + 2>(stops_begin), x_[previous_position]);
+  }
+  //! The filtered current and velocity of the last step (for identification).
+  [[nodiscard]] Scalar filtered_current() const noexcept { return last_filtered_current_; }
+  [[nodiscard]] Scalar filtered_velocity() const noexcept {
+    return last_filtered_velocity_;
+  }  //!< rad/s
+
+ private:
+  Parameters p_;
+  Stops stops_;
+  model::ButterworthBiquad<Scalar> current_{};
+  model::ButterworthBiquad<Scalar> velocity_{};
+  Scalar kappa_{};
+  State x_ = State::Zero();
+  Scalar last_filtered_current_{};
+  Scalar last_filtered_velocity_{};
+};
+
+static_assert(JointForceModel<BidirectionalLoadObserver<double>>);
+
+}  // namespace endohaptics::estimation
