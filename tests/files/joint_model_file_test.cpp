@@ -1,4 +1,5 @@
-// Model-file kinds "stall_hold" and "push_load_observer" (issue 15): round trips, hostile input,
+// Model-file kinds "stall_hold", "push_load_observer" and "bidirectional_load_observer" (issue
+// 15): round trips, hostile input,
 // and a file of each kind loaded by the bridge configuration and run in its ForceEstimator.
 #include "alloc_counter.hpp"  // first: counts every heap allocation of this executable
 
@@ -10,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "endohaptics/estimation/bidirectional_load_observer.hpp"
 #include "endohaptics/estimation/current_offset_reference.hpp"
 #include "endohaptics/estimation/push_load_observer.hpp"
 #include "endohaptics/estimation/stall_hold.hpp"
@@ -52,6 +54,26 @@ files::ModelFile observer_file() {
   p.back_current_per_velocity = -0.004;
   p.back_variance = 4e-4;
   return files::make_push_load_observer_file(p, 0.001, clamp_inputs, {{"grip_torque", "N m"}});
+}
+
+files::ModelFile bidirectional_file() {
+  files::BidirectionalObserverSettings p;
+  p.forward_gain = -1.41e-3;
+  p.forward_gain_stroke = -2.3e-4;
+  p.forward_offset = 0.066;
+  p.backward_gain = -6.1e-4;
+  p.backward_offset = -0.09;
+  p.backward_offset_stroke = 0.035;
+  p.forward_variance = 9000.0;
+  p.backward_variance = 30000.0;
+  p.friction_variance = 62.0;
+  p.load_process_variance = 0.002;
+  p.initial_load = -65.8;
+  p.initial_variance = 1180.0;
+  p.output_offset = 0.26;
+  p.output_shape = {0.2, 0.25, -0.38, 1.15, 1.1, 0.66, 0.12, -0.78};
+  p.output_shape_per_load = {0.008, -0.012, 0.003, 0.0, -0.003, 0.0, 0.01, 0.089};
+  return files::make_bidirectional_observer_file(p, 0.001, clamp_inputs, {{"grip_torque", "mN m"}});
 }
 
 // The message model_from_json gives for `j` (source "m.json").
@@ -121,6 +143,111 @@ TEST_CASE("joint-model files: both kinds round-trip through JSON and disk") {
         }).find("kind \"push_load_observer\" is a joint force model") != std::string::npos);
 }
 
+TEST_CASE(
+    "joint-model files: the bidirectional observer round-trips and is checked field by field") {
+  TempDir dir("bidirectional");
+  files::save_model(dir.path() / "b.json", bidirectional_file());
+  const files::ModelFile b = files::load_model(dir.path() / "b.json");
+  CHECK(b.kind() == files::ModelKind::bidirectional_load_observer);
+  CHECK(b.is_joint_model());
+  CHECK(files::to_json(b) == files::to_json(bidirectional_file()));
+  const json j = files::to_json(b);
+  CHECK(j["parameters"]["stop_thresholds"].size() == 8);
+  CHECK_FALSE(j["parameters"].contains("command_gain"));
+  const auto q =
+      files::bidirectional_observer_parameters<est::BidirectionalLoadObserverParameters<double>>(b);
+  CHECK(q.forward_gain == -1.41e-3);
+  CHECK(q.backward_offset_stroke == 0.035);
+  CHECK(q.output_shape[7] == -0.78);
+  CHECK(q.output_shape_per_load[7] == 0.089);
+  CHECK(q.stop_thresholds[0] == 0.005);
+  CHECK(q.sample_time == 0.001);
+  CHECK_NOTHROW((void)est::BidirectionalLoadObserver<double>{q});
+  // Back to settings, field for field.
+  CHECK(files::to_json(files::make_bidirectional_observer_file(
+            files::bidirectional_observer_settings(
+                q, std::optional<est::CurrentOffsetReferenceParameters<double>>{}),
+            0.001, clamp_inputs, {{"grip_torque", "mN m"}}, b.provenance)) == j);
+  CHECK(message_of([&] {
+          (void)files::push_load_observer_parameters<est::PushLoadObserverParameters<double>>(b);
+        }) ==
+        "push_load_observer_parameters: the model file is of kind "
+        "\"bidirectional_load_observer\", not \"push_load_observer\"");
+  // Hostile fields.
+  auto with = [&](const char* key, const json& value) {
+    json h = j;
+    h["parameters"][key] = value;
+    return h;
+  };
+  CHECK(error_of(with("stop_thresholds", json::array({0.1, 0.2}))) ==
+        "model file m.json: field \"parameters.stop_thresholds\" must be an array of 8 numbers "
+        "(one per stop operator), got [0.1,0.2]");
+  json unordered = j;
+  unordered["parameters"]["stop_thresholds"][3] = 0.05;
+  CHECK(error_of(unordered) ==
+        "model file m.json: field \"parameters.stop_thresholds[3]\" must be > 0 and above the "
+        "threshold before it, got 0.05");
+  json null_shape = j;
+  null_shape["parameters"]["output_shape"][2] = nullptr;
+  CHECK(error_of(null_shape) ==
+        "model file m.json: field \"parameters.output_shape[2]\" is not a number (null)");
+  json huge_shape = j;
+  huge_shape["parameters"]["output_shape_per_load"][5] = 1e300;
+  CHECK(error_of(huge_shape) ==
+        "model file m.json: field \"parameters.output_shape_per_load[5]\" must be in [-1e6, "
+        "1e6], got 1e+300");
+  CHECK(error_of(with("forward_gain_stroke", 2e-3)) ==
+        "model file m.json: field \"parameters.forward_gain\" must be of magnitude at least 1e-9 "
+        "and above |forward_gain_stroke|, got -0.00141");
+  CHECK(error_of(with("backward_gain", 0.0)) ==
+        "model file m.json: field \"parameters.backward_gain\" must be of magnitude at least "
+        "1e-9 and above |backward_gain_stroke|, got 0");
+  CHECK(error_of(with("forward_variance", 0.0)) ==
+        "model file m.json: field \"parameters.forward_variance\" must be in (0, 1e6], got 0");
+  CHECK(error_of(with("friction_variance", -1.0)) ==
+        "model file m.json: field \"parameters.friction_variance\" must be in [0, 1e6], got -1");
+  CHECK(error_of(with("initial_load", 1e308)) ==
+        "model file m.json: field \"parameters.initial_load\" must be in [-1e6, 1e6], got "
+        "1e+308");
+  CHECK(error_of(with("current_cutoff", 500.0)) ==
+        "model file m.json: field \"parameters.current_cutoff\" must be in (0, Nyquist = 0.5 / "
+        "sample_time_s) Hz, got 500");
+  CHECK(error_of(with("push_sign", 1))
+            .starts_with("model file m.json: unknown field \"parameters.push_sign\" for kind "
+                         "\"bidirectional_load_observer\""));
+  json missing = j;
+  missing["parameters"].erase("output_shape");
+  CHECK(error_of(missing) == "model file m.json: parameters: missing field \"output_shape\"");
+  // The reference to the command: both fields or none, and then a third input.
+  json referred = with("command_gain", -2.02);
+  CHECK(error_of(referred) ==
+        "model file m.json: parameters: command_gain and reference_offset go together (both or "
+        "none)");
+  referred["parameters"]["reference_offset"] = -0.0175;
+  CHECK(error_of(referred).find("needs 3 inputs") != std::string::npos);
+  referred["inputs"].push_back({{"name", "current_command"}, {"unit", "1"}});
+  const files::ModelFile with_command = files::model_from_json(referred, "m.json");
+  const auto ref =
+      files::current_offset_reference_parameters<est::CurrentOffsetReferenceParameters<double>>(
+          with_command);
+  REQUIRE(ref.has_value());
+  CHECK(ref->command_gain == -2.02);
+  CHECK(files::to_json(with_command) == referred);
+  // The bridge has no command: refused there, saying why.
+  write_text(dir.path() / "referred.json", referred.dump());
+  write_text(dir.path() / "bridge.json", R"({"estimator": {"clamp_model": "referred.json"}})");
+  CHECK(message_of([&] {
+          (void)files::bridge_force_models(files::load_bridge_config(dir.path() / "bridge.json"));
+        }).find("the bidirectional_load_observer refers its current to the commanded current") !=
+        std::string::npos);
+  // Two joint models in one file.
+  files::ModelFile both = bidirectional_file();
+  both.stall_hold = files::StallHoldSettings{};
+  CHECK(message_of([&] {
+          (void)files::to_json(both);
+        }).starts_with("to_json: a model file holds one joint model"));
+}
+
 // The model-file loader and the estimation types check the same bounds
 // (model/joint_model_bounds.hpp).
 static_assert(files::ModelFile::max_parameter == est::max_joint_model_parameter);
@@ -170,8 +297,8 @@ TEST_CASE("joint-model files: hostile and out-of-range content is refused naming
   kind["kind"] = "neural_network";
   CHECK(error_of(kind) ==
         "model file m.json: field \"kind\" is \"neural_network\", expected "
-        "\"state_space\", \"hammerstein_wiener\", \"stall_hold\" or "
-        "\"push_load_observer\"");
+        "\"state_space\", \"hammerstein_wiener\", \"stall_hold\", "
+        "\"push_load_observer\" or \"bidirectional_load_observer\"");
   json ts = good;
   ts["sample_time_s"] = 0.0;
   CHECK(error_of(ts) == "model file m.json: field \"sample_time_s\" must be finite and > 0, got 0");
@@ -272,7 +399,8 @@ TEST_CASE("bridge: a model file of each kind configures the clamps and runs in t
   TempDir dir("bridge_joint");
   files::save_model(dir.path() / "stall.json", stall_hold_file());
   files::save_model(dir.path() / "observer.json", observer_file());
-  for (const char* name : {"stall.json", "observer.json"}) {
+  files::save_model(dir.path() / "bidirectional.json", bidirectional_file());
+  for (const char* name : {"stall.json", "observer.json", "bidirectional.json"}) {
     CAPTURE(name);
     write_text(dir.path() / "bridge.json",
                std::string(R"({"estimator": {"clamp_model": ")") + name + "\"}}");
@@ -326,6 +454,10 @@ TEST_CASE("bridge: a model file of each kind configures the clamps and runs in t
     if (const auto* o = estimator.joint_model<est::Motor::clamp1>().observer()) {
       CHECK(o->state()[6] == 0.04);
       CHECK(o->state()[7] == o->parameters().initial_variance);
+    }
+    if (const auto* b = estimator.joint_model<est::Motor::clamp1>().bidirectional()) {
+      CHECK(b->load_estimate() == -65.8);
+      CHECK(b->state()[est::BidirectionalLoadObserver<double>::p_ff] == 62.0);
     }
   }
 }

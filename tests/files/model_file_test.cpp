@@ -203,7 +203,7 @@ TEST_CASE("load errors name the file, the field and the value") {
   CHECK(broken([](json& j) { j["kind"] = "arx"; }) ==
         src +
             ": field \"kind\" is \"arx\", expected \"state_space\", \"hammerstein_wiener\", "
-            "\"stall_hold\" or \"push_load_observer\"");
+            "\"stall_hold\", \"push_load_observer\" or \"bidirectional_load_observer\"");
   CHECK(broken([](json& j) { j["inputs"][0].erase("unit"); }) ==
         src + ": inputs[0]: missing field \"unit\"");
 

@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/estimation/bidirectional_load_observer.hpp"
 #include "endohaptics/estimation/force_estimator.hpp"
 #include "endohaptics/estimation/push_load_observer.hpp"
 #include "endohaptics/estimation/stall_hold.hpp"
@@ -49,7 +50,8 @@ struct BridgeConfig {
   teleop::TeleopLoopConfig loop{};
   estimation::ForceEstimatorSettings<double> estimator{};  //!< friction levels, signs, limits
   //! "estimator.clamp_model": an identified model file (endohaptics-identify) for both clamps:
-  //! Hammerstein-Wiener (6 states, 2 inputs, 1 output), "stall_hold" or "push_load_observer",
+  //! Hammerstein-Wiener (6 states, 2 inputs, 1 output), "stall_hold", "push_load_observer" or
+  //! "bidirectional_load_observer",
   //! resolved against the configuration file's folder; empty: the 2016 appendix C yaw model.
   std::filesystem::path clamp_model;
   sim::OperatorScript operator_script{};  //!< the scripted operator of `--device sim`
@@ -507,36 +509,44 @@ void with_prefix(std::string_view source, std::string_view key, F&& validate) {
 
 //! The clamp model the bridge runs, whichever kind the model file holds: the appendix C yaw
 //! Hammerstein-Wiener type (estimation::ClampModel2016, also identified "hammerstein_wiener" files
-//! of 6 states, 2 inputs, 1 output), estimation::StallHold or estimation::PushLoadObserver. A
-//! JointForceModel (noexcept, allocation-free, fixed size: a std::variant of the three). Its State
-//! is the model's own, padded with zeros to 11 numbers (the largest of the three); reset() is the
+//! of 6 states, 2 inputs, 1 output), estimation::StallHold, estimation::PushLoadObserver or
+//! estimation::BidirectionalLoadObserver. A JointForceModel (noexcept, allocation-free, fixed
+//! size: a std::variant of the four). Its State is the model's own, padded with zeros to the
+//! largest of the four (the bidirectional observer's 23 numbers); reset() is the
 //! model's own start state (ForceEstimator::reset, through RateStepper: the yaw model at x = 0,
 //! the observer with its filters waiting for the next sample and its initial load and variance).
 class ClampForceModel {
  public:
-  using ScalarType = double;                              //!< floating-point type
-  using State = Eigen::Matrix<double, 11, 1>;             //!< the model's state, zero-padded
+  using ScalarType = double;  //!< floating-point type
+  //! the bidirectional load observer (kind "bidirectional_load_observer")
+  using Bidirectional = estimation::BidirectionalLoadObserver<double>;
   using Signals = estimation::JointSignals<double>;       //!< one joint's signals for one tick
   using Yaw = estimation::ClampModel2016<double>;         //!< the Hammerstein-Wiener kind
   using StallHold = estimation::StallHold<double>;        //!< kind "stall_hold"
   using Observer = estimation::PushLoadObserver<double>;  //!< kind "push_load_observer"
+  //! The model's state, zero-padded to the largest.
+  using State = Eigen::Matrix<double, Bidirectional::State::RowsAtCompileTime, 1>;
 
  private:
   template <typename F>
   decltype(auto) visit(F&& f) const noexcept {
     if (const auto* m = std::get_if<Yaw>(&model_)) return f(*m);
     if (const auto* m = std::get_if<StallHold>(&model_)) return f(*m);
-    return f(*std::get_if<Observer>(&model_));
+    if (const auto* m = std::get_if<Observer>(&model_)) return f(*m);
+    return f(*std::get_if<Bidirectional>(&model_));
   }
   template <typename F>
   decltype(auto) visit_mutable(F&& f) noexcept {
     if (auto* m = std::get_if<Yaw>(&model_)) return f(*m);
     if (auto* m = std::get_if<StallHold>(&model_)) return f(*m);
-    return f(*std::get_if<Observer>(&model_));
+    if (auto* m = std::get_if<Observer>(&model_)) return f(*m);
+    return f(*std::get_if<Bidirectional>(&model_));
   }
   template <typename M>
   static constexpr int size_of = static_cast<int>(M::State::RowsAtCompileTime);
-  static_assert(size_of<Yaw> <= 11 && size_of<StallHold> <= 11 && size_of<Observer> <= 11);
+  static_assert(size_of<Yaw> <= size_of<Bidirectional> &&
+                size_of<StallHold> <= size_of<Bidirectional> &&
+                size_of<Observer> <= size_of<Bidirectional>);
 
  public:
   //! The Hammerstein-Wiener clamp model.
@@ -545,8 +555,10 @@ class ClampForceModel {
   explicit ClampForceModel(const StallHold& m) : model_(m) {}
   //! The push-load observer.
   explicit ClampForceModel(const Observer& m) : model_(m) {}
+  //! The bidirectional load observer.
+  explicit ClampForceModel(const Bidirectional& m) : model_(m) {}
 
-  //! True for the kinds with their own friction handling (stall_hold, push_load_observer).
+  //! True for the kinds with their own friction handling (stall_hold, the observers).
   [[nodiscard]] bool is_joint_model() const noexcept { return model_.index() != 0; }
   //! The Hammerstein-Wiener model, or null for another kind.
   [[nodiscard]] const Yaw* yaw() const noexcept { return std::get_if<Yaw>(&model_); }
@@ -556,6 +568,10 @@ class ClampForceModel {
   }
   //! The push-load observer, or null for another kind.
   [[nodiscard]] const Observer* observer() const noexcept { return std::get_if<Observer>(&model_); }
+  //! The bidirectional load observer, or null for another kind.
+  [[nodiscard]] const Bidirectional* bidirectional() const noexcept {
+    return std::get_if<Bidirectional>(&model_);
+  }
 
   //! s, the model's sample time.
   [[nodiscard]] double sample_time() const noexcept {
@@ -599,7 +615,7 @@ class ClampForceModel {
   }
 
  private:
-  std::variant<Yaw, StallHold, Observer> model_;
+  std::variant<Yaw, StallHold, Observer, Bidirectional> model_;
 };
 
 static_assert(estimation::JointForceModel<ClampForceModel>);
@@ -634,11 +650,17 @@ inline constexpr int bridge_clamp_states = 6;
         using P = estimation::StallHoldParameters<double>;
         return ClampForceModel(estimation::StallHold<double>(stall_hold_parameters<P>(file)));
       }
-      if (file.push_load_observer->command_gain != 0) {
+      if (file.command_reference().first != 0) {
         ENDOHAPTICS_THROW(Error(  // with_context below adds the file's name
-            "the push_load_observer refers its current to the commanded current (a third "
-            "input), which the sbRIO protocol does not carry: identify the bridge's model from "
-            "the current and the velocity only"));
+            "the " + std::string(to_string(file.kind())) +
+            " refers its current to the commanded current (a third input), which the sbRIO "
+            "protocol does not carry: identify the bridge's model from the current and the "
+            "velocity only"));
+      }
+      if (file.kind() == ModelKind::bidirectional_load_observer) {
+        using P = estimation::BidirectionalLoadObserverParameters<double>;
+        return ClampForceModel(estimation::BidirectionalLoadObserver<double>(
+            bidirectional_observer_parameters<P>(file)));
       }
       using P = estimation::PushLoadObserverParameters<double>;
       return ClampForceModel(
@@ -673,7 +695,7 @@ inline constexpr int bridge_clamp_states = 6;
 
 //! The estimator settings the bridge runs with `models`: `config.estimator`, except that the
 //! 5.2.3 friction gate of both clamps is opened (level 0) when their model is a joint model
-//! (stall_hold, push_load_observer): those models hold their own friction (the dead zone, the
+//! (stall_hold, the observers): those models hold their own friction (the dead zone, the
 //! push regime), and the gate would drop the force they hold while the jaw is stalled against
 //! an object and the current has relaxed below the friction level.
 [[nodiscard]] inline estimation::ForceEstimatorSettings<double> bridge_estimator_settings(

@@ -1,8 +1,9 @@
 //! @file
 //! Identified-model files (JSON, nlohmann::json): a discrete state-space model (eq. 4.2), a
 //! Hammerstein-Wiener model (figure 4.1) with dead-zone/saturation breakpoints, or a joint force
-//! model's parameters (kinds "stall_hold" and "push_load_observer": estimation/stall_hold.hpp,
-//! estimation/push_load_observer.hpp), with sample time in s, input/output names and units,
+//! model's parameters (kinds "stall_hold", "push_load_observer" and "bidirectional_load_observer":
+//! estimation/stall_hold.hpp, push_load_observer.hpp, bidirectional_load_observer.hpp), with
+//! sample time in s, input/output names and units,
 //! initial state and provenance (method, order, files, fit, date).
 //! Loading validates every field and throws Error naming the file, the field and the value.
 //! Format: docs/models/subspace.md, "Model files". Includes only core/ and model/ (a program
@@ -12,6 +13,7 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -67,10 +69,12 @@ enum class ModelKind : std::uint8_t {
   hammerstein_wiener,  //!< input maps, linear block, output maps (figure 4.1)
   stall_hold,          //!< estimation::StallHold (estimation/stall_hold.hpp)
   push_load_observer,  //!< estimation::PushLoadObserver (estimation/push_load_observer.hpp)
+  //! estimation::BidirectionalLoadObserver (estimation/bidirectional_load_observer.hpp)
+  bidirectional_load_observer,
 };
 
 //! The "kind" text of `kind` ("state_space", "hammerstein_wiener", "stall_hold",
-//! "push_load_observer").
+//! "push_load_observer", "bidirectional_load_observer").
 [[nodiscard]] constexpr std::string_view to_string(ModelKind kind) noexcept {
   switch (kind) {
     case ModelKind::state_space:
@@ -81,6 +85,8 @@ enum class ModelKind : std::uint8_t {
       return "stall_hold";
     case ModelKind::push_load_observer:
       return "push_load_observer";
+    case ModelKind::bidirectional_load_observer:
+      return "bidirectional_load_observer";
   }
   return "unknown";
 }
@@ -127,6 +133,41 @@ struct PushLoadObserverSettings {
   double reference_offset = 0;  //!< b_ref, A
 };
 
+//! Kind "bidirectional_load_observer": the parameters of estimation::BidirectionalLoadObserver
+//! (same names and units; load in the output's unit) without the sample time, and the current's
+//! offset reference as for the push-load observer. The arrays hold one value per stop operator.
+struct BidirectionalObserverSettings {
+  //! One value per stop operator.
+  using Stops = std::array<double, static_cast<std::size_t>(model::bidirectional_observer_stops)>;
+  double current_cutoff = 10;                                         //!< Hz, in (0, Nyquist)
+  double velocity_cutoff = 20;                                        //!< Hz, in (0, Nyquist)
+  double direction_scale = 0.05;                                      //!< rad, > 0
+  double velocity_threshold = 0.05;                                   //!< rad/s, >= 0
+  double direction_threshold = 0.5;                                   //!< in (0, 1]
+  Stops stop_thresholds{0.005, 0.02, 0.05, 0.1, 0.2, 0.3, 0.4, 0.5};  //!< rad, increasing, > 0
+  double start_travel = 0.005;                                        //!< rad, >= 0
+  double forward_gain = 1;               //!< A per load unit, |.| > |forward_gain_stroke|
+  double forward_gain_stroke = 0;        //!< A per load unit per unit of the widest operator
+  double forward_offset = 0;             //!< A
+  double forward_offset_stroke = 0;      //!< A
+  double backward_gain = -1;             //!< A per load unit, |.| > |backward_gain_stroke|
+  double backward_gain_stroke = 0;       //!< A per load unit
+  double backward_offset = 0;            //!< A
+  double backward_offset_stroke = 0;     //!< A
+  double forward_variance = 1;           //!< load unit^2, > 0
+  double backward_variance = 1;          //!< load unit^2, > 0
+  double load_process_variance = 0;      //!< load unit^2 per step, >= 0
+  double friction_variance = 1;          //!< load unit^2, >= 0
+  double friction_process_variance = 0;  //!< load unit^2 per step, >= 0
+  double initial_load = 0;               //!< load units
+  double initial_variance = 1;           //!< load unit^2, >= 0
+  double output_offset = 0;              //!< load units
+  Stops output_shape{};                  //!< load units
+  Stops output_shape_per_load{};         //!< dimensionless
+  double command_gain = 0;      //!< A per command unit: 0 (two inputs) or non-zero (a third)
+  double reference_offset = 0;  //!< A
+};
+
 //! The content of a model file, validated on load and save. The model (or a Hammerstein-Wiener
 //! model's linear block) is the library's one linear-model type, `model::DynamicStateSpace<>`,
 //! whose state is the file's x0; `model::StateSpace<Nx, Nu, Ny>(file.state_space)` gives the
@@ -156,6 +197,9 @@ struct ModelFile {
   //! for the encoder angle: the observer uses only its increments; with a non-zero command_gain
   //! a third, the current command; 1 output: the load).
   std::optional<PushLoadObserverSettings> push_load_observer{};
+  //! Kind "bidirectional_load_observer": its parameters; `state_space` a placeholder and the
+  //! inputs as for push_load_observer.
+  std::optional<BidirectionalObserverSettings> bidirectional_load_observer{};
 
   //! True when the file describes a Hammerstein-Wiener model ("kind": "hammerstein_wiener").
   [[nodiscard]] bool is_hammerstein_wiener() const noexcept {
@@ -165,12 +209,26 @@ struct ModelFile {
   [[nodiscard]] ModelKind kind() const noexcept {
     if (stall_hold) return ModelKind::stall_hold;
     if (push_load_observer) return ModelKind::push_load_observer;
+    if (bidirectional_load_observer) return ModelKind::bidirectional_load_observer;
     return is_hammerstein_wiener() ? ModelKind::hammerstein_wiener : ModelKind::state_space;
   }
   //! True for the kinds that are a joint force model, not a linear block (stall_hold,
-  //! push_load_observer): `state_space` is then only a placeholder.
+  //! push_load_observer, bidirectional_load_observer): `state_space` is then only a placeholder.
   [[nodiscard]] bool is_joint_model() const noexcept {
-    return stall_hold.has_value() || push_load_observer.has_value();
+    return stall_hold.has_value() || push_load_observer.has_value() ||
+           bidirectional_load_observer.has_value();
+  }
+  //! The current's offset reference to the command (G, b_ref) of an observer kind: G is 0 when
+  //! there is none (and for the other kinds).
+  [[nodiscard]] std::pair<double, double> command_reference() const noexcept {
+    if (push_load_observer) {
+      return {push_load_observer->command_gain, push_load_observer->reference_offset};
+    }
+    if (bidirectional_load_observer) {
+      return {bidirectional_load_observer->command_gain,
+              bidirectional_load_observer->reference_offset};
+    }
+    return {0.0, 0.0};
   }
 };
 
@@ -253,6 +311,11 @@ ENDOHAPTICS_DECL void validate_settings(const StallHoldSettings& p, const std::s
 ENDOHAPTICS_DECL void validate_settings(const PushLoadObserverSettings& p, double sample_time,
                                         const std::string& where);
 
+//! As above, for BidirectionalObserverSettings (the rules of
+//! estimation::BidirectionalLoadObserverParameters::validate).
+ENDOHAPTICS_DECL void validate_settings(const BidirectionalObserverSettings& p, double sample_time,
+                                        const std::string& where);
+
 //! The placeholder linear block of a joint-model kind: one state, all zero, `nu` inputs, one
 //! output, the sample time (s). Throws Error on a sample time that is not finite and > 0.
 ENDOHAPTICS_DECL model::DynamicStateSpace<> joint_model_placeholder(Eigen::Index nu,
@@ -279,6 +342,12 @@ ENDOHAPTICS_DECL void require_kind(const ModelFile& f, ModelKind kind, const std
 [[nodiscard]] ENDOHAPTICS_DECL ModelFile make_push_load_observer_file(
     const PushLoadObserverSettings& settings, double sample_time, std::vector<SignalInfo> inputs,
     std::vector<SignalInfo> outputs, ModelProvenance provenance = {});
+
+//! A "bidirectional_load_observer" model file, as make_stall_hold_file.
+[[nodiscard]] ENDOHAPTICS_DECL ModelFile
+make_bidirectional_observer_file(const BidirectionalObserverSettings& settings, double sample_time,
+                                 std::vector<SignalInfo> inputs, std::vector<SignalInfo> outputs,
+                                 ModelProvenance provenance = {});
 
 //! The parameters of a "stall_hold" file as `Parameters` (estimation::StallHoldParameters<S>;
 //! a template so that this header does not include estimation/): every field and the sample
@@ -335,19 +404,102 @@ template <typename Parameters>
   return p;
 }
 
-//! The current's offset reference of a "push_load_observer" file as `Parameters`
-//! (estimation::CurrentOffsetReferenceParameters<S>), or none when its command_gain is 0.
+//! The current's offset reference of an observer file ("push_load_observer",
+//! "bidirectional_load_observer") as `Parameters`
+//! (estimation::CurrentOffsetReferenceParameters<S>), or none when its command_gain is 0 (or the
+//! file is of another kind).
 template <typename Parameters>
 [[nodiscard]] std::optional<Parameters> current_offset_reference_parameters(const ModelFile& f) {
-  detail::model_file::require_kind(f, ModelKind::push_load_observer,
-                                   "current_offset_reference_parameters");
-  const PushLoadObserverSettings& m = *f.push_load_observer;
-  if (m.command_gain == 0) return std::nullopt;
+  const auto [gain, offset] = f.command_reference();
+  if (gain == 0) return std::nullopt;
   using S = decltype(Parameters{}.command_gain);
   Parameters p;
-  p.command_gain = static_cast<S>(m.command_gain);
-  p.reference_offset = static_cast<S>(m.reference_offset);
+  p.command_gain = static_cast<S>(gain);
+  p.reference_offset = static_cast<S>(offset);
   return p;
+}
+
+//! The parameters of a "bidirectional_load_observer" file as `Parameters`
+//! (estimation::BidirectionalLoadObserverParameters<S>), as stall_hold_parameters.
+template <typename Parameters>
+[[nodiscard]] Parameters bidirectional_observer_parameters(const ModelFile& f) {
+  detail::model_file::require_kind(f, ModelKind::bidirectional_load_observer,
+                                   "bidirectional_observer_parameters");
+  using S = decltype(Parameters{}.current_cutoff);
+  const BidirectionalObserverSettings& m = *f.bidirectional_load_observer;
+  Parameters p;
+  p.current_cutoff = static_cast<S>(m.current_cutoff);
+  p.velocity_cutoff = static_cast<S>(m.velocity_cutoff);
+  p.direction_scale = static_cast<S>(m.direction_scale);
+  p.velocity_threshold = static_cast<S>(m.velocity_threshold);
+  p.direction_threshold = static_cast<S>(m.direction_threshold);
+  p.start_travel = static_cast<S>(m.start_travel);
+  p.forward_gain = static_cast<S>(m.forward_gain);
+  p.forward_gain_stroke = static_cast<S>(m.forward_gain_stroke);
+  p.forward_offset = static_cast<S>(m.forward_offset);
+  p.forward_offset_stroke = static_cast<S>(m.forward_offset_stroke);
+  p.backward_gain = static_cast<S>(m.backward_gain);
+  p.backward_gain_stroke = static_cast<S>(m.backward_gain_stroke);
+  p.backward_offset = static_cast<S>(m.backward_offset);
+  p.backward_offset_stroke = static_cast<S>(m.backward_offset_stroke);
+  p.forward_variance = static_cast<S>(m.forward_variance);
+  p.backward_variance = static_cast<S>(m.backward_variance);
+  p.load_process_variance = static_cast<S>(m.load_process_variance);
+  p.friction_variance = static_cast<S>(m.friction_variance);
+  p.friction_process_variance = static_cast<S>(m.friction_process_variance);
+  p.initial_load = static_cast<S>(m.initial_load);
+  p.initial_variance = static_cast<S>(m.initial_variance);
+  p.output_offset = static_cast<S>(m.output_offset);
+  for (std::size_t j = 0; j < m.stop_thresholds.size(); ++j) {
+    const auto i = static_cast<Eigen::Index>(j);
+    p.stop_thresholds[i] = static_cast<S>(m.stop_thresholds[j]);
+    p.output_shape[i] = static_cast<S>(m.output_shape[j]);
+    p.output_shape_per_load[i] = static_cast<S>(m.output_shape_per_load[j]);
+  }
+  p.sample_time = static_cast<S>(f.state_space.sample_time());
+  return p;
+}
+
+//! The other way: the settings of a "bidirectional_load_observer" file from `p`
+//! (estimation::BidirectionalLoadObserverParameters<S>) and the reference `reference`, field for
+//! field beside bidirectional_observer_parameters.
+template <typename Parameters, typename Reference>
+[[nodiscard]] BidirectionalObserverSettings bidirectional_observer_settings(
+    const Parameters& p, const std::optional<Reference>& reference) {
+  BidirectionalObserverSettings m;
+  m.current_cutoff = static_cast<double>(p.current_cutoff);
+  m.velocity_cutoff = static_cast<double>(p.velocity_cutoff);
+  m.direction_scale = static_cast<double>(p.direction_scale);
+  m.velocity_threshold = static_cast<double>(p.velocity_threshold);
+  m.direction_threshold = static_cast<double>(p.direction_threshold);
+  m.start_travel = static_cast<double>(p.start_travel);
+  m.forward_gain = static_cast<double>(p.forward_gain);
+  m.forward_gain_stroke = static_cast<double>(p.forward_gain_stroke);
+  m.forward_offset = static_cast<double>(p.forward_offset);
+  m.forward_offset_stroke = static_cast<double>(p.forward_offset_stroke);
+  m.backward_gain = static_cast<double>(p.backward_gain);
+  m.backward_gain_stroke = static_cast<double>(p.backward_gain_stroke);
+  m.backward_offset = static_cast<double>(p.backward_offset);
+  m.backward_offset_stroke = static_cast<double>(p.backward_offset_stroke);
+  m.forward_variance = static_cast<double>(p.forward_variance);
+  m.backward_variance = static_cast<double>(p.backward_variance);
+  m.load_process_variance = static_cast<double>(p.load_process_variance);
+  m.friction_variance = static_cast<double>(p.friction_variance);
+  m.friction_process_variance = static_cast<double>(p.friction_process_variance);
+  m.initial_load = static_cast<double>(p.initial_load);
+  m.initial_variance = static_cast<double>(p.initial_variance);
+  m.output_offset = static_cast<double>(p.output_offset);
+  for (std::size_t j = 0; j < m.stop_thresholds.size(); ++j) {
+    const auto i = static_cast<Eigen::Index>(j);
+    m.stop_thresholds[j] = static_cast<double>(p.stop_thresholds[i]);
+    m.output_shape[j] = static_cast<double>(p.output_shape[i]);
+    m.output_shape_per_load[j] = static_cast<double>(p.output_shape_per_load[i]);
+  }
+  if (reference) {
+    m.command_gain = static_cast<double>(reference->command_gain);
+    m.reference_offset = static_cast<double>(reference->reference_offset);
+  }
+  return m;
 }
 
 //! The other way: the settings of a "push_load_observer" file from `p`

@@ -85,10 +85,105 @@ ENDOHAPTICS_DECL void validate_settings(const PushLoadObserverSettings& p, doubl
                     p.reference_offset, "0 when command_gain is 0");
 }
 
-// The inputs a joint model takes: (current, velocity), and for a push_load_observer that refers
-// its current to the command, that command third.
+// The scalar fields of BidirectionalObserverSettings by their file names (one list for reading,
+// writing and checking), the reference pair apart (optional, both or none).
+using BidirectionalScalar = double BidirectionalObserverSettings::*;
+inline constexpr std::pair<const char*, BidirectionalScalar> bidirectional_scalars[] = {
+    {"current_cutoff", &BidirectionalObserverSettings::current_cutoff},
+    {"velocity_cutoff", &BidirectionalObserverSettings::velocity_cutoff},
+    {"direction_scale", &BidirectionalObserverSettings::direction_scale},
+    {"velocity_threshold", &BidirectionalObserverSettings::velocity_threshold},
+    {"direction_threshold", &BidirectionalObserverSettings::direction_threshold},
+    {"start_travel", &BidirectionalObserverSettings::start_travel},
+    {"forward_gain", &BidirectionalObserverSettings::forward_gain},
+    {"forward_gain_stroke", &BidirectionalObserverSettings::forward_gain_stroke},
+    {"forward_offset", &BidirectionalObserverSettings::forward_offset},
+    {"forward_offset_stroke", &BidirectionalObserverSettings::forward_offset_stroke},
+    {"backward_gain", &BidirectionalObserverSettings::backward_gain},
+    {"backward_gain_stroke", &BidirectionalObserverSettings::backward_gain_stroke},
+    {"backward_offset", &BidirectionalObserverSettings::backward_offset},
+    {"backward_offset_stroke", &BidirectionalObserverSettings::backward_offset_stroke},
+    {"forward_variance", &BidirectionalObserverSettings::forward_variance},
+    {"backward_variance", &BidirectionalObserverSettings::backward_variance},
+    {"load_process_variance", &BidirectionalObserverSettings::load_process_variance},
+    {"friction_variance", &BidirectionalObserverSettings::friction_variance},
+    {"friction_process_variance", &BidirectionalObserverSettings::friction_process_variance},
+    {"initial_load", &BidirectionalObserverSettings::initial_load},
+    {"initial_variance", &BidirectionalObserverSettings::initial_variance},
+    {"output_offset", &BidirectionalObserverSettings::output_offset}};
+using BidirectionalArray = BidirectionalObserverSettings::Stops BidirectionalObserverSettings::*;
+inline constexpr std::pair<const char*, BidirectionalArray> bidirectional_arrays[] = {
+    {"stop_thresholds", &BidirectionalObserverSettings::stop_thresholds},
+    {"output_shape", &BidirectionalObserverSettings::output_shape},
+    {"output_shape_per_load", &BidirectionalObserverSettings::output_shape_per_load}};
+
+ENDOHAPTICS_DECL void validate_settings(const BidirectionalObserverSettings& p, double sample_time,
+                                        const std::string& where) {
+  const double nyquist = 0.5 / sample_time;
+  const double max = max_parameter;
+  // Every number within the joint-model bound first (comparisons fail for NaN).
+  for (const auto& [name, member] : bidirectional_scalars) {
+    require_parameter(std::fabs(p.*member) <= max, where, name, p.*member, "in [-1e6, 1e6]");
+  }
+  for (const auto& [name, member] : bidirectional_arrays) {
+    for (std::size_t j = 0; j < (p.*member).size(); ++j) {
+      const std::string field = std::string(name) + "[" + std::to_string(j) + "]";
+      require_parameter(std::fabs((p.*member)[j]) <= max, where, field.c_str(), (p.*member)[j],
+                        "in [-1e6, 1e6]");
+    }
+  }
+  require_parameter(p.current_cutoff > 0 && p.current_cutoff < nyquist, where, "current_cutoff",
+                    p.current_cutoff, "in (0, Nyquist = 0.5 / sample_time_s) Hz");
+  require_parameter(p.velocity_cutoff > 0 && p.velocity_cutoff < nyquist, where, "velocity_cutoff",
+                    p.velocity_cutoff, "in (0, Nyquist = 0.5 / sample_time_s) Hz");
+  require_parameter(p.direction_scale > 0, where, "direction_scale", p.direction_scale, "> 0 rad");
+  require_parameter(p.velocity_threshold >= 0, where, "velocity_threshold", p.velocity_threshold,
+                    ">= 0 rad/s");
+  require_parameter(p.direction_threshold > 0 && p.direction_threshold <= 1, where,
+                    "direction_threshold", p.direction_threshold, "in (0, 1]");
+  for (std::size_t j = 0; j < p.stop_thresholds.size(); ++j) {
+    const std::string field = "stop_thresholds[" + std::to_string(j) + "]";
+    require_parameter(
+        p.stop_thresholds[j] > 0 && (j == 0 || p.stop_thresholds[j] > p.stop_thresholds[j - 1]),
+        where, field.c_str(), p.stop_thresholds[j], "> 0 and above the threshold before it");
+  }
+  require_parameter(p.start_travel >= 0, where, "start_travel", p.start_travel, ">= 0 rad");
+  require_parameter(std::fabs(p.forward_gain) >= ModelFile::min_current_per_load &&
+                        std::fabs(p.forward_gain_stroke) < std::fabs(p.forward_gain),
+                    where, "forward_gain", p.forward_gain,
+                    "of magnitude at least 1e-9 and above |forward_gain_stroke|");
+  require_parameter(std::fabs(p.backward_gain) >= ModelFile::min_current_per_load &&
+                        std::fabs(p.backward_gain_stroke) < std::fabs(p.backward_gain),
+                    where, "backward_gain", p.backward_gain,
+                    "of magnitude at least 1e-9 and above |backward_gain_stroke|");
+  require_parameter(std::fabs(p.forward_gain / p.backward_gain) <= max, where, "forward_gain",
+                    p.forward_gain, "at most 1e6 times |backward_gain|");
+  require_parameter(p.forward_variance > 0, where, "forward_variance", p.forward_variance,
+                    "in (0, 1e6]");
+  require_parameter(p.backward_variance > 0, where, "backward_variance", p.backward_variance,
+                    "in (0, 1e6]");
+  const std::pair<const char*, double> non_negative[] = {
+      {"load_process_variance", p.load_process_variance},
+      {"friction_variance", p.friction_variance},
+      {"friction_process_variance", p.friction_process_variance},
+      {"initial_variance", p.initial_variance}};
+  for (const auto& [name, v] : non_negative) {
+    require_parameter(v >= 0, where, name, v, "in [0, 1e6]");
+  }
+  require_parameter(
+      p.command_gain == 0 || (std::fabs(p.command_gain) >= ModelFile::min_current_per_load &&
+                              std::fabs(p.command_gain) <= max),
+      where, "command_gain", p.command_gain, "0 or of magnitude in [1e-9, 1e6]");
+  require_parameter(std::fabs(p.reference_offset) <= max, where, "reference_offset",
+                    p.reference_offset, "in [-1e6, 1e6]");
+  require_parameter(p.command_gain != 0 || p.reference_offset == 0, where, "reference_offset",
+                    p.reference_offset, "0 when command_gain is 0");
+}
+
+// The inputs a joint model takes: (current, velocity), and for an observer that refers its
+// current to the command, that command third.
 inline std::size_t joint_model_inputs(const ModelFile& m) {
-  return m.push_load_observer && m.push_load_observer->command_gain != 0 ? 3 : 2;
+  return m.command_reference().first != 0 ? 3 : 2;
 }
 
 ENDOHAPTICS_DECL model::DynamicStateSpace<> joint_model_placeholder(Eigen::Index nu,
@@ -115,10 +210,12 @@ ENDOHAPTICS_DECL void require_kind(const ModelFile& f, ModelKind kind, const std
 
 ENDOHAPTICS_DECL void validate(const ModelFile& m, const std::string& where) {
   const model::DynamicStateSpace<>& ss = m.state_space;
-  if (m.stall_hold && m.push_load_observer) {
+  if (int(m.stall_hold.has_value()) + int(m.push_load_observer.has_value()) +
+          int(m.bidirectional_load_observer.has_value()) >
+      1) {
     fail(where +
-         ": a model file holds one joint model, not both stall_hold and push_load_observer "
-         "parameters");
+         ": a model file holds one joint model, not the parameters of several (stall_hold, "
+         "push_load_observer, bidirectional_load_observer)");
   }
   if (m.is_joint_model()) {
     const std::string kind(to_string(m.kind()));
@@ -142,6 +239,9 @@ ENDOHAPTICS_DECL void validate(const ModelFile& m, const std::string& where) {
     }
     if (m.stall_hold) validate_settings(*m.stall_hold, where);
     if (m.push_load_observer) validate_settings(*m.push_load_observer, ss.sample_time(), where);
+    if (m.bidirectional_load_observer) {
+      validate_settings(*m.bidirectional_load_observer, ss.sample_time(), where);
+    }
   }
 
   const auto nu = static_cast<std::size_t>(ss.input_size());
@@ -342,9 +442,9 @@ ENDOHAPTICS_DECL ModelFile joint_model_from_json(const json& j, const std::strin
            "\" (its parameters are in \"parameters\")");
     }
   }
-  // 3 inputs only for a push_load_observer that refers its current to the command (validate()
-  // checks that against its parameters below).
-  const std::size_t most = kind == "push_load_observer" ? 3 : 2;
+  // 3 inputs only for an observer that refers its current to the command (validate() checks that
+  // against its parameters below).
+  const std::size_t most = kind == "stall_hold" ? 2 : 3;
   if (inputs.size() < 2 || inputs.size() > most || outputs.size() != 1) {
     fail(where + ": kind \"" + kind + "\" needs 2 inputs (current, velocity" +
          (most == 3 ? std::string("; 3 with the current command") : std::string()) +
@@ -377,6 +477,33 @@ ENDOHAPTICS_DECL ModelFile joint_model_from_json(const json& j, const std::strin
     known.emplace_back("side");
     p.side = text(field(params, "side", where + ": parameters"), where, "parameters.side");
     m.stall_hold = p;
+  } else if (kind == "bidirectional_load_observer") {
+    BidirectionalObserverSettings p;
+    for (const auto& [name, member] : bidirectional_scalars) get(name, p.*member);
+    for (const auto& [name, member] : bidirectional_arrays) {
+      known.emplace_back(name);
+      const json& array = field(params, name, where + ": parameters");
+      if (!array.is_array() || array.size() != (p.*member).size()) {
+        fail(where + ": field \"parameters." + name + "\" must be an array of " +
+             std::to_string((p.*member).size()) + " numbers (one per stop operator), got " +
+             detail::json_text::show(array));
+      }
+      for (std::size_t i = 0; i < array.size(); ++i) {
+        (p.*member)[i] = number(array[i], where,
+                                std::string("parameters.") + name + "[" + std::to_string(i) + "]");
+      }
+    }
+    if (params.contains("command_gain") != params.contains("reference_offset")) {
+      fail(where + ": parameters: command_gain and reference_offset go together (both or none)");
+    }
+    if (params.contains("command_gain")) {
+      get("command_gain", p.command_gain);
+      get("reference_offset", p.reference_offset);
+    } else {
+      known.emplace_back("command_gain");
+      known.emplace_back("reference_offset");
+    }
+    m.bidirectional_load_observer = p;
   } else {
     PushLoadObserverSettings p;
     get("current_cutoff", p.current_cutoff);
@@ -543,6 +670,16 @@ ENDOHAPTICS_DECL nlohmann::json to_json(const ModelFile& m) {
       j["parameters"]["reference_offset"] = p.reference_offset;
     }
   }
+  if (m.bidirectional_load_observer) {
+    const BidirectionalObserverSettings& p = *m.bidirectional_load_observer;
+    nlohmann::json& params = j["parameters"] = nlohmann::json::object();
+    for (const auto& [name, member] : mf::bidirectional_scalars) params[name] = p.*member;
+    for (const auto& [name, member] : mf::bidirectional_arrays) params[name] = p.*member;
+    if (p.command_gain != 0) {
+      params["command_gain"] = p.command_gain;
+      params["reference_offset"] = p.reference_offset;
+    }
+  }
   if (!m.is_joint_model()) mf::add_linear_block(j, m);
   const ModelProvenance& p = m.provenance;
   j["provenance"] = {{"method", p.method},
@@ -569,11 +706,12 @@ ENDOHAPTICS_DECL ModelFile model_from_json(const nlohmann::json& j, const std::s
              std::to_string(ModelFile::format_version));
   }
   const std::string kind = mf::text(mf::field(j, "kind", where), where, "kind");
-  if (kind != "state_space" && kind != "hammerstein_wiener" && kind != "stall_hold" &&
-      kind != "push_load_observer") {
+  const bool joint =
+      kind == "stall_hold" || kind == "push_load_observer" || kind == "bidirectional_load_observer";
+  if (kind != "state_space" && kind != "hammerstein_wiener" && !joint) {
     mf::fail(where + ": field \"kind\" is \"" + kind +
-             "\", expected \"state_space\", \"hammerstein_wiener\", \"stall_hold\" or "
-             "\"push_load_observer\"");
+             "\", expected \"state_space\", \"hammerstein_wiener\", \"stall_hold\", "
+             "\"push_load_observer\" or \"bidirectional_load_observer\"");
   }
   const double sample_time =
       mf::number(mf::field(j, "sample_time_s", where), where, "sample_time_s");
@@ -584,7 +722,7 @@ ENDOHAPTICS_DECL ModelFile model_from_json(const nlohmann::json& j, const std::s
   std::vector<SignalInfo> inputs = mf::signals_from_json(j, "inputs", where);
   std::vector<SignalInfo> outputs = mf::signals_from_json(j, "outputs", where);
   if (outputs.empty()) mf::fail(where + ": field \"outputs\" must name at least one output");
-  if (kind == "stall_hold" || kind == "push_load_observer") {
+  if (joint) {
     return mf::joint_model_from_json(j, kind, sample_time, std::move(inputs), std::move(outputs),
                                      where);
   }
@@ -660,6 +798,25 @@ ENDOHAPTICS_DECL ModelFile make_push_load_observer_file(const PushLoadObserverSe
               .push_load_observer = settings};
   if (f.provenance.date.empty()) f.provenance.date = utc_date_today();
   mf::validate(f, "make_push_load_observer_file");
+  return f;
+}
+
+ENDOHAPTICS_DECL ModelFile make_bidirectional_observer_file(
+    const BidirectionalObserverSettings& settings, double sample_time,
+    std::vector<SignalInfo> inputs, std::vector<SignalInfo> outputs, ModelProvenance provenance) {
+  namespace mf = detail::model_file;
+  ModelFile f{.state_space = mf::with_context("make_bidirectional_observer_file",
+                                              [&] {
+                                                return mf::joint_model_placeholder(
+                                                    static_cast<Eigen::Index>(inputs.size()),
+                                                    sample_time);
+                                              }),
+              .inputs = std::move(inputs),
+              .outputs = std::move(outputs),
+              .provenance = std::move(provenance),
+              .bidirectional_load_observer = settings};
+  if (f.provenance.date.empty()) f.provenance.date = utc_date_today();
+  mf::validate(f, "make_bidirectional_observer_file");
   return f;
 }
 
