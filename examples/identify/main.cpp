@@ -3,7 +3,8 @@
 // identifies with N4SID/MOESP/CVA (or all three), optionally with input dead zones, and chooses
 // method, dead zones and order by the causal score (x0 from the inputs, warm-up excluded, inputs
 // filtered forward only, output as logged), refusing unstable and near-integrating models.
-// Joint force models (--method stall_hold, push_load_observer: workflow/joint_models.hpp) are
+// Joint force models (--method stall_hold, push_load_observer, bidirectional_load_observer:
+// workflow/joint_models.hpp) are
 // further families; with several, the family is chosen by an inner cross-validation on the
 // training files (workflow::choose_family). Each format has recommended defaults
 // (workflow/format_defaults.hpp). Writes a JSON model.
@@ -57,8 +58,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   auto* method_opt = app.add_option(
       "--method", method,
-      "n4sid, moesp, cva, best (all three, highest causal score), static, stall_hold or "
-      "push_load_observer, or a comma list of them (every family fitted, the best by an inner "
+      "n4sid, moesp, cva, best (all three, highest causal score), static, stall_hold, "
+      "push_load_observer or bidirectional_load_observer, or a comma list of them (every family "
+      "fitted, the best by an inner "
       "cross-validation on the training files chosen) [format]");
   auto* deadzone_opt = app.add_option(
       "--deadzone", deadzone,
@@ -150,7 +152,7 @@ int main(int argc, char** argv) {
     options.deadzone = wf::parse_deadzone(deadzone, sel.inputs.size());
     // The joint models take (current, velocity) -> one output; from the format's defaults they
     // are left out (with a note) for other signal lists, asked for by --method they are an error.
-    // (push_load_observer: or 3, the current command third).
+    // (the observers: or 3, the current command third).
     const auto joint_inputs_ok = [&] {
       const bool stall = std::find(joint_kinds.begin(), joint_kinds.end(),
                                    files::ModelKind::stall_hold) != joint_kinds.end();
@@ -162,11 +164,12 @@ int main(int argc, char** argv) {
         throw endohaptics::Error(
             "--method " + method +
             ": joint models need 1 output and the inputs (current, velocity): stall_hold "
-            "those 2, push_load_observer 2 or 3 (current, velocity, current command)");
+            "those 2, push_load_observer and bidirectional_load_observer 2 or 3 (current, "
+            "velocity, current command)");
       }
       fmt::print(
           "note: the format's joint models ({}) need 2 inputs (current, velocity; "
-          "push_load_observer: a third, the current command, optional) and 1 output: not "
+          "the observers: a third, the current command, optional) and 1 output: not "
           "fitted\n",
           method);
       joint_kinds.clear();

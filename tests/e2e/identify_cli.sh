@@ -182,7 +182,7 @@ case $scenario in
     at_least "$(mean_fit "$work/rp.out")" 95 || fail "replay fit < 95 %"
     expect_error "has no linear state to fit to the output" \
       "$replay" --model "$work/joint.json" --format csv --log "$work/h3.csv" --x0 oracle
-    expect_error "push_load_observer 2 or 3 (current, velocity, current command)" \
+    expect_error "push_load_observer and bidirectional_load_observer 2 or 3 (current, velocity" \
       "$identify" --log "$work/h1.csv" --format csv --input current --output force \
       --method push_load_observer
     echo "PASS: stall_hold chosen and replayed, fit $(mean_fit "$work/rp.out") % (causal)"

@@ -1,5 +1,6 @@
 // The joint force models in the identify/replay workflow (issue 15): simulation and causal
-// scoring of model files of kind stall_hold / push_load_observer, their fit from prepared logs,
+// scoring of model files of kind stall_hold / push_load_observer / bidirectional_load_observer,
+// their fit from prepared logs,
 // the family choice by inner cross-validation, and the formats' defaults.
 #include <doctest/doctest.h>
 
@@ -230,12 +231,77 @@ TEST_CASE("joint models: an observer with the current command third, and hostile
         std::string::npos);
 }
 
+TEST_CASE("joint models: the bidirectional observer through the workflow, with the command") {
+  // A grasper at 1 kHz sweeping +-0.5 rad at 0.5 Hz against one load per run: forward the current
+  // is 1.4 mA per mN m + 70 mA, backward 0.7 mA per mN m - 90 mA; the amplifier makes it follow
+  // the command, i = -2.06 u, measured 0.01 A high.
+  auto log_of = [](double load, const std::string& name) {
+    const int n = 8000;
+    Eigen::MatrixXd u(n, 3);
+    Eigen::MatrixXd y(n, 1);
+    for (int k = 0; k < n; ++k) {
+      const double w = 2 * 3.141592653589793 * 0.5;
+      const double v = 0.5 * w * std::cos(w * 1e-3 * k);
+      const double current = v > 0 ? 1.4e-3 * load + 0.07 : 0.7e-3 * load - 0.09;
+      u.row(k) << current + 0.01, v, current / -2.06;
+      y(k, 0) = load + (v > 0 ? 3.0 : -3.0);
+    }
+    wf::PreparedLog log;
+    log.source = name;
+    log.sample_time = 0.001;
+    log.preparation = wf::Preparation::score;
+    log.segments.push_back({u, y});
+    log.start_time.push_back(0.0);
+    return log;
+  };
+  const std::vector<files::SignalInfo> three{
+      {"current", "A"}, {"motor_velocity", "rad/s"}, {"current_command", "1"}};
+  const std::vector<files::SignalInfo> load{{"grip_torque", "mN m"}};
+  const std::vector<wf::PreparedLog> logs{log_of(20.0, "a"), log_of(50.0, "b"), log_of(80.0, "c")};
+  const wf::JointModelFit fit =
+      wf::fit_joint_model(files::ModelKind::bidirectional_load_observer, logs, three, load, 0.5);
+  REQUIRE(fit.model.bidirectional_load_observer.has_value());
+  CHECK(fit.model.kind() == files::ModelKind::bidirectional_load_observer);
+  CHECK(fit.model.inputs.size() == 3);
+  CHECK(fit.model.bidirectional_load_observer->command_gain ==
+        doctest::Approx(-2.06).epsilon(0.01));
+  CHECK(fit.summary.starts_with("bidirectional_load_observer: forward "));
+  CHECK(fit.training_fit.size() == 3);
+  // Replayed through the file: the same as the estimation types composed by hand.
+  const Eigen::MatrixXd& u = logs[1].segments[0].u;
+  const Eigen::VectorXd y = wf::simulate_joint_model(fit.model, u);
+  est::CurrentOffsetReference<double> reference(
+      *files::current_offset_reference_parameters<est::CurrentOffsetReferenceParameters<double>>(
+          fit.model));
+  est::BidirectionalLoadObserver<double> observer(wf::bidirectional_observer_parameters(fit.model));
+  double position = 0.0, largest = 0.0;
+  for (Eigen::Index k = 0; k < u.rows(); ++k) {
+    position += u(k, 1) * 0.001;
+    REQUIRE(reference.advance(u(k, 0), u(k, 2)) == endohaptics::model::StepStatus::ok);
+    const est::JointSignals<double> s{position, u(k, 1), reference.corrected(), 0.0};
+    REQUIRE(observer.advance(s) == endohaptics::model::StepStatus::ok);
+    largest = std::max(largest, std::fabs(observer.force(s) - y[k]));
+  }
+  CHECK(largest == 0.0);
+  // The truth is the level +-3 mN m by direction: after the first cycle the estimate follows it.
+  const auto& truth = logs[1].segments[0].y;
+  CHECK(std::sqrt((y.tail(4000) - truth.col(0).tail(4000)).squaredNorm() / 4000.0) < 1.0);
+  CHECK(message_of([&] {
+          (void)wf::fit_joint_model(files::ModelKind::bidirectional_load_observer, logs,
+                                    {three[0], three[2], three[1]}, load, 0.5);
+        }) ==
+        "fit_joint_model: bidirectional_load_observer takes (current, velocity, current command) "
+        "in that order; got (current, current_command, motor_velocity)");
+  CHECK(wf::joint_model_kind("bidirectional_load_observer") ==
+        files::ModelKind::bidirectional_load_observer);
+}
+
 TEST_CASE("joint models: the formats' defaults offer them, --method names them") {
   const auto aau = wf::format_defaults(files::LogFormat::endowrist_2016);
   CHECK(aau.method == "moesp,stall_hold");
   CHECK(aau.joint_sample_time == 0.01);
   const auto umn = wf::format_defaults(files::LogFormat::umn_mis_2018);
-  CHECK(umn.method == "moesp,static,push_load_observer");
+  CHECK(umn.method == "moesp,static,push_load_observer,bidirectional_load_observer");
   CHECK(umn.joint_sample_time == 0.001);
   CHECK(wf::joint_model_kind("stall_hold") == files::ModelKind::stall_hold);
   CHECK(wf::joint_model_kind("push_load_observer") == files::ModelKind::push_load_observer);

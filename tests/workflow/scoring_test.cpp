@@ -147,7 +147,7 @@ TEST_CASE("format defaults: the fixed command lines' settings") {
   CHECK(umn.inputs == std::vector<std::string>{"current", "motor_velocity", "current_command"});
   CHECK(umn.outputs == std::vector<std::string>{"grip_torque"});
   CHECK(umn.sample_time == 0.01);
-  CHECK(umn.method == "moesp,static,push_load_observer");
+  CHECK(umn.method == "moesp,static,push_load_observer,bidirectional_load_observer");
   CHECK(wf::default_deadzone(umn, umn.inputs) == "auto,none,none");
   const wf::FormatDefaults aau = wf::format_defaults(files::LogFormat::endowrist_2016);
   CHECK(aau.outputs == std::vector<std::string>{"force"});

@@ -1,10 +1,13 @@
 //! @file
 //! The joint force models of issue 15 in the identify/replay workflow: estimation::StallHold
 //! (model-file kind "stall_hold", docs/research_force_models.md A1) and
-//! estimation::PushLoadObserver ("push_load_observer", K2) simulated causally on prepared logs
+//! estimation::PushLoadObserver ("push_load_observer", K2) and
+//! estimation::BidirectionalLoadObserver ("bidirectional_load_observer", K7) simulated causally
+//! on prepared logs
 //! (inputs: current A, velocity rad/s; the observer's encoder angle is the running sum of the
 //! velocity times the sample time, of which it uses only the increments), fitted from logs
-//! prepared for scoring (workflow/stall_hold_fit.hpp, workflow/push_load_observer_fit.hpp), and
+//! prepared for scoring (workflow/stall_hold_fit.hpp, workflow/push_load_observer_fit.hpp,
+//! workflow/bidirectional_observer_fit.hpp), and
 //! compared with the subspace candidates by an inner cross-validation over the training files.
 //! Configuration time: allocates, throws endohaptics::Error.
 #pragma once
@@ -20,9 +23,11 @@
 #include "endohaptics/core/separate_compilation.hpp"
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/estimation/bidirectional_load_observer.hpp"
 #include "endohaptics/estimation/push_load_observer.hpp"
 #include "endohaptics/estimation/stall_hold.hpp"
 #include "endohaptics/files/model_file.hpp"
+#include "endohaptics/workflow/bidirectional_observer_fit.hpp"
 #include "endohaptics/workflow/error_context.hpp"
 #include "endohaptics/workflow/prepared_log.hpp"
 #include "endohaptics/workflow/push_load_observer_fit.hpp"
@@ -30,7 +35,8 @@
 
 namespace endohaptics::workflow {
 
-//! The joint-model kind named by a --method value ("stall_hold", "push_load_observer"), or none.
+//! The joint-model kind named by a --method value ("stall_hold", "push_load_observer",
+//! "bidirectional_load_observer"), or none.
 [[nodiscard]] ENDOHAPTICS_DECL std::optional<files::ModelKind> joint_model_kind(
     std::string_view method);
 
@@ -42,7 +48,11 @@ namespace endohaptics::workflow {
 [[nodiscard]] ENDOHAPTICS_DECL estimation::PushLoadObserverParameters<double>
 push_load_observer_parameters(const files::ModelFile& f);
 
-//! A joint-model file (kind stall_hold or push_load_observer) run causally on one segment from
+//! The model file's BidirectionalLoadObserver parameters in the estimation type.
+[[nodiscard]] ENDOHAPTICS_DECL estimation::BidirectionalLoadObserverParameters<double>
+bidirectional_observer_parameters(const files::ModelFile& f);
+
+//! A joint-model file (kind stall_hold or an observer) run causally on one segment from
 //! its start state: `u` is N x 2 (current A, velocity rad/s), or N x 3 with the current command
 //! for an observer that refers its current to it; one output value per row. Throws Error on
 //! another kind, another input count, or a non-finite signal or result (naming the row).
@@ -51,7 +61,7 @@ push_load_observer_parameters(const files::ModelFile& f);
 
 //! A joint model fitted on logs, with its causal training score.
 struct JointModelFit {
-  files::ModelFile model;              //!< kind stall_hold or push_load_observer
+  files::ModelFile model;              //!< a joint-model kind
   std::vector<double> training_fit{};  //!< causal fit % per experiment (segment) after the warm-up
   std::string summary{};               //!< one line: the fitted values, for identify's report
 };
@@ -66,7 +76,9 @@ struct JointModelFit {
 //! second; 1e-8 (N m)^2 per ms for the UMN grasper, the research note's), both push signs fitted
 //! (fit_push_load_observer), the one in which the motor works against the load kept (the
 //! current's magnitude grows with the load at the training-mean load), then the better causal
-//! training RMSE. Throws Error on another kind or unusable data.
+//! training RMSE. BidirectionalLoadObserver: the priors of its parameters and everything else by
+//! fit_bidirectional_load_observer (no sign to choose: forward and backward enter alike). Throws
+//! Error on another kind or unusable data.
 [[nodiscard]] ENDOHAPTICS_DECL JointModelFit
 fit_joint_model(files::ModelKind kind, const std::vector<PreparedLog>& logs,
                 const std::vector<files::SignalInfo>& inputs,

@@ -48,6 +48,13 @@ struct LoadObserverFit {
   double push_fraction = 0.0;    //!< share of the samples in the push regime
 };
 
+//! The experiment's current referred to its command by `reference` (causal, from the first
+//! sample), or as measured without a reference. Throws Error naming `where` when the experiment
+//! lacks the command or a sample is not finite.
+[[nodiscard]] ENDOHAPTICS_DECL Eigen::VectorXd referred_current(const LoadObserverData& d,
+                                                                const CurrentReference& reference,
+                                                                const char* where);
+
 //! The causal output of `model` (from its reset state) on one experiment; with a `reference`, the
 //! current referred to the command first (the experiment must then carry it).
 [[nodiscard]] ENDOHAPTICS_DECL Eigen::VectorXd simulate_load_observer(

@@ -44,7 +44,7 @@ ENDOHAPTICS_DECL FormatDefaults format_defaults(files::LogFormat format) {
       // family, at the logs' 1 kHz (the rate of the bridge's loop; its encoder angle is the
       // running sum of motor_velocity, exact on the logged samples); identify keeps the family
       // with the better inner cross-validated causal fit on the training files.
-      d.method = "moesp,static,push_load_observer";
+      d.method = "moesp,static,push_load_observer,bidirectional_load_observer";
       d.joint_sample_time = 0.001;
       break;
     case files::LogFormat::csv:

@@ -10,6 +10,9 @@ namespace endohaptics::workflow {
 ENDOHAPTICS_DECL std::optional<files::ModelKind> joint_model_kind(std::string_view method) {
   if (method == "stall_hold") return files::ModelKind::stall_hold;
   if (method == "push_load_observer") return files::ModelKind::push_load_observer;
+  if (method == "bidirectional_load_observer") {
+    return files::ModelKind::bidirectional_load_observer;
+  }
   return std::nullopt;
 }
 
@@ -23,9 +26,15 @@ ENDOHAPTICS_DECL estimation::PushLoadObserverParameters<double> push_load_observ
   return files::push_load_observer_parameters<estimation::PushLoadObserverParameters<double>>(f);
 }
 
+ENDOHAPTICS_DECL estimation::BidirectionalLoadObserverParameters<double>
+bidirectional_observer_parameters(const files::ModelFile& f) {
+  return files::bidirectional_observer_parameters<
+      estimation::BidirectionalLoadObserverParameters<double>>(f);
+}
+
 namespace detail {
 
-// A segment as the push-load observer sees it: the current, the encoder angle as the running sum
+// A segment as the observers see it: the current, the encoder angle as the running sum
 // of the velocity (column 1) times `ts` (up to a constant: the observer uses only increments),
 // the load `y` (may be empty when only simulating) and, with a third column, the command.
 inline LoadObserverData load_observer_data(const Eigen::MatrixXd& u, Eigen::VectorXd y, double ts) {
@@ -47,10 +56,8 @@ ENDOHAPTICS_DECL Eigen::VectorXd simulate_joint_model(const files::ModelFile& mo
     detail::fail("simulate_joint_model: the model file is of kind \"" +
                  std::string(files::to_string(model.kind())) + "\", not a joint model");
   }
-  const auto reference = model.push_load_observer
-                             ? files::current_offset_reference_parameters<
-                                   estimation::CurrentOffsetReferenceParameters<double>>(model)
-                             : std::nullopt;
+  const auto reference = files::current_offset_reference_parameters<
+      estimation::CurrentOffsetReferenceParameters<double>>(model);
   if (u.cols() != (reference ? 3 : 2)) {
     detail::fail("simulate_joint_model: " + std::to_string(u.cols()) +
                  " input columns, the model " +
@@ -70,9 +77,15 @@ ENDOHAPTICS_DECL Eigen::VectorXd simulate_joint_model(const files::ModelFile& mo
     }
     return y;
   }
+  const LoadObserverData data =
+      detail::load_observer_data(u, Eigen::VectorXd(), model.state_space.sample_time());
+  if (model.bidirectional_load_observer) {
+    return simulate_bidirectional_observer(
+        estimation::BidirectionalLoadObserver<double>(bidirectional_observer_parameters(model)),
+        data, reference);
+  }
   return simulate_load_observer(
-      estimation::PushLoadObserver<double>(push_load_observer_parameters(model)),
-      detail::load_observer_data(u, Eigen::VectorXd(), model.state_space.sample_time()), reference);
+      estimation::PushLoadObserver<double>(push_load_observer_parameters(model)), data, reference);
 }
 
 namespace detail {
@@ -86,13 +99,84 @@ inline double fit_percent(const Eigen::VectorXd& y, const Eigen::VectorXd& y_hat
 
 }  // namespace detail
 
+namespace detail {
+
+// fit_joint_model for kind bidirectional_load_observer, on the segments as the observers see them.
+inline JointModelFit fit_bidirectional(const std::vector<LoadObserverData>& data, double ts,
+                                       double warmup, const std::vector<files::SignalInfo>& inputs,
+                                       const std::vector<files::SignalInfo>& outputs,
+                                       const files::ModelProvenance& provenance) {
+  estimation::BidirectionalLoadObserverParameters<double> prior;
+  prior.sample_time = ts;
+  const BidirectionalObserverFit fit = fit_bidirectional_load_observer(data, prior, warmup);
+  const auto& p = fit.parameters;
+  const auto& reference = fit.reference;
+  if (inputs.size() == 3 && !reference) {
+    endohaptics::detail::fail(
+        "fit_joint_model: bidirectional_load_observer: the current does not follow the third "
+        "input, " +
+        inputs[2].name +
+        ", or it does not vary (no current-per-command slope can be fitted): leave it out");
+  }
+  JointModelFit out{
+      .model = files::make_bidirectional_observer_file(
+          files::bidirectional_observer_settings(p, reference), ts, inputs, outputs, provenance)};
+  const estimation::BidirectionalLoadObserver<double> fitted(p);
+  const auto skip = static_cast<Eigen::Index>(std::ceil(warmup / ts));
+  double fit_sum = 0.0;
+  for (const LoadObserverData& d : data) {
+    const auto n = d.load.size() - skip;
+    out.training_fit.push_back(
+        fit_percent(d.load.tail(n), simulate_bidirectional_observer(fitted, d, reference).tail(n)));
+    fit_sum += out.training_fit.back();
+  }
+  out.model.provenance.fit_percent = {fit_sum / static_cast<double>(out.training_fit.size())};
+  const std::string unit = outputs.front().unit;
+  const auto map = [&unit](double g, double g1, double o, double o1) {
+    return "(" + endohaptics::detail::format_number(g) + " + " +
+           endohaptics::detail::format_number(g1) + " s) A/" + unit + ", offset " +
+           endohaptics::detail::format_number(o) + " + " + endohaptics::detail::format_number(o1) +
+           " s A";
+  };
+  out.summary =
+      "bidirectional_load_observer: forward " +
+      endohaptics::detail::format_number(100.0 * fit.forward_fraction) + " %, backward " +
+      endohaptics::detail::format_number(100.0 * fit.backward_fraction) +
+      " % of the samples; forward map " +
+      map(p.forward_gain, p.forward_gain_stroke, p.forward_offset, p.forward_offset_stroke) +
+      ", backward map " +
+      map(p.backward_gain, p.backward_gain_stroke, p.backward_offset, p.backward_offset_stroke) +
+      " (s: the widest stop operator); filter noise sqrt(R) " +
+      endohaptics::detail::format_number(std::sqrt(p.forward_variance)) + " / " +
+      endohaptics::detail::format_number(std::sqrt(p.backward_variance)) + " " + unit +
+      " forward / backward (the inversions' per-sample sd x sqrt(0.2 s / Ts): they err in "
+      "strokes), "
+      "friction prior " +
+      endohaptics::detail::format_number(std::sqrt(p.friction_variance)) + " " + unit + " (" +
+      endohaptics::detail::format_number(bidirectional_friction_prior_scale) +
+      " x the runs' forward bias " + endohaptics::detail::format_number(fit.forward_bias_rms) +
+      "), initial load " + endohaptics::detail::format_number(p.initial_load) + " " + unit +
+      " (sd " + endohaptics::detail::format_number(std::sqrt(p.initial_variance)) +
+      "), output hysteresis offset " + endohaptics::detail::format_number(p.output_offset) + " " +
+      unit + ", " +
+      (reference ? "current referred to the command: " +
+                       endohaptics::detail::format_number(reference->command_gain) +
+                       " A per command unit, " + "reference offset " +
+                       endohaptics::detail::format_number(reference->reference_offset) + " A"
+                 : std::string("current as measured (no command)")) +
+      "; training RMSE " + endohaptics::detail::format_number(fit.mean_rmse) + " " + unit;
+  return out;
+}
+
+}  // namespace detail
+
 ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
                                                const std::vector<PreparedLog>& logs,
                                                const std::vector<files::SignalInfo>& inputs,
                                                const std::vector<files::SignalInfo>& outputs,
                                                double warmup) {
   if (logs.empty()) detail::fail("fit_joint_model: no logs");
-  const std::size_t most = kind == files::ModelKind::push_load_observer ? 3 : 2;
+  const std::size_t most = kind == files::ModelKind::stall_hold ? 2 : 3;
   if (inputs.size() < 2 || inputs.size() > most || outputs.size() != 1) {
     detail::fail(
         "fit_joint_model: " + std::string(files::to_string(kind)) +
@@ -105,10 +189,9 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
   // third (named so: a velocity or any other signal there would be taken for the command).
   if (inputs.size() == 3 && (inputs[2].name.find("command") == std::string::npos ||
                              inputs[1].name.find("command") != std::string::npos)) {
-    detail::fail(
-        "fit_joint_model: push_load_observer takes (current, velocity, current command) "
-        "in that order; got (" +
-        inputs[0].name + ", " + inputs[1].name + ", " + inputs[2].name + ")");
+    detail::fail("fit_joint_model: " + std::string(files::to_string(kind)) +
+                 " takes (current, velocity, current command) in that order; got (" +
+                 inputs[0].name + ", " + inputs[1].name + ", " + inputs[2].name + ")");
   }
   for (const PreparedLog& log : logs) {
     for (const DataSet& d : log.segments) {
@@ -156,7 +239,8 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
                   outputs.front().unit + "/A, loaded side " + side;
     return out;
   }
-  if (kind != files::ModelKind::push_load_observer) {
+  if (kind != files::ModelKind::push_load_observer &&
+      kind != files::ModelKind::bidirectional_load_observer) {
     detail::fail("fit_joint_model: kind \"" + std::string(files::to_string(kind)) +
                  "\" is not a joint model");
   }
@@ -175,6 +259,9 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
     }
   }
   if (data.empty()) detail::fail("fit_joint_model: no segment longer than the warm-up");
+  if (kind == files::ModelKind::bidirectional_load_observer) {
+    return detail::fit_bidirectional(data, ts, warmup, inputs, outputs, provenance);
+  }
   const double mean = sum / static_cast<double>(count);
   const double variance = std::max(sum2 / static_cast<double>(count) - mean * mean, 0.0);
   estimation::PushLoadObserverParameters<double> prior;

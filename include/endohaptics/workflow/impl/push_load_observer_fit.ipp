@@ -8,11 +8,9 @@
 
 namespace endohaptics::workflow {
 
-namespace detail {
-
-// The experiment's current referred to its command (causal), or as measured without a reference.
-inline Eigen::VectorXd referred_current(const LoadObserverData& d,
-                                        const CurrentReference& reference, const char* where) {
+ENDOHAPTICS_DECL Eigen::VectorXd referred_current(const LoadObserverData& d,
+                                                  const CurrentReference& reference,
+                                                  const char* where) {
   if (!reference) return d.current;
   if (d.command.size() != d.current.size()) {
     ENDOHAPTICS_THROW(
@@ -32,8 +30,6 @@ inline Eigen::VectorXd referred_current(const LoadObserverData& d,
   }
   return out;
 }
-
-}  // namespace detail
 
 ENDOHAPTICS_DECL CurrentReference fit_current_reference(std::span<const LoadObserverData> data) {
   double sxy = 0.0, sxx = 0.0;
@@ -64,7 +60,7 @@ ENDOHAPTICS_DECL Eigen::VectorXd simulate_load_observer(
     const CurrentReference& reference) {
   estimation::PushLoadObserver<double> m = model;
   m.reset();
-  const Eigen::VectorXd current = detail::referred_current(d, reference, "simulate_load_observer");
+  const Eigen::VectorXd current = referred_current(d, reference, "simulate_load_observer");
   Eigen::VectorXd y(d.current.size());
   for (Eigen::Index k = 0; k < d.current.size(); ++k) {
     const estimation::JointSignals<double> s{d.position[k], 0.0, current[k], 0.0};
@@ -112,10 +108,8 @@ fit_push_load_observer(std::span<const LoadObserverData> measured,
   std::vector<LoadObserverData> referred;
   if (reference) {
     for (const auto& d : measured) {
-      referred.push_back({detail::referred_current(d, reference, "fit_push_load_observer"),
-                          d.position,
-                          d.load,
-                          {}});
+      referred.push_back(
+          {referred_current(d, reference, "fit_push_load_observer"), d.position, d.load, {}});
     }
   }
   const std::span<const LoadObserverData> data =
