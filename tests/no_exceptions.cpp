@@ -59,6 +59,20 @@ int main() {
   }
   if (!(largest_force > 0.0)) return 1;
 
+  // The bidirectional load observer (a joint model of cable-driven instruments) on the same
+  // motion: every step ok, the force finite.
+  est::BidirectionalLoadObserverParameters<double> bp;
+  bp.forward_gain = 1.4e-3;
+  bp.backward_gain = 0.7e-3;
+  est::BidirectionalLoadObserver<double> observer(bp);
+  for (int i = 0; i < 1000; ++i) {
+    const double t = 1e-3 * i;
+    const est::JointSignals<double> s{0.5 * std::sin(omega * t), 0.0,
+                                      0.1 + 0.05 * std::cos(omega * t), 0.0};
+    if (observer.advance(s) != endohaptics::model::StepStatus::ok) return 1;
+    if (!std::isfinite(observer.force(s))) return 1;
+  }
+
   auto echo = [](std::span<const std::byte> in, auto& reply) {
     Codec::Setpoint sp;
     Codec::State s;

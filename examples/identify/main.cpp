@@ -4,11 +4,10 @@
 // method, dead zones and order by the causal score (x0 from the inputs, warm-up excluded, inputs
 // filtered forward only, output as logged), refusing unstable and near-integrating models.
 // Joint force models (--method stall_hold, push_load_observer, bidirectional_load_observer:
-// workflow/joint_models.hpp) are
-// further families; with several, the family is chosen by an inner cross-validation on the
-// training files (workflow::choose_family). Each format has recommended defaults
-// (workflow/format_defaults.hpp). Writes a JSON model.
-// Workflow: endohaptics/workflow/workflow.hpp; results: docs/identification_results.md.
+// workflow/joint_models.hpp) are further families; with several, the family is chosen by an inner
+// cross-validation on the training files (workflow::choose_family). Each format has recommended
+// defaults (workflow/format_defaults.hpp). Writes a JSON model. Workflow:
+// endohaptics/workflow/workflow.hpp; results: docs/identification_results.md.
 #include <fmt/format.h>
 #include <algorithm>
 

@@ -110,15 +110,18 @@ TEST_CASE("bidirectional observer: bad input leaves the state, no allocation per
   CHECK(m.advance({std::nan(""), 0.0, 0.1, 0.0}) == StepStatus::non_finite_input);
   CHECK(m.advance({0.0, 0.0, INFINITY, 0.0}) == StepStatus::non_finite_input);
   CHECK(m.state() == before);
-  // A state that overflows is refused whole (non_finite_result), not half applied.
-  auto huge = before;
-  huge[Observer::load] = 1e308;
-  huge[Observer::p_ll] = 1e308;
-  m.reset(huge);
-  const est::JointSignals<double> forward{0.5, 1.0, 0.1, 0.0};
-  (void)m.advance({0.2, 1.0, 0.1, 0.0});
-  for (int k = 0; k < 50 && m.advance(forward) == StepStatus::ok; ++k) {
+  // A step whose result overflows is refused whole (non_finite_result), not half applied: load and
+  // friction at 1e308 make the innovation -Inf on the first forward step.
+  for (int k = 1; k <= 100; ++k) {  // moving forward at 1 rad/s: the regime is forward
+    REQUIRE(m.advance({1e-3 * k, 1.0, 0.2, 0.0}) == StepStatus::ok);
   }
+  REQUIRE(m.regime() == 1.0);
+  auto huge = m.state();
+  huge[Observer::load] = 1e308;
+  huge[Observer::friction] = 1e308;
+  m.reset(huge);
+  CHECK(m.advance({0.101, 1.0, 0.2, 0.0}) == StepStatus::non_finite_result);
+  CHECK(m.state() == huge);
   m.reset();
   CHECK(m.load_estimate() == 50.0);
   CHECK(m.state()[Observer::started] == 0.0);
@@ -136,26 +139,31 @@ TEST_CASE("bidirectional observer: bad input leaves the state, no allocation per
 
 TEST_CASE("bidirectional observer: parameters out of range are refused, naming the field") {
   auto p = parameters();
-  p.forward_gain_stroke = 2e-3;  // |g'| >= |g|: the map's gain would cross zero
+  p.forward_gain_stroke = 1.3e-3;  // > 0.9 |g|: the map's gain would all but vanish
   CHECK(message_of([&] { Observer bad(p); }) ==
-        "BidirectionalLoadObserverParameters: forward_gain must be of magnitude in [1e-9, 1e6] "
-        "and above |forward_gain_stroke|, got 0.0014");
+        "BidirectionalLoadObserverParameters: forward_gain_stroke must be at most 0.9 times the "
+        "gain's magnitude (the gain keeps its sign and a tenth of its size along the stroke), "
+        "got 0.0013");
+  p = parameters();
+  p.backward_gain = -0.7e-3;  // the current would fall with the load moving back
+  CHECK(message_of([&] { Observer bad(p); }) ==
+        "BidirectionalLoadObserverParameters: forward_gain / backward_gain must be in (0, 1e6] "
+        "(the current grows with the load both ways: gains of one sign), got -2");
   p = parameters();
   p.stop_thresholds[3] = p.stop_thresholds[2];
   CHECK(message_of([&] { Observer bad(p); }).starts_with("StopOperators: threshold 3 must be"));
   p = parameters();
   p.output_shape[2] = 1e300;
   CHECK(message_of([&] { Observer bad(p); }) ==
-        "BidirectionalLoadObserverParameters: output_shape must be in [-1e6, 1e6], got 1e+300");
+        "BidirectionalLoadObserverParameters: output_shape[2] must be in [-1e6, 1e6], got 1e+300");
   p = parameters();
   p.backward_variance = 0.0;
   CHECK(message_of([&] { Observer bad(p); }) ==
-        "BidirectionalLoadObserverParameters: backward_variance must be in (0, 1e6], got 0");
+        "BidirectionalLoadObserverParameters: backward_variance must be in [1e-12, 1e6], got 0");
   p = parameters();
   p.friction_variance = std::nan("");
-  CHECK(message_of([&] { Observer bad(p); })
-            .starts_with("BidirectionalLoadObserverParameters: a process or prior variance must be "
-                         "in [0, 1e6]"));
+  CHECK(message_of([&] { Observer bad(p); }) ==
+        "BidirectionalLoadObserverParameters: friction_variance must be in [0, 1e6], got nan");
   p = parameters();
   p.current_cutoff = 600.0;  // above Nyquist at 1 kHz
   CHECK(message_of([&] { Observer bad(p); }) ==

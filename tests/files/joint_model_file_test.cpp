@@ -196,14 +196,20 @@ TEST_CASE(
   CHECK(error_of(huge_shape) ==
         "model file m.json: field \"parameters.output_shape_per_load[5]\" must be in [-1e6, "
         "1e6], got 1e+300");
-  CHECK(error_of(with("forward_gain_stroke", 2e-3)) ==
-        "model file m.json: field \"parameters.forward_gain\" must be of magnitude at least 1e-9 "
-        "and above |forward_gain_stroke|, got -0.00141");
+  CHECK(error_of(with("forward_gain_stroke", 1.3e-3)) ==
+        "model file m.json: field \"parameters.forward_gain_stroke\" must be at most 0.9 times "
+        "the gain's magnitude (the gain keeps its sign and a tenth of its size along the stroke), "
+        "got 0.0013");
   CHECK(error_of(with("backward_gain", 0.0)) ==
-        "model file m.json: field \"parameters.backward_gain\" must be of magnitude at least "
-        "1e-9 and above |backward_gain_stroke|, got 0");
-  CHECK(error_of(with("forward_variance", 0.0)) ==
-        "model file m.json: field \"parameters.forward_variance\" must be in (0, 1e6], got 0");
+        "model file m.json: field \"parameters.backward_gain\" must be of magnitude in [1e-9, "
+        "1e6], got 0");
+  CHECK(error_of(with("backward_gain", 6.1e-4)) ==
+        "model file m.json: field \"parameters.backward_gain\" must be of forward_gain's sign "
+        "and at least 1e-6 times its magnitude (the current grows with the load both ways), got "
+        "0.00061");
+  CHECK(error_of(with("forward_variance", 1e-300)) ==
+        "model file m.json: field \"parameters.forward_variance\" must be in [1e-12, 1e6], got "
+        "1e-300");
   CHECK(error_of(with("friction_variance", -1.0)) ==
         "model file m.json: field \"parameters.friction_variance\" must be in [0, 1e6], got -1");
   CHECK(error_of(with("initial_load", 1e308)) ==

@@ -83,10 +83,12 @@ TEST_CASE("bidirectional observer fit: the maps, the hysteresis, and another ins
   const auto& p = fit.parameters;
   // The truth moves +-4 around the level: the maps see the level +-4 (and the gain of the
   // hysteresis), the fit recovers them within that.
-  CHECK(p.forward_gain == doctest::Approx(1.4e-3).epsilon(0.05));
-  CHECK(p.backward_gain == doctest::Approx(0.7e-3).epsilon(0.05));
-  CHECK(p.forward_offset + 4.0 * p.forward_gain == doctest::Approx(0.07).epsilon(0.05));
-  CHECK(p.initial_load == doctest::Approx(50.0).epsilon(0.01));
+  // (Relative checks: doctest's Approx is absolute near 0.)
+  CHECK(std::fabs(p.forward_gain / 1.4e-3 - 1.0) < 0.05);
+  CHECK(std::fabs(p.backward_gain / 0.7e-3 - 1.0) < 0.05);
+  // Forward the truth is L_e + 4 (x 1.05 at most), so the offset absorbs 4 gains.
+  CHECK(std::fabs((p.forward_offset - 4.0 * p.forward_gain) / 0.07 - 1.0) < 0.03);
+  CHECK(std::fabs(p.initial_load / 50.0 - 1.0) < 0.01);
   CHECK(fit.forward_fraction > 0.3);
   CHECK(fit.backward_fraction > 0.3);
   CHECK_FALSE(fit.reference.has_value());
@@ -125,7 +127,7 @@ TEST_CASE("bidirectional observer fit: the current referred to its command") {
   }
   const auto fit = wf::fit_bidirectional_load_observer(train, {}, 1.0);
   REQUIRE(fit.reference.has_value());
-  CHECK(fit.reference->command_gain == doctest::Approx(-2.06).epsilon(0.01));
+  CHECK(std::fabs(fit.reference->command_gain / -2.06 - 1.0) < 0.01);
   const auto test = with_command(grasper(9, 45.0, 0.25, 0.0), -0.015);
   const Observer model(fit.parameters);
   const double referred = rmse(model, test, fit.reference);
@@ -209,7 +211,8 @@ TEST_CASE("bidirectional observer on the UMN grasper, one session to the other, 
   MESSAGE("L_2 -> L_4 (5 runs each): " << to_l4 << " mN m (without the friction state "
                                        << to_l4_fixed << "); L_4 -> L_2: " << to_l2 << " ("
                                        << to_l2_fixed << ")");
-  // The push-load observer on the same runs: 11.9 and 8.6 mN m (push_load_observer_fit_test).
+  // Measured 5.70 and 4.75 mN m (without the friction state 6.50 / 5.74); the push-load observer
+  // on the same runs: 11.9 and 8.6 mN m (push_load_observer_fit_test).
   CHECK(to_l4 < 8.0);
   CHECK(to_l2 < 6.5);
   CHECK(to_l4 < to_l4_fixed);

@@ -1,23 +1,16 @@
 //! @file
-//! BidirectionalLoadObserver: a JointForceModel for a cable-driven instrument whose motor current
-//! shows the load in both directions of motion, each offset by a friction the instrument does not
-//! share with another (docs/research_force_models.md, K7). A two-state Kalman filter on the load
-//! L (random walk) and the friction f (per-instrument constant) takes the current inverted through
-//! a forward map while the tool moves forward, z = L + f, and through a backward map while it moves
-//! back, z = L - kappa f (kappa = the ratio of the maps' gains: a friction current that adds to one
-//! direction subtracts from the other), so that motion both ways cancels the friction (the
-//! midpoint of the two currents). Each map is affine in the load with a gain and offset that
-//! follow the stroke (the widest stop operator): i_f = (g + g' s_N) L + o + o' s_N. The output adds
-//! the load's hysteresis along the stroke, a Prandtl-Ishlinskii sum of stop operators on the
-//! encoder (model/stop_operators.hpp): y = L + e0 + sum_j (a_j + b_j L) s_j. Front end as
-//! PushLoadObserver: Butterworth current and velocity filters, a Dahl direction state and a
-//! velocity threshold decide forward (+1), backward (-1) or rest (0, no update). About 120 flops
-//! per step; noexcept, allocation-free. Units: A, rad, rad/s, s; load in the fit's unit.
+//! BidirectionalLoadObserver: a JointForceModel for a cable-driven instrument (research note K7,
+//! docs/models.md): a two-state Kalman filter on the load L and the instrument's friction f from
+//! the current inverted through a forward and a backward map (z = L + h f, h of opposite signs),
+//! so that motion both ways cancels the friction; the output adds the hysteresis along the stroke
+//! as stop operators, y = L + e0 + sum_j (a_j + b_j L) s_j. Units: A, rad, rad/s, s; load: the
+//! fit's.
 #pragma once
 
 #include <Eigen/Core>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/estimation/joint_force_model.hpp"
@@ -43,7 +36,7 @@ struct BidirectionalLoadObserverParameters {
   Scalar direction_scale = Scalar(0.05);     //!< rad, q0: travel that flips the direction state
   Scalar velocity_threshold = Scalar(0.05);  //!< rad/s: slower is rest (no update)
   Scalar direction_threshold = Scalar(0.5);  //!< |h| at or above: moving that way
-  //! rad, r_1 < ... < r_N; the widest should stay below half the stroke so that it saturates
+  //! rad, r_1 < ... < r_N; the widest at most half the stroke, so that it saturates each stroke
   Vector stop_thresholds = (Vector() << Scalar(0.005), Scalar(0.02), Scalar(0.05), Scalar(0.1),
                             Scalar(0.2), Scalar(0.3), Scalar(0.4), Scalar(0.5))
                                .finished();
@@ -52,7 +45,7 @@ struct BidirectionalLoadObserverParameters {
   Scalar forward_gain_stroke = Scalar(0);         //!< g'_f, A per load unit per unit of s_N
   Scalar forward_offset = Scalar(0);              //!< o_f, A
   Scalar forward_offset_stroke = Scalar(0);       //!< o'_f, A per unit of s_N
-  Scalar backward_gain = Scalar(-1);              //!< g_b, A per load unit while moving back
+  Scalar backward_gain = Scalar(1);               //!< g_b, A per load unit while moving back
   Scalar backward_gain_stroke = Scalar(0);        //!< g'_b
   Scalar backward_offset = Scalar(0);             //!< o_b, A
   Scalar backward_offset_stroke = Scalar(0);      //!< o'_b
@@ -68,16 +61,19 @@ struct BidirectionalLoadObserverParameters {
   Vector output_shape_per_load = Vector::Zero();  //!< b_j, dimensionless
   Scalar sample_time = Scalar(0.001);             //!< s, one advance()
 
-  //! kappa = g_f / g_b: how a friction shift of the forward inversion shows in the backward one.
-  [[nodiscard]] Scalar friction_ratio() const noexcept { return forward_gain / backward_gain; }
+  //! Smallest variance of an inversion, load unit^2 (a smaller one could make the filter's
+  //! covariance lose its sign through rounding).
+  static constexpr Scalar min_variance = Scalar(1e-12);
+  //! Largest |g'| / |g| of a map: its gain stays at least a tenth of g along the stroke, so that
+  //! the inversion (i - offset) / gain stays bounded.
+  static constexpr Scalar max_stroke_ratio = Scalar(0.9);
 
   //! Throws Error naming the field, its value and the rule.
   void validate() const {
-    auto require = [](bool ok, const char* field, Scalar value, const char* rule) {
+    auto require = [](bool ok, const std::string& field, Scalar value, const char* rule) {
       if (!ok) {
-        ENDOHAPTICS_THROW(Error(std::string("BidirectionalLoadObserverParameters: ") + field +
-                                " must be " + rule + ", got " +
-                                endohaptics::detail::format_number(value)));
+        ENDOHAPTICS_THROW(Error("BidirectionalLoadObserverParameters: " + field + " must be " +
+                                rule + ", got " + endohaptics::detail::format_number(value)));
       }
     };
     const Scalar nyquist = Scalar(0.5) / sample_time;
@@ -88,45 +84,52 @@ struct BidirectionalLoadObserverParameters {
             "in (0, Nyquist) Hz");
     require(velocity_cutoff > 0 && velocity_cutoff < nyquist, "velocity_cutoff", velocity_cutoff,
             "in (0, Nyquist) Hz");
-    require(std::isfinite(direction_scale) && direction_scale > 0 && direction_scale <= max,
-            "direction_scale", direction_scale, "in (0, 1e6] rad");
+    require(direction_scale > 0 && direction_scale <= max, "direction_scale", direction_scale,
+            "in (0, 1e6] rad");
     require(velocity_threshold >= 0 && velocity_threshold <= max, "velocity_threshold",
             velocity_threshold, "in [0, 1e6] rad/s");
     require(direction_threshold > 0 && direction_threshold <= 1, "direction_threshold",
             direction_threshold, "in (0, 1]");
     for (int j = 0; j < N; ++j) {
-      require(stop_thresholds[j] <= max, "stop_thresholds", stop_thresholds[j], "at most 1e6");
+      require(stop_thresholds[j] <= max, "stop_thresholds[" + std::to_string(j) + "]",
+              stop_thresholds[j], "at most 1e6 rad");
     }
     require(start_travel <= max, "start_travel", start_travel, "at most 1e6 rad");
     Stops::validate(stop_thresholds, start_travel);
-    const auto gain_ok = [max](Scalar g, Scalar stroke) {
-      // |g| - |g'| > 0: the map's gain keeps its sign over the stroke (s_N in [-1, 1])
-      return std::fabs(g) >= static_cast<Scalar>(min_current_per_load) && std::fabs(g) <= max &&
-             std::fabs(stroke) <= max && std::fabs(stroke) < std::fabs(g);
+    const auto map = [&](const char* gain_name, Scalar g, Scalar stroke, const char* stroke_name) {
+      require(std::fabs(g) >= static_cast<Scalar>(min_current_per_load) && std::fabs(g) <= max,
+              gain_name, g, "of magnitude in [1e-9, 1e6]");
+      require(std::fabs(stroke) <= max_stroke_ratio * std::fabs(g), stroke_name, stroke,
+              "at most 0.9 times the gain's magnitude (the gain keeps its sign and a tenth of its "
+              "size along the stroke)");
     };
-    require(gain_ok(forward_gain, forward_gain_stroke), "forward_gain", forward_gain,
-            "of magnitude in [1e-9, 1e6] and above |forward_gain_stroke|");
-    require(gain_ok(backward_gain, backward_gain_stroke), "backward_gain", backward_gain,
-            "of magnitude in [1e-9, 1e6] and above |backward_gain_stroke|");
-    require(std::fabs(friction_ratio()) <= max, "forward_gain / backward_gain", friction_ratio(),
-            "of magnitude at most 1e6");
-    for (const Scalar v : {forward_offset, forward_offset_stroke, backward_offset,
-                           backward_offset_stroke, initial_load, output_offset}) {
-      require(std::fabs(v) <= max, "an offset or the initial load", v, "in [-1e6, 1e6]");
-    }
+    map("forward_gain", forward_gain, forward_gain_stroke, "forward_gain_stroke");
+    map("backward_gain", backward_gain, backward_gain_stroke, "backward_gain_stroke");
+    require(forward_gain / backward_gain > 0 && forward_gain / backward_gain <= max,
+            "forward_gain / backward_gain", forward_gain / backward_gain,
+            "in (0, 1e6] (the current grows with the load both ways: gains of one sign)");
+    const std::pair<const char*, Scalar> bounded[] = {
+        {"forward_offset", forward_offset},   {"forward_offset_stroke", forward_offset_stroke},
+        {"backward_offset", backward_offset}, {"backward_offset_stroke", backward_offset_stroke},
+        {"initial_load", initial_load},       {"output_offset", output_offset}};
+    for (const auto& [name, v] : bounded) require(std::fabs(v) <= max, name, v, "in [-1e6, 1e6]");
     for (int j = 0; j < N; ++j) {
-      require(std::fabs(output_shape[j]) <= max, "output_shape", output_shape[j], "in [-1e6, 1e6]");
-      require(std::fabs(output_shape_per_load[j]) <= max, "output_shape_per_load",
-              output_shape_per_load[j], "in [-1e6, 1e6]");
+      require(std::fabs(output_shape[j]) <= max, "output_shape[" + std::to_string(j) + "]",
+              output_shape[j], "in [-1e6, 1e6]");
+      require(std::fabs(output_shape_per_load[j]) <= max,
+              "output_shape_per_load[" + std::to_string(j) + "]", output_shape_per_load[j],
+              "in [-1e6, 1e6]");
     }
-    require(forward_variance > 0 && forward_variance <= max, "forward_variance", forward_variance,
-            "in (0, 1e6]");
-    require(backward_variance > 0 && backward_variance <= max, "backward_variance",
-            backward_variance, "in (0, 1e6]");
-    for (const Scalar v :
-         {load_process_variance, friction_variance, friction_process_variance, initial_variance}) {
-      require(v >= 0 && v <= max, "a process or prior variance", v, "in [0, 1e6]");
-    }
+    require(forward_variance >= min_variance && forward_variance <= max, "forward_variance",
+            forward_variance, "in [1e-12, 1e6]");
+    require(backward_variance >= min_variance && backward_variance <= max, "backward_variance",
+            backward_variance, "in [1e-12, 1e6]");
+    const std::pair<const char*, Scalar> variances[] = {
+        {"load_process_variance", load_process_variance},
+        {"friction_variance", friction_variance},
+        {"friction_process_variance", friction_process_variance},
+        {"initial_variance", initial_variance}};
+    for (const auto& [name, v] : variances) require(v >= 0 && v <= max, name, v, "in [0, 1e6]");
   }
 };
 
@@ -166,7 +169,6 @@ class BidirectionalLoadObserver {
       : p_((p.validate(), p)), stops_(p.stop_thresholds, p.start_travel) {
     current_ = model::ButterworthBiquad<Scalar>::lowpass(p_.current_cutoff, p_.sample_time);
     velocity_ = model::ButterworthBiquad<Scalar>::lowpass(p_.velocity_cutoff, p_.sample_time);
-    kappa_ = p_.friction_ratio();
     reset();
   }
 
@@ -218,8 +220,13 @@ class BidirectionalLoadObserver {
                                   : p_.backward_gain + p_.backward_gain_stroke * stroke;
       const Scalar offset = forward ? p_.forward_offset + p_.forward_offset_stroke * stroke
                                     : p_.backward_offset + p_.backward_offset_stroke * stroke;
-      const Scalar z_load = (i_f - offset) / gain;  // gain != 0: validate() keeps |g| > |g'|
-      const Scalar h = forward ? Scalar(1) : -kappa_;
+      // |gain| >= |g| / 10: validate() bounds the stroke term.
+      const Scalar z_load = (i_f - offset) / gain;
+      // z = L + h f: a friction shift of the forward inversion f shows as -kappa f in the
+      // backward one, kappa = g_f / g_b (the gains at mid-stroke; research note K7: weights that
+      // follow the stroke, h = g_f / gain_f(s) and -g_f / gain_b(s), scored 4.67 / 7.31 mN m
+      // across the UMN sessions against 4.95 / 4.07 for the constant ratio).
+      const Scalar h = forward ? Scalar(1) : -p_.forward_gain / p_.backward_gain;
       const Scalar r = forward ? p_.forward_variance : p_.backward_variance;
       // Measurement z = L + h f + noise (variance r): the Kalman update of (L, f).
       const Scalar ph0 = x[p_ll] + h * x[p_lf];
@@ -230,9 +237,9 @@ class BidirectionalLoadObserver {
       const Scalar innovation = z_load - x[load] - h * x[friction];
       x[load] += k0 * innovation;
       x[friction] += k1 * innovation;
-      x[p_ll] -= k0 * ph0;
+      x[p_ll] = std::fmax(x[p_ll] - k0 * ph0, Scalar(0));  // variances keep their sign
       x[p_lf] -= k0 * ph1;
-      x[p_ff] -= k1 * ph1;
+      x[p_ff] = std::fmax(x[p_ff] - k1 * ph1, Scalar(0));
     }
     if (!x.allFinite()) return model::StepStatus::non_finite_result;
     x_ = x;
@@ -242,7 +249,8 @@ class BidirectionalLoadObserver {
   }
 
   [[nodiscard]] const State& state() const noexcept { return x_; }  //!< see State
-  //! Sets the state; reset() starts over (filters wait for the next first sample).
+  //! Sets the state (Precondition: one that state() returned, so that the covariance is one);
+  //! reset() starts over (filters wait for the next first sample).
   void reset(const State& x) noexcept { x_ = x; }
   //! Back to the start: initial load and variances, no friction, filters and operators unstarted.
   void reset() noexcept {
@@ -263,18 +271,16 @@ class BidirectionalLoadObserver {
   [[nodiscard]] StopValues stop_values() const noexcept {
     return stops_.values(x_.template segment<N + 2>(stops_begin), x_[previous_position]);
   }
-  //! The filtered current and velocity of the last step (for identification).
+  //! The filtered current of the last step, A (for identification).
   [[nodiscard]] Scalar filtered_current() const noexcept { return last_filtered_current_; }
-  [[nodiscard]] Scalar filtered_velocity() const noexcept {
-    return last_filtered_velocity_;
-  }  //!< rad/s
+  //! The filtered velocity of the last step, rad/s (for identification).
+  [[nodiscard]] Scalar filtered_velocity() const noexcept { return last_filtered_velocity_; }
 
  private:
   Parameters p_;
   Stops stops_;
   model::ButterworthBiquad<Scalar> current_{};
   model::ButterworthBiquad<Scalar> velocity_{};
-  Scalar kappa_{};
   State x_ = State::Zero();
   Scalar last_filtered_current_{};
   Scalar last_filtered_velocity_{};

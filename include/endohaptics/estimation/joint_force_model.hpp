@@ -31,7 +31,8 @@ struct JointSignals {
 //! A per-joint force model as the estimator drives it: `force(s)` is the model's force output
 //! at its current state (feedthrough from the signals `s`), `advance(s)` steps the model one
 //! model period with `s` (all-or-nothing), `memoryless()` is true when the state never reaches
-//! the output (the sample time then does not matter). Implementations: OpenLoop, KalmanCorrected.
+//! the output (the sample time then does not matter). Implementations: OpenLoop, KalmanCorrected,
+//! StallHold, PushLoadObserver, BidirectionalLoadObserver.
 template <typename M>
 concept JointForceModel = requires(M& m, const M& cm,
                                    const JointSignals<typename M::ScalarType>& signals,

@@ -51,8 +51,8 @@ struct BridgeConfig {
   estimation::ForceEstimatorSettings<double> estimator{};  //!< friction levels, signs, limits
   //! "estimator.clamp_model": an identified model file (endohaptics-identify) for both clamps:
   //! Hammerstein-Wiener (6 states, 2 inputs, 1 output), "stall_hold", "push_load_observer" or
-  //! "bidirectional_load_observer",
-  //! resolved against the configuration file's folder; empty: the 2016 appendix C yaw model.
+  //! "bidirectional_load_observer", resolved against the configuration file's folder; empty: the
+  //! 2016 appendix C yaw model.
   std::filesystem::path clamp_model;
   sim::OperatorScript operator_script{};  //!< the scripted operator of `--device sim`
 };

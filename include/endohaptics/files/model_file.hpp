@@ -146,16 +146,16 @@ struct BidirectionalObserverSettings {
   double direction_threshold = 0.5;                                   //!< in (0, 1]
   Stops stop_thresholds{0.005, 0.02, 0.05, 0.1, 0.2, 0.3, 0.4, 0.5};  //!< rad, increasing, > 0
   double start_travel = 0.005;                                        //!< rad, >= 0
-  double forward_gain = 1;               //!< A per load unit, |.| > |forward_gain_stroke|
-  double forward_gain_stroke = 0;        //!< A per load unit per unit of the widest operator
-  double forward_offset = 0;             //!< A
+  double forward_gain = 1;         //!< A per load unit, of magnitude >= |forward_gain_stroke| / 0.9
+  double forward_gain_stroke = 0;  //!< A per load unit per unit of the widest operator
+  double forward_offset = 0;       //!< A
   double forward_offset_stroke = 0;      //!< A
-  double backward_gain = -1;             //!< A per load unit, |.| > |backward_gain_stroke|
+  double backward_gain = 1;              //!< A per load unit, of forward_gain's sign
   double backward_gain_stroke = 0;       //!< A per load unit
   double backward_offset = 0;            //!< A
   double backward_offset_stroke = 0;     //!< A
-  double forward_variance = 1;           //!< load unit^2, > 0
-  double backward_variance = 1;          //!< load unit^2, > 0
+  double forward_variance = 1;           //!< load unit^2, in [1e-12, 1e6]
+  double backward_variance = 1;          //!< load unit^2, in [1e-12, 1e6]
   double load_process_variance = 0;      //!< load unit^2 per step, >= 0
   double friction_variance = 1;          //!< load unit^2, >= 0
   double friction_process_variance = 0;  //!< load unit^2 per step, >= 0
@@ -287,9 +287,10 @@ ENDOHAPTICS_DECL void add_linear_block(json& j, const ModelFile& m);
 //! The "provenance" object of `j`; throws naming the field when missing or of the wrong type.
 ENDOHAPTICS_DECL ModelProvenance provenance_from_json(const json& j, const std::string& where);
 
-//! A joint-model kind ("stall_hold", "push_load_observer") from `j`: its "parameters" object
-//! (every field required except those added later, unknown fields refused), no linear-block
-//! fields, 2 inputs (push_load_observer with a command reference: 3) and 1 output; validated.
+//! A joint-model kind ("stall_hold", "push_load_observer", "bidirectional_load_observer") from
+//! `j`: its "parameters" object (every field required except those added later, unknown fields
+//! refused), no linear-block fields, 2 inputs (an observer with a command reference: 3) and 1
+//! output; validated.
 //! Throws Error naming the field.
 ENDOHAPTICS_DECL ModelFile joint_model_from_json(const json& j, const std::string& kind,
                                                  double sample_time, std::vector<SignalInfo> inputs,
@@ -426,6 +427,9 @@ template <typename Parameters>
   detail::model_file::require_kind(f, ModelKind::bidirectional_load_observer,
                                    "bidirectional_observer_parameters");
   using S = decltype(Parameters{}.current_cutoff);
+  static_assert(decltype(Parameters{}.stop_thresholds)::SizeAtCompileTime ==
+                    model::bidirectional_observer_stops,
+                "the model files hold bidirectional_observer_stops stop operators");
   const BidirectionalObserverSettings& m = *f.bidirectional_load_observer;
   Parameters p;
   p.current_cutoff = static_cast<S>(m.current_cutoff);

@@ -13,8 +13,12 @@ namespace endohaptics::model {
 //! The filter's coefficients (see the file comment); step() and start() are noexcept.
 template <typename Scalar = double>
 struct ButterworthBiquad {
-  Scalar b0{}, b1{}, b2{}, a1{},
-      a2{};  //!< y = (b0 + b1 z^-1 + b2 z^-2) / (1 + a1 z^-1 + a2 z^-2) u
+  // y = (b0 + b1 z^-1 + b2 z^-2) / (1 + a1 z^-1 + a2 z^-2) u
+  Scalar b0{};  //!< numerator, z^0
+  Scalar b1{};  //!< numerator, z^-1
+  Scalar b2{};  //!< numerator, z^-2
+  Scalar a1{};  //!< denominator, z^-1 (the z^0 coefficient is 1)
+  Scalar a2{};  //!< denominator, z^-2
 
   //! The low-pass with `cutoff` Hz at `sample_time` s. Precondition: 0 < cutoff < Nyquist.
   [[nodiscard]] static ButterworthBiquad lowpass(Scalar cutoff, Scalar sample_time) noexcept {

@@ -1,18 +1,9 @@
 //! @file
 //! fit_bidirectional_load_observer: identifies estimation::BidirectionalLoadObserver from logs by
-//! linear least squares (docs/research_force_models.md, K7). Each experiment is taken to hold one
-//! load level L_e, the mean of its truth after the warm-up (the UMN protocol: a constant reaction
-//! torque per run), around which the load moves along the stroke. (a) On the forward samples, the
-//! filtered current on [L_e, L_e s_N, 1, s_N] gives the forward map; on the backward samples, the
-//! backward map. (b) (load - L_e) on [1, s_1..s_N, L_e s_1..L_e s_N] gives the output's hysteresis
-//! e0, a_j, b_j. (c) The maps' inversions on the training samples give the filter's noise: R =
-//! the per-sample variance of the inversion times the correlation time over the sample time (the
-//! inversion errors run in strokes, not white), the friction prior (2.5 x the RMS of the runs'
-//! forward bias, at least one sample's variance: a new instrument's friction spreads wider than
-//! the training runs'), Q_L = (0.01 max |load|)^2 Ts (1 % of the range per root second). When every
-//! experiment carries the command, the current is first referred to it
-//! (estimation/current_offset_reference.hpp). Every experiment weighs the same. Configuration
-//! time: allocates, throws endohaptics::Error.
+//! linear least squares (docs/research_force_models.md, K7; the rules in
+//! docs/identification_results.md, "Their fits"): each experiment one load level (its mean truth),
+//! the two maps and the output's hysteresis around it, the filter's noise from the inversions.
+//! Configuration time: allocates, throws endohaptics::Error.
 #pragma once
 
 #include <Eigen/Dense>
@@ -20,6 +11,8 @@
 #include <cmath>
 #include <limits>
 #include <span>
+#include <string>
+#include <utility>
 #include <vector>
 #include "endohaptics/core/separate_compilation.hpp"
 
@@ -52,11 +45,20 @@ inline constexpr double bidirectional_friction_prior_scale = 2.5;
     const estimation::BidirectionalLoadObserver<double>& model, const LoadObserverData& d,
     const CurrentReference& reference = std::nullopt);
 
-//! Fits the current's offset reference (when the data carry the command), both maps, the noise,
-//! the friction prior, the initial load and the output's hysteresis (see the file comment); the
-//! filters, thresholds and stop thresholds come from `prior`. Throws Error on empty or mismatched
-//! data, fewer than 10 samples in either direction, experiments all at one load level, a singular
-//! fit or a map whose gain changes sign along the stroke.
+//! Fits the current's offset reference (when every experiment carries the command: the current is
+//! referred to it first, estimation/current_offset_reference.hpp), then with each experiment
+//! weighing the same and its first `warmup` s left out: (a) on the forward samples, the filtered
+//! current on [L_e, L_e s_N, 1, s_N] (L_e the experiment's mean load) gives the forward map, on
+//! the backward samples the backward map; (b) (load - L_e) on [1, s_1..s_N, L_e s_1..L_e s_N]
+//! gives e0, a_j, b_j; (c) R = the mean square of each map's inversion z - L_e times
+//! bidirectional_inversion_correlation_time / Ts (the inversion errors run in strokes, not
+//! white), the friction prior (bidirectional_friction_prior_scale x the RMS of the experiments'
+//! forward bias)^2, at least the forward inversion's mean square, Q_L = (0.01 max |load|)^2 Ts,
+//! the initial load and its variance from the training loads. The filters, thresholds and stop
+//! thresholds come from `prior`. Throws Error on empty or mismatched
+//! data, a warm-up that is not finite and >= 0, fewer than 10 samples in either direction,
+//! experiments all at one load level, a singular fit, a map whose gain would fall below a tenth
+//! along the stroke, maps of opposite signs, or variances beyond the model's bound.
 [[nodiscard]] ENDOHAPTICS_DECL BidirectionalObserverFit fit_bidirectional_load_observer(
     std::span<const LoadObserverData> data,
     const estimation::BidirectionalLoadObserverParameters<double>& prior, double warmup = 1.0);

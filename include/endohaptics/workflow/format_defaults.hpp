@@ -20,13 +20,14 @@ struct FormatDefaults {
   std::vector<std::string> outputs;  //!< signal names (empty: must be given)
   double sample_time = 0.0;          //!< s; 0: the median step of the first log
   Preprocessing preprocessing{};     //!< for the fit (scoring stays causal whatever it says)
-  //! Comma list of n4sid, moesp, cva, best, static, stall_hold, push_load_observer: every
-  //! family is fitted and the best by the causal score on the training files is chosen.
+  //! Comma list of n4sid, moesp, cva, best, static, stall_hold, push_load_observer,
+  //! bidirectional_load_observer: every family is fitted and the best by the causal score on the
+  //! training files is chosen.
   std::string method = "moesp";
   std::string order = "auto";  //!< N or auto
   //! Dead zone on inputs named "current" (the motor current: 4.2.3's friction); none elsewhere.
   std::string current_deadzone = "none";
-  //! s, the grid of the joint models (methods stall_hold, push_load_observer); 0: sample_time.
+  //! s, the grid of the joint models (stall_hold and the observers); 0: sample_time.
   double joint_sample_time = 0.0;
 };
 

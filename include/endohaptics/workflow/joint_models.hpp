@@ -1,14 +1,12 @@
 //! @file
 //! The joint force models of issue 15 in the identify/replay workflow: estimation::StallHold
-//! (model-file kind "stall_hold", docs/research_force_models.md A1) and
-//! estimation::PushLoadObserver ("push_load_observer", K2) and
-//! estimation::BidirectionalLoadObserver ("bidirectional_load_observer", K7) simulated causally
-//! on prepared logs
-//! (inputs: current A, velocity rad/s; the observer's encoder angle is the running sum of the
-//! velocity times the sample time, of which it uses only the increments), fitted from logs
-//! prepared for scoring (workflow/stall_hold_fit.hpp, workflow/push_load_observer_fit.hpp,
-//! workflow/bidirectional_observer_fit.hpp), and
-//! compared with the subspace candidates by an inner cross-validation over the training files.
+//! (model-file kind "stall_hold", docs/research_force_models.md A1), PushLoadObserver
+//! ("push_load_observer", K2) and BidirectionalLoadObserver ("bidirectional_load_observer", K7),
+//! simulated causally on prepared logs (inputs: current A, velocity rad/s; the observers' encoder
+//! angle is the running sum of the velocity times the sample time, of which they use only the
+//! increments), fitted from logs prepared for scoring (workflow/stall_hold_fit.hpp,
+//! push_load_observer_fit.hpp, bidirectional_observer_fit.hpp), and compared with the subspace
+//! candidates by an inner cross-validation over the training files.
 //! Configuration time: allocates, throws endohaptics::Error.
 #pragma once
 

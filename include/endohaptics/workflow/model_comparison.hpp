@@ -101,7 +101,7 @@ struct FileComparison {
     const model::DynamicStateSpace<>& linear, const Eigen::VectorXd& u0);
 
 //! Simulates the model file (input maps, linear block, output maps; or a joint model, kinds
-//! stall_hold and push_load_observer, from its start state whatever `options.initial_state` says
+//! stall_hold and the observers, from its start state whatever `options.initial_state` says
 //! but oracle, which it refuses) on every segment of `log` from x0 as `options.initial_state` says,
 //! leaves the first `options.warmup` s of each segment (all but its last sample when shorter) out,
 //! and scores the rest of the file together. Throws Error when the log's input or output count

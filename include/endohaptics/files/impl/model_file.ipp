@@ -148,20 +148,24 @@ ENDOHAPTICS_DECL void validate_settings(const BidirectionalObserverSettings& p, 
         where, field.c_str(), p.stop_thresholds[j], "> 0 and above the threshold before it");
   }
   require_parameter(p.start_travel >= 0, where, "start_travel", p.start_travel, ">= 0 rad");
-  require_parameter(std::fabs(p.forward_gain) >= ModelFile::min_current_per_load &&
-                        std::fabs(p.forward_gain_stroke) < std::fabs(p.forward_gain),
-                    where, "forward_gain", p.forward_gain,
-                    "of magnitude at least 1e-9 and above |forward_gain_stroke|");
-  require_parameter(std::fabs(p.backward_gain) >= ModelFile::min_current_per_load &&
-                        std::fabs(p.backward_gain_stroke) < std::fabs(p.backward_gain),
+  // The rules of estimation::BidirectionalLoadObserverParameters::validate().
+  const auto map = [&](const char* gain_name, double g, double stroke, const char* stroke_name) {
+    require_parameter(std::fabs(g) >= ModelFile::min_current_per_load, where, gain_name, g,
+                      "of magnitude in [1e-9, 1e6]");
+    require_parameter(std::fabs(stroke) <= 0.9 * std::fabs(g), where, stroke_name, stroke,
+                      "at most 0.9 times the gain's magnitude (the gain keeps its sign and a "
+                      "tenth of its size along the stroke)");
+  };
+  map("forward_gain", p.forward_gain, p.forward_gain_stroke, "forward_gain_stroke");
+  map("backward_gain", p.backward_gain, p.backward_gain_stroke, "backward_gain_stroke");
+  require_parameter(p.forward_gain / p.backward_gain > 0 && p.forward_gain / p.backward_gain <= max,
                     where, "backward_gain", p.backward_gain,
-                    "of magnitude at least 1e-9 and above |backward_gain_stroke|");
-  require_parameter(std::fabs(p.forward_gain / p.backward_gain) <= max, where, "forward_gain",
-                    p.forward_gain, "at most 1e6 times |backward_gain|");
-  require_parameter(p.forward_variance > 0, where, "forward_variance", p.forward_variance,
-                    "in (0, 1e6]");
-  require_parameter(p.backward_variance > 0, where, "backward_variance", p.backward_variance,
-                    "in (0, 1e6]");
+                    "of forward_gain's sign and at least 1e-6 times its magnitude (the current "
+                    "grows with the load both ways)");
+  require_parameter(p.forward_variance >= 1e-12, where, "forward_variance", p.forward_variance,
+                    "in [1e-12, 1e6]");
+  require_parameter(p.backward_variance >= 1e-12, where, "backward_variance", p.backward_variance,
+                    "in [1e-12, 1e6]");
   const std::pair<const char*, double> non_negative[] = {
       {"load_process_variance", p.load_process_variance},
       {"friction_variance", p.friction_variance},

@@ -82,11 +82,13 @@ inline Eigen::Vector4d fit_direction_map(const std::vector<BidirectionalSamples>
                             " map is singular (the current does not follow the load levels of "
                             "the experiments)"));
   }
-  if (!(std::fabs(theta[1]) < std::fabs(theta[0]))) {
+  using Parameters = estimation::BidirectionalLoadObserverParameters<double>;
+  if (!(std::fabs(theta[1]) <= Parameters::max_stroke_ratio * std::fabs(theta[0]))) {
     ENDOHAPTICS_THROW(Error(std::string("fit_bidirectional_load_observer: the ") + name +
-                            " map's gain changes sign along the stroke (gain " +
+                            " map's gain all but vanishes or changes sign along the stroke (gain " +
                             endohaptics::detail::format_number(theta[0]) + ", per s_N " +
-                            endohaptics::detail::format_number(theta[1]) + ")"));
+                            endohaptics::detail::format_number(theta[1]) +
+                            "; at most 0.9 times the gain)"));
   }
   return theta;
 }
@@ -128,6 +130,12 @@ ENDOHAPTICS_DECL BidirectionalObserverFit fit_bidirectional_load_observer(
     const estimation::BidirectionalLoadObserverParameters<double>& prior, double warmup) {
   constexpr int N = estimation::bidirectional_observer_stops;
   if (measured.empty()) ENDOHAPTICS_THROW(Error("fit_bidirectional_load_observer: no data"));
+  if (!(std::isfinite(warmup) && warmup >= 0.0)) {
+    ENDOHAPTICS_THROW(
+        Error("fit_bidirectional_load_observer: warmup must be finite and >= 0 s, "
+              "got " +
+              endohaptics::detail::format_number(warmup)));
+  }
   prior.validate();
   const auto skip = static_cast<Eigen::Index>(std::ceil(warmup / prior.sample_time));
   for (std::size_t e = 0; e < measured.size(); ++e) {
@@ -187,6 +195,15 @@ ENDOHAPTICS_DECL BidirectionalObserverFit fit_bidirectional_load_observer(
   // (a) The two maps.
   const Eigen::Vector4d fwd = detail::fit_direction_map(samples, skip, 1, "forward");
   const Eigen::Vector4d bwd = detail::fit_direction_map(samples, skip, -1, "backward");
+  if (!(fwd[0] / bwd[0] > 0.0)) {
+    ENDOHAPTICS_THROW(
+        Error("fit_bidirectional_load_observer: the forward and the backward map's "
+              "gains have opposite signs (" +
+              endohaptics::detail::format_number(fwd[0]) + ", " +
+              endohaptics::detail::format_number(bwd[0]) +
+              " A per load unit): the current does not grow with the load both "
+              "ways"));
+  }
   // (b) The output's hysteresis around each experiment's level.
   constexpr int M = 1 + 2 * N;
   Eigen::Matrix<double, M, M> normal = Eigen::Matrix<double, M, M>::Zero();
@@ -240,6 +257,22 @@ ENDOHAPTICS_DECL BidirectionalObserverFit fit_bidirectional_load_observer(
   q.output_offset = shape[0];
   q.output_shape = shape.segment<N>(1);
   q.output_shape_per_load = shape.segment<N>(1 + N);
+  // The variances scale with the square of the load's unit: a unit so small that they exceed the
+  // joint-model bound is refused by name (rescale the output), not by a generic check.
+  const std::pair<const char*, double> variances[] = {
+      {"forward_variance", q.forward_variance},
+      {"backward_variance", q.backward_variance},
+      {"friction_variance", q.friction_variance},
+      {"initial_variance", q.initial_variance},
+      {"load_process_variance", q.load_process_variance}};
+  for (const auto& [field, v] : variances) {
+    if (!(v <= model::max_joint_model_parameter)) {
+      ENDOHAPTICS_THROW(Error(std::string("fit_bidirectional_load_observer: ") + field + " " +
+                              endohaptics::detail::format_number(v) +
+                              " exceeds the model's bound 1e6 (load unit^2): give the output in "
+                              "a larger unit"));
+    }
+  }
   q.validate();
   fit.reference = reference;
   fit.forward_fraction = static_cast<double>(forward) / static_cast<double>(total);

@@ -97,10 +97,6 @@ inline double fit_percent(const Eigen::VectorXd& y, const Eigen::VectorXd& y_hat
                     : -std::numeric_limits<double>::infinity();
 }
 
-}  // namespace detail
-
-namespace detail {
-
 // fit_joint_model for kind bidirectional_load_observer, on the segments as the observers see them.
 inline JointModelFit fit_bidirectional(const std::vector<LoadObserverData>& data, double ts,
                                        double warmup, const std::vector<files::SignalInfo>& inputs,
