@@ -11,6 +11,7 @@
 
 #include "shared_data.hpp"
 #include "test_support.hpp"
+#include "umn_sessions.hpp"
 
 namespace workflow_bidirectional_observer_fit_test {
 
@@ -174,24 +175,8 @@ TEST_CASE("bidirectional observer on the UMN grasper, one session to the other, 
   // Five runs per session spread evenly in name order (frequencies and levels both vary), to keep
   // the sanitized test short; the current, its command and the motor encoder only (only its
   // increments are used); grip torque in mN m as logged; RMSE on every sample after 1 s.
-  auto session = [](const char* folder) {
-    std::vector<std::filesystem::path> paths;
-    for (const auto& e : std::filesystem::directory_iterator(
-             endohaptics::test::shared_data(std::string("umn-mis-tool-2018/") + folder))) {
-      paths.push_back(e.path());
-    }
-    std::sort(paths.begin(), paths.end());
-    std::vector<wf::LoadObserverData> out;
-    for (std::size_t i = 0; i < 5 && paths.size() > 1; ++i) {
-      const auto log =
-          endohaptics::files::read_umn_mis_2018(paths[(i * (paths.size() - 1) + 2) / 4].string());
-      out.push_back({log.signal("current"), log.signal("motor_position"), log.signal("grip_torque"),
-                     log.signal("current_command")});
-    }
-    return out;
-  };
-  const auto l2 = session("Tool_4_Maryland_L_2");
-  const auto l4 = session("Tool_4_Maryland_L_4");
+  const auto l2 = endohaptics::test::umn_session_runs("Tool_4_Maryland_L_2");
+  const auto l4 = endohaptics::test::umn_session_runs("Tool_4_Maryland_L_4");
   const auto cross = [](const std::vector<wf::LoadObserverData>& train,
                         const std::vector<wf::LoadObserverData>& test) {
     const auto fit = wf::fit_bidirectional_load_observer(train, {}, 1.0);

@@ -59,6 +59,26 @@ wf::PreparedLog hits_log(double gain, int hits, double first_depth, const std::s
   return log;
 }
 
+// The largest difference between `y` (a 3-input observer file replayed on `u` at 1 kHz) and the
+// estimation types composed by hand: the current referred to its command, then `observer` on the
+// encoder angle summed from the velocity.
+template <typename Observer>
+double by_hand(const files::ModelFile& file, Observer observer, const Eigen::MatrixXd& u,
+               const Eigen::VectorXd& y) {
+  est::CurrentOffsetReference<double> reference(
+      *files::current_offset_reference_parameters<est::CurrentOffsetReferenceParameters<double>>(
+          file));
+  double position = 0.0, largest = 0.0;
+  for (Eigen::Index k = 0; k < u.rows(); ++k) {
+    position += u(k, 1) * 0.001;
+    REQUIRE(reference.advance(u(k, 0), u(k, 2)) == endohaptics::model::StepStatus::ok);
+    const est::JointSignals<double> s{position, u(k, 1), reference.corrected(), 0.0};
+    REQUIRE(observer.advance(s) == endohaptics::model::StepStatus::ok);
+    largest = std::max(largest, std::fabs(observer.force(s) - y[k]));
+  }
+  return largest;
+}
+
 }  // namespace
 
 TEST_CASE("joint models: a stall-hold file simulates as the estimation type, scored causally") {
@@ -184,19 +204,9 @@ TEST_CASE("joint models: an observer with the current command third, and hostile
   // Replayed through the file: the same as the estimation types composed by hand.
   const Eigen::MatrixXd& u = logs[1].segments[0].u;
   const Eigen::VectorXd y = wf::simulate_joint_model(fit.model, u);
-  est::CurrentOffsetReference<double> reference(
-      *files::current_offset_reference_parameters<est::CurrentOffsetReferenceParameters<double>>(
-          fit.model));
-  est::PushLoadObserver<double> observer(wf::push_load_observer_parameters(fit.model));
-  double position = 0.0, largest = 0.0;
-  for (Eigen::Index k = 0; k < u.rows(); ++k) {
-    position += u(k, 1) * 0.001;
-    REQUIRE(reference.advance(u(k, 0), u(k, 2)) == endohaptics::model::StepStatus::ok);
-    const est::JointSignals<double> s{position, u(k, 1), reference.corrected(), 0.0};
-    REQUIRE(observer.advance(s) == endohaptics::model::StepStatus::ok);
-    largest = std::max(largest, std::fabs(observer.force(s) - y[k]));
-  }
-  CHECK(largest == 0.0);
+  CHECK(by_hand(fit.model,
+                est::PushLoadObserver<double>(wf::push_load_observer_parameters(fit.model)), u,
+                y) == 0.0);
   CHECK(message_of([&] { (void)wf::simulate_joint_model(fit.model, u.leftCols(2)); }) ==
         "simulate_joint_model: 2 input columns, the model takes 3 (current, velocity, current "
         "command)");
@@ -270,19 +280,10 @@ TEST_CASE("joint models: the bidirectional observer through the workflow, with t
   // Replayed through the file: the same as the estimation types composed by hand.
   const Eigen::MatrixXd& u = logs[1].segments[0].u;
   const Eigen::VectorXd y = wf::simulate_joint_model(fit.model, u);
-  est::CurrentOffsetReference<double> reference(
-      *files::current_offset_reference_parameters<est::CurrentOffsetReferenceParameters<double>>(
-          fit.model));
-  est::BidirectionalLoadObserver<double> observer(wf::bidirectional_observer_parameters(fit.model));
-  double position = 0.0, largest = 0.0;
-  for (Eigen::Index k = 0; k < u.rows(); ++k) {
-    position += u(k, 1) * 0.001;
-    REQUIRE(reference.advance(u(k, 0), u(k, 2)) == endohaptics::model::StepStatus::ok);
-    const est::JointSignals<double> s{position, u(k, 1), reference.corrected(), 0.0};
-    REQUIRE(observer.advance(s) == endohaptics::model::StepStatus::ok);
-    largest = std::max(largest, std::fabs(observer.force(s) - y[k]));
-  }
-  CHECK(largest == 0.0);
+  CHECK(by_hand(fit.model,
+                est::BidirectionalLoadObserver<double>(
+                    wf::bidirectional_observer_parameters(fit.model)),
+                u, y) == 0.0);
   // The truth is the level +-3 mN m by direction: after the first cycle the estimate follows it.
   const auto& truth = logs[1].segments[0].y;
   CHECK(std::sqrt((y.tail(4000) - truth.col(0).tail(4000)).squaredNorm() / 4000.0) < 1.0);

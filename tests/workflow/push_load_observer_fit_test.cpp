@@ -11,6 +11,7 @@
 
 #include "shared_data.hpp"
 #include "test_support.hpp"
+#include "umn_sessions.hpp"
 
 namespace workflow_push_load_observer_fit_test {
 
@@ -227,24 +228,8 @@ TEST_CASE("push-load observer on the UMN grasper, one session to the other, scor
   // the sanitized test short; the current, its command and the motor encoder only (no absolute
   // position: only increments are used); grip torque in mN m as logged; RMSE on every sample
   // after 1 s of warm-up, state from reset.
-  auto session = [](const char* folder) {
-    std::vector<std::filesystem::path> paths;
-    for (const auto& e : std::filesystem::directory_iterator(
-             endohaptics::test::shared_data(std::string("umn-mis-tool-2018/") + folder))) {
-      paths.push_back(e.path());
-    }
-    std::sort(paths.begin(), paths.end());
-    std::vector<wf::LoadObserverData> out;
-    for (std::size_t i = 0; i < 5 && paths.size() > 1; ++i) {
-      const auto log =
-          endohaptics::files::read_umn_mis_2018(paths[(i * (paths.size() - 1) + 2) / 4].string());
-      out.push_back({log.signal("current"), log.signal("motor_position"), log.signal("grip_torque"),
-                     log.signal("current_command")});
-    }
-    return out;
-  };
-  const auto l2 = session("Tool_4_Maryland_L_2");
-  const auto l4 = session("Tool_4_Maryland_L_4");
+  const auto l2 = endohaptics::test::umn_session_runs("Tool_4_Maryland_L_2");
+  const auto l4 = endohaptics::test::umn_session_runs("Tool_4_Maryland_L_4");
   // The priors as fit_joint_model sets them: P0 the variance of the training loads, Q = (0.03 x
   // the largest |load|)^2 per second. Pushing is positive motor motion (the jaws close against the
   // reaction; the research note's reading of the data, not chosen on the test runs).

@@ -1,0 +1,35 @@
+// The UMN grasper logs (../shared/data/umn-mis-tool-2018) as the observer fits take them, for the
+// workflow tests that score a model across the two sessions.
+#pragma once
+
+#include <algorithm>
+#include <endohaptics/files/umn_mis_2018_log.hpp>
+#include <endohaptics/workflow/push_load_observer_fit.hpp>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "shared_data.hpp"
+
+namespace endohaptics::test {
+
+//! Five runs of one session folder spread evenly in name order (frequencies and levels both
+//! vary), to keep the sanitized tests short: the current, its command and the motor encoder only
+//! (the observers use its increments only); grip torque in mN m as logged.
+inline std::vector<workflow::LoadObserverData> umn_session_runs(const std::string& folder) {
+  std::vector<std::filesystem::path> paths;
+  for (const auto& e :
+       std::filesystem::directory_iterator(shared_data("umn-mis-tool-2018/" + folder))) {
+    paths.push_back(e.path());
+  }
+  std::sort(paths.begin(), paths.end());
+  std::vector<workflow::LoadObserverData> out;
+  for (std::size_t i = 0; i < 5 && paths.size() > 1; ++i) {
+    const auto log = files::read_umn_mis_2018(paths[(i * (paths.size() - 1) + 2) / 4].string());
+    out.push_back({log.signal("current"), log.signal("motor_position"), log.signal("grip_torque"),
+                   log.signal("current_command")});
+  }
+  return out;
+}
+
+}  // namespace endohaptics::test
