@@ -169,6 +169,7 @@ class BidirectionalLoadObserver {
       : p_((p.validate(), p)), stops_(p.stop_thresholds, p.start_travel) {
     current_ = model::ButterworthBiquad<Scalar>::lowpass(p_.current_cutoff, p_.sample_time);
     velocity_ = model::ButterworthBiquad<Scalar>::lowpass(p_.velocity_cutoff, p_.sample_time);
+    backward_weight_ = -p_.forward_gain / p_.backward_gain;
     reset();
   }
 
@@ -226,7 +227,7 @@ class BidirectionalLoadObserver {
       // backward one, kappa = g_f / g_b (the gains at mid-stroke; research note K7: weights that
       // follow the stroke, h = g_f / gain_f(s) and -g_f / gain_b(s), scored 4.67 / 7.31 mN m
       // across the UMN sessions against 4.95 / 4.07 for the constant ratio).
-      const Scalar h = forward ? Scalar(1) : -p_.forward_gain / p_.backward_gain;
+      const Scalar h = forward ? Scalar(1) : backward_weight_;
       const Scalar r = forward ? p_.forward_variance : p_.backward_variance;
       // Measurement z = L + h f + noise (variance r): the Kalman update of (L, f).
       const Scalar ph0 = x[p_ll] + h * x[p_lf];
@@ -281,6 +282,7 @@ class BidirectionalLoadObserver {
   Stops stops_;
   model::ButterworthBiquad<Scalar> current_{};
   model::ButterworthBiquad<Scalar> velocity_{};
+  Scalar backward_weight_{};  // -kappa = -g_f / g_b, from the parameters
   State x_ = State::Zero();
   Scalar last_filtered_current_{};
   Scalar last_filtered_velocity_{};

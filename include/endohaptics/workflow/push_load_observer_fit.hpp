@@ -55,6 +55,17 @@ struct LoadObserverFit {
                                                                 const CurrentReference& reference,
                                                                 const char* where);
 
+//! Throws Error naming `where` and the experiment unless every experiment's current, position and
+//! load have the same length, longer than `skip` + 1 samples (the warm-up).
+ENDOHAPTICS_DECL void check_experiments(std::span<const LoadObserverData> data, Eigen::Index skip,
+                                        const char* where);
+
+//! The experiments with their current referred to the command by `reference` (for a fit that
+//! works on the current as the fitted model will see it); empty without a reference (then use the
+//! experiments as measured). Throws Error as referred_current.
+[[nodiscard]] ENDOHAPTICS_DECL std::vector<LoadObserverData> referred_experiments(
+    std::span<const LoadObserverData> data, const CurrentReference& reference, const char* where);
+
 //! The causal output of `model` (from its reset state) on one experiment; with a `reference`, the
 //! current referred to the command first (the experiment must then carry it).
 [[nodiscard]] ENDOHAPTICS_DECL Eigen::VectorXd simulate_load_observer(

@@ -33,10 +33,10 @@ namespace detail {
 // One experiment as the observer's front end sees it (configuration time).
 struct BidirectionalSamples {
   Eigen::VectorXd current;  // filtered, A
-  Eigen::VectorXd stroke;   // s_N
   Eigen::VectorXi regime;   // +1, -1, 0
-  Eigen::MatrixXd stops;    // samples x N
+  Eigen::MatrixXd stops;    // samples x N; its last column is s_N, the stroke of the maps
   double level = 0.0;       // L_e: the mean load after the warm-up
+  [[nodiscard]] double stroke(Eigen::Index k) const { return stops(k, stops.cols() - 1); }
 };
 
 // Least squares of the filtered current on [L, L s_N, 1, s_N] over the samples of `regime`
@@ -57,7 +57,7 @@ inline Eigen::Vector4d fit_direction_map(const std::vector<BidirectionalSamples>
     const double w = 1.0 / static_cast<double>(n);
     for (Eigen::Index k = skip; k < e.current.size(); ++k) {
       if (e.regime[k] != regime) continue;
-      const Eigen::Vector4d row(e.level, e.level * e.stroke[k], 1.0, e.stroke[k]);
+      const Eigen::Vector4d row(e.level, e.level * e.stroke(k), 1.0, e.stroke(k));
       normal += w * row * row.transpose();
       rhs += w * row * e.current[k];
     }
@@ -109,7 +109,7 @@ inline InversionError inversion_error(const std::vector<BidirectionalSamples>& s
     for (Eigen::Index k = skip; k < e.current.size(); ++k) {
       if (e.regime[k] != regime) continue;
       const double z =
-          (e.current[k] - map[2] - map[3] * e.stroke[k]) / (map[0] + map[1] * e.stroke[k]);
+          (e.current[k] - map[2] - map[3] * e.stroke(k)) / (map[0] + map[1] * e.stroke(k));
       square += (z - e.level) * (z - e.level);
       sum += z - e.level;
       ++n;
@@ -138,27 +138,12 @@ ENDOHAPTICS_DECL BidirectionalObserverFit fit_bidirectional_load_observer(
   }
   prior.validate();
   const auto skip = static_cast<Eigen::Index>(std::ceil(warmup / prior.sample_time));
-  for (std::size_t e = 0; e < measured.size(); ++e) {
-    const auto& d = measured[e];
-    if (d.position.size() != d.current.size() || d.load.size() != d.current.size() ||
-        d.current.size() <= skip + 1) {
-      ENDOHAPTICS_THROW(Error("fit_bidirectional_load_observer: experiment " + std::to_string(e) +
-                              ": current, position and load must have the same length, longer "
-                              "than the warm-up"));
-    }
-  }
+  check_experiments(measured, skip, "fit_bidirectional_load_observer");
   // The current's offset reference first (when the data carry the command); everything below
   // works on the referred current, as the fitted model will see it.
   const CurrentReference reference = fit_current_reference(measured);
-  std::vector<LoadObserverData> referred;
-  if (reference) {
-    for (const auto& d : measured) {
-      referred.push_back({referred_current(d, reference, "fit_bidirectional_load_observer"),
-                          d.position,
-                          d.load,
-                          {}});
-    }
-  }
+  const std::vector<LoadObserverData> referred =
+      referred_experiments(measured, reference, "fit_bidirectional_load_observer");
   const std::span<const LoadObserverData> data =
       reference ? std::span<const LoadObserverData>(referred) : measured;
   // The front end (filters, regime, stop operators) does not depend on the fitted values.
@@ -167,20 +152,18 @@ ENDOHAPTICS_DECL BidirectionalObserverFit fit_bidirectional_load_observer(
   std::size_t forward = 0, backward = 0, total = 0;
   for (const auto& d : data) {
     estimation::BidirectionalLoadObserver<double> m(prior);
-    detail::BidirectionalSamples e{
-        Eigen::VectorXd(d.current.size()), Eigen::VectorXd(d.current.size()),
-        Eigen::VectorXi(d.current.size()), Eigen::MatrixXd(d.current.size(), N), 0.0};
+    detail::BidirectionalSamples e{Eigen::VectorXd(d.current.size()),
+                                   Eigen::VectorXi(d.current.size()),
+                                   Eigen::MatrixXd(d.current.size(), N), 0.0};
     for (Eigen::Index k = 0; k < d.current.size(); ++k) {
       const estimation::JointSignals<double> s{d.position[k], 0.0, d.current[k], 0.0};
       if (m.advance(s) != model::StepStatus::ok) {
         ENDOHAPTICS_THROW(Error("fit_bidirectional_load_observer: non-finite signal at sample " +
                                 std::to_string(k)));
       }
-      const auto stops = m.stop_values();
       e.current[k] = m.filtered_current();
-      e.stroke[k] = stops[N - 1];
       e.regime[k] = static_cast<int>(m.regime());
-      e.stops.row(k) = stops.transpose();
+      e.stops.row(k) = m.stop_values().transpose();
       if (k < skip) continue;
       ++total;
       forward += e.regime[k] > 0 ? 1U : 0U;

@@ -97,6 +97,31 @@ inline double fit_percent(const Eigen::VectorXd& y, const Eigen::VectorXd& y_hat
                     : -std::numeric_limits<double>::infinity();
 }
 
+// An observer fitted on logs with a third input (the command) must refer its current to it.
+inline void require_reference(const char* kind, const std::vector<files::SignalInfo>& inputs,
+                              bool has_reference) {
+  if (inputs.size() == 3 && !has_reference) {
+    endohaptics::detail::fail(std::string("fit_joint_model: ") + kind +
+                              ": the current does not follow the third input, " + inputs[2].name +
+                              ", or it does not vary (no current-per-command slope can be "
+                              "fitted): leave it out");
+  }
+}
+
+// The causal training fit of an observer on every experiment after `skip` samples (`simulate`:
+// its output on one experiment), into out.training_fit and the provenance's mean.
+template <typename Simulate>
+void score_training(JointModelFit& out, const std::vector<LoadObserverData>& data,
+                    Eigen::Index skip, Simulate&& simulate) {
+  double sum = 0.0;
+  for (const LoadObserverData& d : data) {
+    const auto n = d.load.size() - skip;
+    out.training_fit.push_back(fit_percent(d.load.tail(n), simulate(d).tail(n)));
+    sum += out.training_fit.back();
+  }
+  out.model.provenance.fit_percent = {sum / static_cast<double>(out.training_fit.size())};
+}
+
 // fit_joint_model for kind bidirectional_load_observer, on the segments as the observers see them.
 inline JointModelFit fit_bidirectional(const std::vector<LoadObserverData>& data, double ts,
                                        double warmup, const std::vector<files::SignalInfo>& inputs,
@@ -107,26 +132,15 @@ inline JointModelFit fit_bidirectional(const std::vector<LoadObserverData>& data
   const BidirectionalObserverFit fit = fit_bidirectional_load_observer(data, prior, warmup);
   const auto& p = fit.parameters;
   const auto& reference = fit.reference;
-  if (inputs.size() == 3 && !reference) {
-    endohaptics::detail::fail(
-        "fit_joint_model: bidirectional_load_observer: the current does not follow the third "
-        "input, " +
-        inputs[2].name +
-        ", or it does not vary (no current-per-command slope can be fitted): leave it out");
-  }
+  require_reference("bidirectional_load_observer", inputs, reference.has_value());
   JointModelFit out{
       .model = files::make_bidirectional_observer_file(
           files::bidirectional_observer_settings(p, reference), ts, inputs, outputs, provenance)};
   const estimation::BidirectionalLoadObserver<double> fitted(p);
-  const auto skip = static_cast<Eigen::Index>(std::ceil(warmup / ts));
-  double fit_sum = 0.0;
-  for (const LoadObserverData& d : data) {
-    const auto n = d.load.size() - skip;
-    out.training_fit.push_back(
-        fit_percent(d.load.tail(n), simulate_bidirectional_observer(fitted, d, reference).tail(n)));
-    fit_sum += out.training_fit.back();
-  }
-  out.model.provenance.fit_percent = {fit_sum / static_cast<double>(out.training_fit.size())};
+  score_training(out, data, static_cast<Eigen::Index>(std::ceil(warmup / ts)),
+                 [&](const LoadObserverData& d) {
+                   return simulate_bidirectional_observer(fitted, d, reference);
+                 });
   const std::string unit = outputs.front().unit;
   const auto map = [&unit](double g, double g1, double o, double o1) {
     return "(" + endohaptics::detail::format_number(g) + " + " +
@@ -297,26 +311,14 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
   if (!best) detail::fail("fit_joint_model: push_load_observer: " + failures);
   const auto& p = best->parameters;
   const auto& reference = best->reference;
-  if (inputs.size() == 3 && !reference) {
-    detail::fail(
-        "fit_joint_model: push_load_observer: the current does not follow the third "
-        "input, " +
-        inputs[2].name +
-        ", or it does not vary (no current-per-command slope can be fitted): leave it "
-        "out");
-  }
+  detail::require_reference("push_load_observer", inputs, reference.has_value());
   JointModelFit out{
       .model = files::make_push_load_observer_file(files::push_load_observer_settings(p, reference),
                                                    ts, inputs, outputs, provenance)};
   const estimation::PushLoadObserver<double> fitted(p);
-  for (const LoadObserverData& d : data) {
-    const auto n = d.load.size() - skip;
-    out.training_fit.push_back(
-        detail::fit_percent(d.load.tail(n), simulate_load_observer(fitted, d, reference).tail(n)));
-  }
-  double fit_sum = 0.0;
-  for (const double f : out.training_fit) fit_sum += f;
-  out.model.provenance.fit_percent = {fit_sum / static_cast<double>(out.training_fit.size())};
+  detail::score_training(out, data, skip, [&](const LoadObserverData& d) {
+    return simulate_load_observer(fitted, d, reference);
+  });
   const std::string unit = outputs.front().unit;
   out.summary =
       "push_load_observer: push sign " + detail::format_number(p.push_sign) +

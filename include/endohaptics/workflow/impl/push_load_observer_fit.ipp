@@ -31,6 +31,29 @@ ENDOHAPTICS_DECL Eigen::VectorXd referred_current(const LoadObserverData& d,
   return out;
 }
 
+ENDOHAPTICS_DECL void check_experiments(std::span<const LoadObserverData> data, Eigen::Index skip,
+                                        const char* where) {
+  for (std::size_t e = 0; e < data.size(); ++e) {
+    const auto& d = data[e];
+    if (d.position.size() != d.current.size() || d.load.size() != d.current.size() ||
+        d.current.size() <= skip + 1) {
+      ENDOHAPTICS_THROW(Error(std::string(where) + ": experiment " + std::to_string(e) +
+                              ": current, position and load must have the same length, longer "
+                              "than the warm-up"));
+    }
+  }
+}
+
+ENDOHAPTICS_DECL std::vector<LoadObserverData> referred_experiments(
+    std::span<const LoadObserverData> data, const CurrentReference& reference, const char* where) {
+  std::vector<LoadObserverData> referred;
+  if (!reference) return referred;
+  for (const auto& d : data) {
+    referred.push_back({referred_current(d, reference, where), d.position, d.load, {}});
+  }
+  return referred;
+}
+
 ENDOHAPTICS_DECL CurrentReference fit_current_reference(std::span<const LoadObserverData> data) {
   double sxy = 0.0, sxx = 0.0;
   for (const auto& d : data) {
@@ -93,25 +116,12 @@ fit_push_load_observer(std::span<const LoadObserverData> measured,
   if (measured.empty()) ENDOHAPTICS_THROW(Error("fit_push_load_observer: no data"));
   prior.validate();
   const auto skip = static_cast<Eigen::Index>(std::ceil(warmup / prior.sample_time));
-  for (std::size_t e = 0; e < measured.size(); ++e) {
-    const auto& d = measured[e];
-    if (d.position.size() != d.current.size() || d.load.size() != d.current.size() ||
-        d.current.size() <= skip + 1) {
-      ENDOHAPTICS_THROW(Error("fit_push_load_observer: experiment " + std::to_string(e) +
-                              ": current, position and load must have the same length, longer "
-                              "than the warm-up"));
-    }
-  }
+  check_experiments(measured, skip, "fit_push_load_observer");
   // The current's offset reference first (when the data carry the command); everything below
   // works on the referred current, as the fitted model will see it.
   const CurrentReference reference = fit_current_reference(measured);
-  std::vector<LoadObserverData> referred;
-  if (reference) {
-    for (const auto& d : measured) {
-      referred.push_back(
-          {referred_current(d, reference, "fit_push_load_observer"), d.position, d.load, {}});
-    }
-  }
+  const std::vector<LoadObserverData> referred =
+      referred_experiments(measured, reference, "fit_push_load_observer");
   const std::span<const LoadObserverData> data =
       reference ? std::span<const LoadObserverData>(referred) : measured;
   // (a) The push regime and the filtered signals do not depend on the fitted values.
