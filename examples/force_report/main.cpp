@@ -13,14 +13,18 @@
 #include <endohaptics/files/tick_log.hpp>
 #include <endohaptics/sim/force_accuracy.hpp>
 #include <endohaptics/workflow/command_line.hpp>
+#include <endohaptics/workflow/gnuplot.hpp>
 #include <filesystem>
+#include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "../cli_numbers.hpp"
 
 namespace files = endohaptics::files;
 namespace sim = endohaptics::sim;
+namespace wf = endohaptics::workflow;
 
 namespace {
 
@@ -37,20 +41,71 @@ files::Log read_truth(const std::string& path) {
   return log;
 }
 
-bool plot(const std::string& script) {
-  std::FILE* gp = popen("gnuplot 2>&1", "w");
-  if (gp == nullptr) return false;
-  std::fputs(script.c_str(), gp);
-  return pclose(gp) == 0;
-}
-
 // One run: the emulator's truth log and the bridge's tick log of the same teleoperation.
 struct Run {
   std::string label, truth_path, log_path;
+  std::vector<double> truth_time, truth_force;  // the truth log's time and force of the joint
   files::TickLog ticks;
   sim::ForceAccuracy accuracy;
   double t0 = 0.0;  // the tick log's first time stamp
 };
+
+// One panel per run: true force, estimate and stylus force over time since the run's first tick.
+wf::PlotFigure forces_figure(const std::vector<Run>& runs, int joint) {
+  const std::string j = std::to_string(joint);
+  wf::PlotFigure figure;
+  figure.panel_height = 350;
+  for (const Run& run : runs) {
+    wf::PlotPanel& panel = figure.panels.emplace_back();
+    panel.title = fmt::format("{}: motor {}, true external force (emulator) vs estimate (bridge)",
+                              run.label, joint);
+    panel.x_label = "time (s)";
+    panel.y_label = "force (N)";
+    panel.key = wf::KeyPlacement::top_left;
+    wf::PlotSeries truth, estimate, stylus;
+    truth.title = "true";
+    estimate.title = "estimated (" + run.label + ")";
+    truth.line_width = estimate.line_width = 2;
+    stylus.title = "stylus |F|";
+    for (std::size_t i = 0; i < run.truth_time.size(); ++i) {
+      truth.add(run.truth_time[i] - run.t0, run.truth_force[i]);
+    }
+    const auto& t = run.ticks.column("time");
+    const auto& f = run.ticks.column("motor_force" + j);
+    const auto& fx = run.ticks.column("stylus_fx");
+    const auto& fy = run.ticks.column("stylus_fy");
+    const auto& fz = run.ticks.column("stylus_fz");
+    for (std::size_t i = 0; i < t.size(); ++i) {
+      estimate.add(t[i] - run.t0, f[i]);
+      stylus.add(t[i] - run.t0, std::sqrt(fx[i] * fx[i] + fy[i] * fy[i] + fz[i] * fz[i]));
+    }
+    panel.series = {std::move(truth), std::move(estimate), std::move(stylus)};
+  }
+  return figure;
+}
+
+// Histogram of the run's tick-to-tick periods in 5 us bins.
+wf::PlotFigure period_figure(const Run& run) {
+  constexpr double bin = 5.0;  // us
+  std::map<double, int> counts;
+  const auto& t = run.ticks.column("time");
+  for (std::size_t i = 1; i < t.size(); ++i) {
+    ++counts[bin * std::floor((t[i] - t[i - 1]) * 1e6 / bin + 0.5)];
+  }
+  wf::PlotFigure figure;
+  figure.panel_height = 350;
+  wf::PlotPanel& panel = figure.panels.emplace_back();
+  panel.title = "Bridge tick period (tick to tick), " + run.label;
+  panel.x_label = "period (us)";
+  panel.y_label = "ticks";
+  panel.log_y = true;
+  panel.key = wf::KeyPlacement::none;
+  wf::PlotSeries& boxes = panel.series.emplace_back();
+  boxes.style = wf::PlotStyle::boxes;
+  boxes.box_width = bin;
+  for (const auto& [period, count] : counts) boxes.add(period, count);
+  return figure;
+}
 
 }  // namespace
 
@@ -74,7 +129,8 @@ int main(int argc, char** argv) {
       ->check(examples::number_in(0.0, 1e7))
       ->capture_default_str();
   app.add_option("--plot-dir", plot_dir,
-                 "write forces.png (every run) and period.png (the last) here (needs gnuplot)");
+                 "write forces.png (every run) and period.png (the last) here (needs gnuplot; "
+                 "a plot that fails is an error)");
   CLI11_PARSE(app, argc, argv);
 
   try {
@@ -93,6 +149,8 @@ int main(int argc, char** argv) {
       run.truth_path = truth_paths[r];
       run.log_path = log_paths[r];
       const files::Log truth = read_truth(run.truth_path);
+      run.truth_time = to_vector(truth.time);
+      run.truth_force = to_vector(truth.signal("force" + j));
       run.ticks = files::read_tick_log(run.log_path);
       if (run.ticks.dropped > 0) fmt::print("force-report: {}", run.ticks.report());
       if (run.ticks.rows() == 0)
@@ -107,8 +165,8 @@ int main(int argc, char** argv) {
           f_est.push_back(f_all[i]);
         }
       }
-      const auto& a = run.accuracy = sim::force_accuracy(
-          to_vector(truth.time), to_vector(truth.signal("force" + j)), t_est, f_est);
+      const auto& a = run.accuracy =
+          sim::force_accuracy(run.truth_time, run.truth_force, t_est, f_est);
       fmt::print(
           "{}: force feedback (motor {}) over {:.1f} s: fit {:.1f} %, correlation {:.3f}, RMSE "
           "{:.3f} N, delay of the estimate {:.0f} ms (fit {:.1f} %, correlation {:.3f} once "
@@ -134,47 +192,13 @@ int main(int argc, char** argv) {
       runs.push_back(std::move(run));
     }
 
-    if (!plot_dir.empty()) {
+    if (!plot_dir.empty()) {  // asked for: a plot that fails fails the run
       std::filesystem::create_directories(plot_dir);
-      const std::string forces = plot_dir + "/forces.png";
-      const std::string period = plot_dir + "/period.png";
-      // One panel per run: truth, estimate and stylus force. gnuplot reads the logs itself, by
-      // the column numbers the reader found by name.
-      std::string script = fmt::format(
-          "set terminal pngcairo size 1400,{0} noenhanced\n"
-          "set datafile separator ','\nset datafile columnheaders\n"
-          "set output '{1}'\nset multiplot layout {2},1\n"
-          "set xlabel 'time (s)'; set ylabel 'force (N)'; set grid; set key top left\n",
-          350 * runs.size() + 100, forces, runs.size());
-      for (const Run& run : runs) {
-        const auto col = [&run](const std::string& name) { return run.ticks.index(name) + 1; };
-        script += fmt::format(
-            "set title '{0}: motor {1}, true external force (emulator) vs estimate (bridge)'\n"
-            "t0 = {2:.9f}\n"
-            "plot '{3}' using (column('time')-t0):(column('force{1}')) with lines lw 2 title "
-            "'true', '{4}' using (${5}-t0):{6} with lines lw 2 title 'estimated ({0})', "
-            "'{4}' using (${5}-t0):(sqrt(${7}**2+${8}**2+${9}**2)) with lines title "
-            "'stylus |F|'\n",
-            run.label, joint, run.t0, run.truth_path, run.log_path, col("time"),
-            col("motor_force" + j), col("stylus_fx"), col("stylus_fy"), col("stylus_fz"));
-      }
-      const Run& last = runs.back();
-      const auto time_col = last.ticks.index("time") + 1;
-      script += fmt::format(
-          "unset multiplot\nset output '{0}'\n"
-          "set title 'Bridge tick period (tick to tick), {1}'\n"
-          "set xlabel 'period (us)'; set ylabel 'ticks'; set logscale y; unset key\n"
-          "binwidth = 5; bin(x) = binwidth * floor(x / binwidth + 0.5)\n"
-          "set style fill solid 0.6\n"
-          "prev = {2:.9f}\n"
-          "plot '{3}' every ::1 using (d = (${4} - prev) * 1e6, prev = ${4}, bin(d)):(1) "
-          "smooth frequency with boxes\n",
-          period, last.label, last.t0, last.log_path, time_col);
-      if (plot(script)) {
-        fmt::print("plots: {} and {}\n", forces, period);
-      } else {
-        fmt::print("plots: gnuplot failed or is not installed (apt-get install gnuplot-nox)\n");
-      }
+      const std::filesystem::path forces = std::filesystem::path(plot_dir) / "forces.png";
+      const std::filesystem::path period = std::filesystem::path(plot_dir) / "period.png";
+      wf::write_png(forces_figure(runs, joint), forces);
+      wf::write_png(period_figure(runs.back()), period);
+      fmt::print("plots: {} and {}\n", forces.string(), period.string());
     }
     // Last: one line per run, side by side (./run demo ends with these).
     for (const Run& run : runs) {
@@ -185,7 +209,7 @@ int main(int argc, char** argv) {
           run.label, a.fit_percent, a.correlation, a.rmse, a.delay * 1e3, a.estimate_peak,
           a.truth_peak);
     }
-    endohaptics::workflow::require_written(stdout, "standard output");
+    wf::require_written(stdout, "standard output");
     return 0;
   } catch (const std::exception& e) {
     fmt::print(stderr, "error: {}\n", e.what());

@@ -9,9 +9,11 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <endohaptics/workflow/command_line.hpp>
+#include <endohaptics/workflow/gnuplot.hpp>
 #include <endohaptics/workflow/workflow.hpp>
 #include <exception>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "../cli_numbers.hpp"
@@ -24,46 +26,35 @@ using examples::number_in;
 
 namespace {
 
-// Measured vs simulated, one panel per file (gnuplot, pngcairo); segments break the lines.
+// Measured vs simulated, one panel per file; segments break the lines. workflow/gnuplot.hpp
+// draws it: file and signal names travel to gnuplot as data, never as code.
 void plot(const std::string& png, const std::vector<wf::FileComparison>& files,
           const std::vector<std::string>& outputs) {
-  const std::string data = png + ".dat";
-  std::FILE* out = std::fopen(data.c_str(), "w");
-  if (out == nullptr) throw endohaptics::Error("--plot: cannot write " + data);
+  wf::PlotFigure figure;
   for (const auto& f : files) {
-    for (std::size_t s = 0; s < f.y.size(); ++s) {
-      for (Eigen::Index k = 0; k < f.y[s].rows(); ++k) {
-        fmt::print(out, "{:.6f}", f.start_time[s] + static_cast<double>(k) * f.sample_time);
-        for (Eigen::Index i = 0; i < f.y[s].cols(); ++i) {
-          fmt::print(out, " {:.9g} {:.9g}", f.y[s](k, i), f.y_hat[s](k, i));
-        }
-        fmt::print(out, "\n");
-      }
-      fmt::print(out, "\n");
-    }
-    fmt::print(out, "\n");
-  }
-  wf::close_written(out, "--plot data " + data);
-  std::string script = fmt::format(
-      "set terminal pngcairo size 1400,{} noenhanced\nset output '{}'\nset multiplot layout {},1\n"
-      "set grid\nset xlabel 'time (s)'\n",
-      300 * files.size() + 100, png, files.size());
-  for (std::size_t f = 0; f < files.size(); ++f) {
-    script +=
-        fmt::format("set title '{} (fit {:.1f} %)'\nplot ", files[f].source, files[f].mean_fit());
+    wf::PlotPanel& panel = figure.panels.emplace_back();
+    panel.title = fmt::format("{} (fit {:.1f} %)", f.source, f.mean_fit());
+    panel.x_label = "time (s)";
     for (std::size_t i = 0; i < outputs.size(); ++i) {
-      script += fmt::format(
-          "{}'{}' index {} using 1:{} with lines lw 2 title '{} measured', '{}' index {} using "
-          "1:{} with lines lw 2 title '{} simulated'",
-          i > 0 ? ", " : "", data, f, 2 + 2 * i, outputs[i], data, f, 3 + 2 * i, outputs[i]);
+      const auto column = static_cast<Eigen::Index>(i);
+      wf::PlotSeries measured, simulated;
+      measured.title = outputs[i] + " measured";
+      simulated.title = outputs[i] + " simulated";
+      measured.line_width = simulated.line_width = 2;
+      for (std::size_t s = 0; s < f.y.size(); ++s) {
+        measured.gap();
+        simulated.gap();
+        for (Eigen::Index k = 0; k < f.y[s].rows(); ++k) {
+          const double t = f.start_time[s] + static_cast<double>(k) * f.sample_time;
+          measured.add(t, f.y[s](k, column));
+          simulated.add(t, f.y_hat[s](k, column));
+        }
+      }
+      panel.series.push_back(std::move(measured));
+      panel.series.push_back(std::move(simulated));
     }
-    script += "\n";
   }
-  script += "unset multiplot\n";
-  std::FILE* gp = popen("gnuplot", "w");
-  if (gp == nullptr) throw endohaptics::Error("--plot: cannot run gnuplot");
-  std::fputs(script.c_str(), gp);
-  if (pclose(gp) != 0) throw endohaptics::Error("--plot: gnuplot failed (is it installed?)");
+  wf::write_png(figure, png);
 }
 
 }  // namespace
