@@ -2,8 +2,9 @@
 # Issue 14, items 4 and 5: every program's numbers parse whole and inside their stated range or
 # the program exits non-zero naming the option; a run whose result is not finite, or whose output
 # could not be written (/dev/full), exits non-zero with a message. Each case failed before.
-# Usage: cli_strict.sh BIN_DIR numbers|results|outputs|keys   (prints PASS: ... on success)
+# Usage: cli_strict.sh BIN_DIR numbers|results|outputs|keys|inputs   (prints PASS: ... on success)
 # keys: protocol v2 key files and --protocol 2016 (issue 16).
+# inputs: every file a program reads is a regular file within a stated size (issue 30, finding 5).
 set -euo pipefail
 bin=$1
 scenario=$2
@@ -48,6 +49,7 @@ identify="$bin/endohaptics-identify"
 replay="$bin/endohaptics-replay"
 bridge="$bin/endohaptics-bridge"
 emulator="$bin/endohaptics-sbrio-emulator"
+force_report="$bin/endohaptics-force-report"
 csv=(--format csv --input u1 --input u2 --output y)
 
 case $scenario in
@@ -157,6 +159,40 @@ case $scenario in
       fail "bridge --protocol 2016: $(cat "$work/out")"
     grep -q "WARNING: --protocol 2016: unauthenticated" "$work/out" || fail "no warning: $(cat "$work/out")"
     echo "PASS: key files: generated 0600, never overwritten or printed; group-readable, short and missing keys refused; 2016 warns"
+    ;;
+  inputs)
+    # Issue 30, finding 5: a FIFO, a device or a directory given as any input file is refused at
+    # once, naming the file (before: a FIFO blocked every program for ever, SIGTERM did not end the
+    # bridge; /dev/zero as a log ended in std::bad_alloc naming no file), and so is a file above
+    # its reader's limit (sparse files: nothing is read).
+    make_csv "$work/sys.csv" 600 7 1
+    "$identify" --log "$work/sys.csv" "${csv[@]}" --out "$work/model.json" >/dev/null
+    printf 'time,force2\n0,1\n0.01,2\n' >"$work/truth.csv"
+    mkfifo "$work/pipe"
+    inputs=("$work/pipe" "FIFO (named pipe)" /dev/zero "character device" "$work" "directory")
+    for ((i = 0; i < ${#inputs[@]}; i += 2)); do
+      f=${inputs[i]}
+      what="' is a ${inputs[i + 1]}, not a regular file"
+      expect_error "read_csv: log file '$f$what" "$identify" --log "$f" "${csv[@]}"
+      expect_error "read_endowrist_2016: log file '$f$what" "$identify" --log "$f"
+      expect_error "read_umn_mis_2018: log file '$f$what" "$identify" --log "$f" --format umn-mis-2018
+      expect_error "read_csv: log file '$f$what" "$replay" --model "$work/model.json" --format csv --log "$f"
+      expect_error "model file '$f$what" "$replay" --model "$f" --format csv --log "$work/sys.csv"
+      expect_error "key file '$f$what" "$bridge" --key "$f" --duration 0.1
+      expect_error "key file '$f$what" "$emulator" --key "$f" --duration 0.1
+      [[ -d $f ]] && continue  # CLI11 refuses a directory for --config, --truth and --log itself
+      expect_error "configuration file '$f$what" "$bridge" --config "$f" --protocol 2016 --duration 0.1
+      expect_error "read_csv: log file '$f$what" "$force_report" --truth "$f" --log "$work/sys.csv"
+      expect_error "tick log '$f$what" "$force_report" --truth "$work/truth.csv" --log "$f"
+    done
+    truncate -s 1048577 "$work/big.json"
+    expect_error "configuration file '$work/big.json' holds 1048577 bytes, more than the limit of 1048576 bytes" "$bridge" --config "$work/big.json" --protocol 2016 --duration 0.1
+    truncate -s 67108865 "$work/big.json"
+    expect_error "model file '$work/big.json' holds 67108865 bytes, more than the limit of 67108864 bytes" "$replay" --model "$work/big.json" --format csv --log "$work/sys.csv"
+    truncate -s 1073741825 "$work/big.csv"
+    expect_error "read_csv: log file '$work/big.csv' holds 1073741825 bytes, more than the limit of 1073741824 bytes (raise LogReadOptions::max_bytes to read it)" "$identify" --log "$work/big.csv" "${csv[@]}"
+    expect_error "tick log '$work/big.csv' holds 1073741825 bytes, more than the limit of 1073741824 bytes (raise TickLogOptions::max_bytes to read it)" "$force_report" --truth "$work/truth.csv" --log "$work/big.csv"
+    echo "PASS: FIFOs, devices, directories and files above their limit refused at once, named"
     ;;
   *)
     fail "unknown scenario $scenario"

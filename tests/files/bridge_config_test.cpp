@@ -123,7 +123,7 @@ TEST_CASE("file errors name the file") {
   TempDir dir("file_errors");
   const auto missing = dir.path() / "missing.json";
   CHECK(message_of([&] { (void)files::load_bridge_config(missing); }) ==
-        missing.string() + ": cannot read the configuration file");
+        "configuration file '" + missing.string() + "' cannot be opened: the file does not exist");
 
   const auto bad = dir.path() / "bad.json";
   write_text(bad, "{\n  \"safety\": { \"policy\": \"zero_force\", }\n}");
@@ -138,7 +138,9 @@ TEST_CASE("file errors name the file") {
   const auto big = dir.path() / "big.json";
   write_text(big, "{}" + std::string(files::bridge_config_max_bytes, ' '));
   CHECK(message_of([&] { (void)files::load_bridge_config(big); }) ==
-        big.string() + ": larger than 1048576 bytes; not a bridge configuration");
+        "configuration file '" + big.string() +
+            "' holds 1048578 bytes, more than the limit of 1048576 bytes "
+            "(files::bridge_config_max_bytes; a complete one is under 2 kB)");
 }
 
 TEST_CASE("unknown keys are errors that list the allowed keys") {
@@ -161,9 +163,10 @@ TEST_CASE("unknown keys are errors that list the allowed keys") {
 
 TEST_CASE("duplicate keys are errors, at any level") {
   CHECK(error_of(R"({"safety": {"policy": "zero_force", "policy": "hold_position"}})") ==
-        "bridge.json: duplicate key 'safety.policy' (a key may appear only once)");
+        "bridge.json: line 1, column 44: duplicate key 'safety.policy' (a key may appear only "
+        "once)");
   CHECK(error_of(R"({"loop": {}, "mapping": {}, "loop": {"receive_timeout": 0.002}})") ==
-        "bridge.json: duplicate key 'loop' (a key may appear only once)");
+        "bridge.json: line 1, column 34: duplicate key 'loop' (a key may appear only once)");
   // The same key in two different objects is fine.
   CHECK_NOTHROW((void)files::parse_bridge_config(
       R"({"mapping": {"force_limit": 2}, "safety": {"max_stylus_force": 2}})"));
@@ -294,7 +297,7 @@ TEST_CASE("echoed values and keys are cut to 60 characters") {
   CHECK(literal.size() < 300);
 }
 
-TEST_CASE("nesting deeper than 64 levels is refused before parsing") {
+TEST_CASE("nesting deeper than 64 levels is refused by the parser, before it descends further") {
   CHECK(error_of(nested(65)) ==
         "bridge.json: line 1, column 85: nested deeper than 64 levels (the limit; the bridge "
         "configuration needs 3)");
@@ -305,8 +308,12 @@ TEST_CASE("nesting deeper than 64 levels is refused before parsing") {
   // A depth that would exhaust a recursive parser's stack, and one that is unterminated.
   const std::string deep(1000000, '[');
   CHECK(error_of(deep).find("nested deeper than 64 levels") != std::string::npos);
-  CHECK(error_of("{\"a\":\n" + std::string(70, '{')).rfind("bridge.json: line 2, column 64: ", 0) ==
+  CHECK(error_of("{\"a\":\n" + std::string(70, '[')).rfind("bridge.json: line 2, column 64: ", 0) ==
         0);
+  // Objects nest as arrays do; an object that opens where a key belongs is invalid JSON, refused
+  // as such (the bracket counter that ran before the parser called it too deep).
+  CHECK(error_of("{\"a\":\n" + std::string(70, '{'))
+            .rfind("bridge.json: not valid JSON: parse error at line 2, column 2", 0) == 0);
   // Brackets inside strings and comments do not count.
   const std::string brackets(100, '[');
   CHECK(error_of("{\"" + brackets + "\": 1}").rfind("bridge.json: unknown key '[[[", 0) == 0);

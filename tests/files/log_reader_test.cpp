@@ -194,7 +194,8 @@ TEST_CASE("EndoWrist friction log: 3 columns (a 4th ignored), ticks to rad, velo
 TEST_CASE("EndoWrist log: unreadable, empty, unrecognised files throw with the file name") {
   const TempDir dir;
   const std::string missing = (dir.path() / "missing.csv").string();
-  const std::string message = missing + ": file does not exist";
+  const std::string message =
+      "read_endowrist_2016: log file '" + missing + "' cannot be opened: the file does not exist";
   CHECK_THROWS_WITH_AS((void)files::read_endowrist_2016(missing),
                        doctest::Contains(message.c_str()), Error);
   CHECK_THROWS_WITH_AS((void)files::read_endowrist_2016(dir.path().string()),

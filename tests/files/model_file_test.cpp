@@ -209,7 +209,7 @@ TEST_CASE("load errors name the file, the field and the value") {
 
   // Files: unreadable, not JSON (a bare NaN literal is not JSON), a type the loader cannot hold.
   CHECK(message_of([] { (void)files::load_model("/nonexistent/model.json"); }) ==
-        "model file /nonexistent/model.json: cannot be opened");
+        "model file '/nonexistent/model.json' cannot be opened: the file does not exist");
   TempFile tmp("errors.json");
   std::string text = valid_json().dump();
   text.replace(text.find("0.9"), 3, "NaN");

@@ -161,7 +161,7 @@ TEST_CASE("header errors") {
   CHECK(message_of([] { (void)parse("time,link,time\n"); }) ==
         "ticks.csv: line 1: column 'time' appears twice in the header");
   CHECK(message_of([] { (void)files::read_tick_log("/nonexistent/ticks.csv"); }) ==
-        "/nonexistent/ticks.csv: cannot read the tick log");
+        "tick log '/nonexistent/ticks.csv' cannot be opened: the file does not exist");
 }
 
 TEST_CASE("tick periods come from LoopStats") {

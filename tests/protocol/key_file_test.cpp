@@ -1,20 +1,28 @@
 #include "endohaptics/protocol/key_file.hpp"
 
 #include <doctest/doctest.h>
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <array>
+#include <chrono>
+#include <cstddef>
 #include <cstdio>
 #include <cstdlib>
+#include <future>
+#include <initializer_list>
 #include <string>
+#include <vector>
 
 namespace protocol_key_file_test {
 
 namespace {
 
 using endohaptics::Error;
+using endohaptics::protocol::check_key_file_mode;
 using endohaptics::protocol::generate_key_file;
+using endohaptics::protocol::key_from_bytes;
 using endohaptics::protocol::load_key_file;
 
 // A fresh private directory, removed with what is in it.
@@ -100,7 +108,8 @@ TEST_CASE("key file: wrong length, missing file and directory are refused, namin
   CHECK_THROWS_WITH_AS(load_key_file(dir.file("absent.key")), doctest::Contains("absent.key"),
                        Error);
   REQUIRE(::chmod(dir.path.c_str(), 0700) == 0);
-  CHECK_THROWS_WITH_AS(load_key_file(dir.path), doctest::Contains("not a file"), Error);
+  CHECK_THROWS_WITH_AS(load_key_file(dir.path),
+                       doctest::Contains("is a directory, not a regular file"), Error);
 }
 
 TEST_CASE("key file: error messages never contain the key") {
@@ -113,6 +122,56 @@ TEST_CASE("key file: error messages never contain the key") {
     FAIL("a world-readable key was loaded");
   } catch (const Error& e) {
     CHECK(std::string(e.what()).find("SECRET") == std::string::npos);
+  }
+}
+
+TEST_CASE("key file: a FIFO, a device or a symbolic link is refused at once, never read") {
+  // Before (issue 30, finding 5): a FIFO as --key blocked the bridge in open() for ever.
+  TempDir dir;
+  const std::string fifo = dir.file("pipe.key");
+  REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+  auto result = std::async(std::launch::async, [&] {
+    try {
+      (void)load_key_file(fifo);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("(loaded)");
+  });
+  if (result.wait_for(std::chrono::seconds(5)) != std::future_status::ready) {
+    const int fd = ::open(fifo.c_str(), O_WRONLY | O_NONBLOCK);  // lets the reader end
+    if (fd >= 0) ::close(fd);
+    FAIL("load_key_file blocked on a FIFO");
+  }
+  CHECK(result.get() == "key file '" + fifo + "' is a FIFO (named pipe), not a regular file");
+  if (::access("/dev/zero", R_OK) == 0) {
+    CHECK_THROWS_WITH_AS(
+        load_key_file("/dev/zero"),
+        doctest::Contains("key file '/dev/zero' is a character device, not a regular file"), Error);
+  }
+  // A symbolic link, even to a good key, is refused (O_NOFOLLOW).
+  const std::string key = dir.file("good.key");
+  write_file(key, std::string(32, 'k'), 0600);
+  const std::string link = dir.file("link.key");
+  REQUIRE(::symlink(key.c_str(), link.c_str()) == 0);
+  CHECK_THROWS_WITH_AS(load_key_file(link),
+                       doctest::Contains("is a symbolic link, not a regular file"), Error);
+  (void)load_key_file(key);
+}
+
+TEST_CASE("key file: the checks on bytes and on the mode, apart from the file") {
+  const std::vector<std::byte> bytes(33, std::byte{7});
+  for (const std::size_t n : {std::size_t{0}, std::size_t{31}, std::size_t{33}}) {
+    const std::string message = "must hold exactly 32 bytes, holds " + std::to_string(n);
+    CHECK_THROWS_WITH_AS(key_from_bytes(std::span(bytes).first(n), "k"),
+                         doctest::Contains(message.c_str()), Error);
+  }
+  (void)key_from_bytes(std::span(bytes).first(32), "k");
+  for (const mode_t mode : std::initializer_list<mode_t>{0600, 0400, 0700, 04600}) {
+    CHECK_NOTHROW(check_key_file_mode(mode, "k"));
+  }
+  for (const mode_t mode : std::initializer_list<mode_t>{0601, 0610, 0640, 0604, 0666, 0777}) {
+    CHECK_THROWS_WITH_AS(check_key_file_mode(mode, "k"), doctest::Contains("chmod 600 k"), Error);
   }
 }
 

@@ -487,7 +487,7 @@ struct Checker {
   }
 };
 
-//! Parses `text` as JSON (comments allowed): nesting limited before parsing, duplicate keys
+//! Parses `text` as JSON (comments allowed): nesting limited as it parses, duplicate keys
 //! refused anywhere (files/json_text.hpp).
 inline json parse(std::string_view text, std::string_view source) {
   return json_text::parse_strict(
@@ -778,22 +778,14 @@ inline void validate_bridge_config(const BridgeConfig& config,
   return config;
 }
 
-//! Reads the bridge configuration file `path` (at most bridge_config_max_bytes) as
+//! Reads the bridge configuration file `path` (a regular file of at most
+//! bridge_config_max_bytes: a FIFO or device is refused without blocking, files/json_text.hpp) as
 //! parse_bridge_config, with the file's name in messages and relative model files resolved
 //! against its folder.
 [[nodiscard]] inline BridgeConfig load_bridge_config(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) ENDOHAPTICS_THROW(Error(path.string() + ": cannot read the configuration file"));
-  std::string text;
-  text.resize(bridge_config_max_bytes + 1);
-  in.read(text.data(), static_cast<std::streamsize>(text.size()));
-  if (in.bad()) ENDOHAPTICS_THROW(Error(path.string() + ": read error"));
-  text.resize(static_cast<std::size_t>(in.gcount()));
-  if (text.size() > bridge_config_max_bytes) {
-    ENDOHAPTICS_THROW(Error(path.string() + ": larger than " +
-                            std::to_string(bridge_config_max_bytes) +
-                            " bytes; not a bridge configuration"));
-  }
+  const std::string text = detail::json_text::read_bounded(
+      path, bridge_config_max_bytes, "configuration file",
+      "files::bridge_config_max_bytes; a complete one is under 2 kB");
   return parse_bridge_config(text, path.string(), path.parent_path());
 }
 

@@ -38,6 +38,9 @@ struct LogReadOptions {
   double gap_threshold = 0;               //!< s; 0: 5 x the median time step
   std::size_t min_rows = 2;               //!< fewer usable rows throw (0 acts as 1)
   std::size_t max_issues = 20;            //!< defects recorded with their line in the report
+  //! Largest file read, bytes: a larger one (or one that grows beyond it while being read) is
+  //! refused, naming the file, its size and this option (files/log_text.hpp).
+  std::uint64_t max_bytes = default_log_max_bytes;
 
   //! Every defect throws (extra fields too); gaps are still only reported.
   [[nodiscard]] static LogReadOptions strict() {
@@ -52,11 +55,11 @@ struct LogReadOptions {
 namespace detail::log_rows {
 
 using identification::detail::signal::format;
+using log_text::Lines;
 using log_text::Number;
 using log_text::parse_number;
 using log_text::readable;
 using log_text::split;
-using log_text::Text;
 
 //! How the data rows of a file are laid out.
 struct Layout {
@@ -79,16 +82,19 @@ ENDOHAPTICS_DECL void record(LogReport& report, const LogReadOptions& options, s
 
 ENDOHAPTICS_DECL std::string where(const Layout& layout, const std::string& path, std::size_t line);
 
-//! Parses the data lines from index `first` on; fills the report's per-row counts.
-ENDOHAPTICS_DECL Rows parse_rows(const Text& text, std::size_t first, const Layout& layout,
-                                 const LogReadOptions& options, LogReport& report);
+//! Parses the data lines not yet taken from `lines`, to the end of the file; fills the report's
+//! per-row counts.
+ENDOHAPTICS_DECL Rows parse_rows(Lines& lines, const Layout& layout, const LogReadOptions& options,
+                                 LogReport& report);
 
-//! Shared by the readers: checks options, parses, then fills the time part of the report,
-//! rebases time, and throws when fewer than min_rows rows are left.
-ENDOHAPTICS_DECL Rows read_rows(const Text& text, std::size_t first, const Layout& layout,
-                                const LogReadOptions& options, LogReport& report);
+//! Shared by the readers: checks options, parses the rest of `lines`, then fills the line counts
+//! and the time part of the report, rebases time, and throws when fewer than min_rows rows are
+//! left.
+ENDOHAPTICS_DECL Rows read_rows(Lines& lines, const Layout& layout, const LogReadOptions& options,
+                                LogReport& report);
 
-ENDOHAPTICS_DECL LogReport start_report(const Text& text, const std::string& path);
+//! The report of file `path` before its rows are read (read_rows adds the line counts).
+ENDOHAPTICS_DECL LogReport start_report(const std::string& path);
 
 //! Column `c` of the row-major values as a vector.
 ENDOHAPTICS_DECL Eigen::VectorXd column_of(const Rows& rows, std::size_t columns, std::size_t c);

@@ -1,7 +1,8 @@
 //! @file
-//! The text layer of the log readers (internals, namespace detail::log_text): a file read into
-//! lines (UTF-8 byte order mark and the CR of CR LF removed, blank lines counted), fields split
-//! at ',', ';', tab or runs of blanks, and locale-independent whole-field numbers
+//! The text layer of the log readers (internals, namespace detail::log_text): a file read line by
+//! line through core/regular_file.hpp (a regular file of at most a stated size; never the whole
+//! file at once), UTF-8 byte order mark and the CR of CR LF removed, blank lines counted; fields
+//! split at ',', ';', tab or runs of blanks, and locale-independent whole-field numbers
 //! (std::from_chars). Configuration time: allocates, throws endohaptics::Error naming the file.
 #pragma once
 
@@ -10,9 +11,8 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <filesystem>
-#include <fstream>
-#include <iterator>
+#include <cstring>
+#include <deque>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -21,34 +21,98 @@
 #include "endohaptics/core/separate_compilation.hpp"
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/core/regular_file.hpp"
+
+namespace endohaptics::files {
+
+//! Largest log file the readers read by default, bytes (LogReadOptions::max_bytes,
+//! TickLogOptions::max_bytes): 1 GiB, about 750 times the largest log of ../shared/data (1.4 MB)
+//! and about 50 minutes of the bridge's tick log at 1 kHz. Larger files are refused with a
+//! message naming the file, its size and the option that raises the limit.
+inline constexpr std::uint64_t default_log_max_bytes = std::uint64_t{1} << 30;
+
+}  // namespace endohaptics::files
 
 namespace endohaptics::files::detail::log_text {
 
 //! Ten significant digits: enough for the logs' time stamps, short enough to read.
 ENDOHAPTICS_DECL std::string readable(double value);
 
-//! The file's text, split into lines (offsets into `content`, CR of CR LF removed).
-struct Text {
-  struct Line {
-    std::size_t number = 0;  //!< 1-based
-    std::size_t begin = 0;
-    std::size_t length = 0;
-  };
-  std::string content;
-  std::vector<Line> lines;  //!< non-blank lines only
-  std::size_t total_lines = 0;
-  std::size_t crlf_lines = 0;
-  std::size_t blank_lines = 0;
-  bool byte_order_mark = false;
-
-  [[nodiscard]] std::string_view text(const Line& line) const {
-    return std::string_view(content).substr(line.begin, line.length);
+//! A file's raw lines, read through one descriptor in blocks (core/regular_file.hpp: a regular
+//! file of at most `max_bytes`), one line held at a time: what std::getline gives, without the
+//! file held in memory.
+class LineReader {
+ public:
+  //! Opens `path`; `what` names it in messages ("read_csv: log file"), `raise` says how to raise
+  //! the limit ("raise LogReadOptions::max_bytes to read it").
+  ENDOHAPTICS_DECL LineReader(const std::string& path, std::string_view what,
+                              std::uint64_t max_bytes, std::string_view raise);
+  //! The next line without its '\n' into `line`; `terminated`: it ended with '\n' (false for a
+  //! last line without one). False at the end of the file.
+  ENDOHAPTICS_DECL bool next(std::string& line, bool& terminated);
+  //! As next(), for callers that need not know whether the line was terminated.
+  bool next(std::string& line) {
+    bool terminated = false;
+    return next(line, terminated);
   }
+  //! The open file.
+  [[nodiscard]] const RegularFile& file() const noexcept { return file_; }
+
+ private:
+  RegularFile file_;
+  std::vector<char> buffer_;
+  std::size_t begin_ = 0;  // unread bytes: [begin_, end_)
+  std::size_t end_ = 0;
+  bool at_end_ = false;
+};
+
+//! One non-blank line of a log.
+struct Line {
+  std::size_t number = 0;  //!< 1-based, counting every line of the file
+  std::string text;        //!< without '\n' and the CR of CR LF
+};
+
+//! The non-blank lines of a log file, one at a time (LineReader), with the counts a LogReport
+//! shows; any number of lines may be looked at ahead (peek) before they are taken (next).
+class Lines {
+ public:
+  //! Opens `path` for `function` ("read_csv"), at most `max_bytes`: "<function>: log file
+  //! '<path>' ...", with "raise LogReadOptions::max_bytes" when it is too large.
+  ENDOHAPTICS_DECL Lines(const std::string& path, std::string_view function,
+                         std::uint64_t max_bytes);
+  //! The `ahead`-th line not yet taken (0: the next one), or null past the last; valid until
+  //! next() takes it.
+  ENDOHAPTICS_DECL const Line* peek(std::size_t ahead = 0);
+  //! Takes the next line, or null at the end; valid until the next call.
+  ENDOHAPTICS_DECL const Line* next();
+
+  //! Lines read so far, blank ones and the last line without '\n' included.
+  [[nodiscard]] std::size_t total_lines() const noexcept { return total_lines_; }
+  //! Lines read so far that ended with CR LF.
+  [[nodiscard]] std::size_t crlf_lines() const noexcept { return crlf_lines_; }
+  //! Blank lines read so far (nothing but blanks and tabs).
+  [[nodiscard]] std::size_t blank_lines() const noexcept { return blank_lines_; }
+  //! True when the file starts with a UTF-8 byte order mark.
+  [[nodiscard]] bool byte_order_mark() const noexcept { return byte_order_mark_; }
+  //! The file's path.
+  [[nodiscard]] const std::string& path() const noexcept { return reader_.file().path(); }
+
+ private:
+  // Reads the next non-blank line into `out`; false at the end.
+  ENDOHAPTICS_DECL bool read(Line& out);
+
+  LineReader reader_;
+  std::deque<Line> ahead_;
+  Line current_;
+  std::string raw_;
+  std::size_t total_lines_ = 0;
+  std::size_t crlf_lines_ = 0;
+  std::size_t blank_lines_ = 0;
+  bool byte_order_mark_ = false;
+  bool first_ = true;
 };
 
 ENDOHAPTICS_DECL std::string_view trim(std::string_view s);
-
-ENDOHAPTICS_DECL Text read_text(const std::string& path, std::string_view function);
 
 //! Fields of a line: split at `separator` (' ' = runs of blanks and tabs), each trimmed.
 ENDOHAPTICS_DECL std::vector<std::string_view> split(std::string_view line, char separator);

@@ -3,7 +3,8 @@
 //! header names (teleop::tick_log_columns), never by position, so a reader keeps working when
 //! columns are added or reordered. Malformed lines (wrong field count, a field that is not a
 //! number, e.g. a row cut short when the bridge was killed, a time not after the previous row's)
-//! are dropped and counted, or refused.
+//! are dropped and counted, or refused. A file is read line by line (files/log_text.hpp: a
+//! regular file of at most TickLogOptions::max_bytes), never held whole.
 #pragma once
 
 #include <algorithm>
@@ -11,8 +12,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
-#include <fstream>
 #include <istream>
 #include <string>
 #include <string_view>
@@ -21,6 +22,7 @@
 #include <vector>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/files/log_text.hpp"
 #include "endohaptics/teleop/loop_stats.hpp"
 #include "endohaptics/teleop/tick_recorder.hpp"
 
@@ -68,6 +70,9 @@ struct TickLogOptions {
   //! A row whose "time" is not after the previous row's is malformed (the recorder's times
   //! increase; a repeated or backward time means a corrupt log). No effect without "time".
   bool increasing_time = true;
+  //! Largest file read_tick_log reads, bytes: a larger one (or one that grows beyond it while
+  //! being read) is refused, naming the file, its size and this option.
+  std::uint64_t max_bytes = default_log_max_bytes;
 };
 
 //! One dropped line: where and why.
@@ -133,23 +138,25 @@ class TickLog {
   std::vector<std::vector<double>> data_;
 };
 
-//! Reads a tick log from `in` (its first line is the header). `source` names it in messages.
-//! Throws Error on a missing or malformed header (empty, duplicate or empty names), on an I/O
-//! error, and with `options.strict` on the first malformed line; otherwise malformed lines are
-//! dropped and counted in `TickLog::dropped` / `issues`.
-[[nodiscard]] inline TickLog parse_tick_log(std::istream& in, std::string source,
-                                            const TickLogOptions& options = {}) {
-  using detail::tick_log::excerpt;
+namespace detail::tick_log {
+
+//! parse_tick_log on the lines that `next_line(std::string&)` gives one at a time (false at the
+//! end), as std::getline gives them; `number` counts them.
+template <typename NextLine>
+[[nodiscard]] TickLog parse_lines(NextLine&& next_line, std::string source,
+                                  const TickLogOptions& options, std::size_t& number) {
   TickLog log;
   log.source = std::move(source);
   std::string line;
-  if (!std::getline(in, line)) {
+  number = 0;
+  if (!next_line(line)) {
     ENDOHAPTICS_THROW(Error(log.source + ": empty, expected the tick-log header (" +
                             std::string(teleop::tick_log_columns[0]) + "," +
                             std::string(teleop::tick_log_columns[1]) + ",...)"));
   }
+  number = 1;
   if (!line.empty() && line.back() == '\r') line.pop_back();
-  for (const auto name : detail::tick_log::split(line)) {
+  for (const auto name : split(line)) {
     if (name.empty()) {
       ENDOHAPTICS_THROW(Error(log.source + ": line 1: empty column name in the header"));
     }
@@ -165,7 +172,6 @@ class TickLog {
   const bool check_time = options.increasing_time && time_at != log.columns.end();
   double last_time = 0.0;
   bool have_time = false;
-  std::size_t number = 1;
   auto drop = [&](std::string what) {
     if (options.strict) {
       ENDOHAPTICS_THROW(Error(log.source + ": line " + std::to_string(number) + ": " + what));
@@ -173,11 +179,11 @@ class TickLog {
     ++log.dropped;
     if (log.issues.size() < options.max_issues) log.issues.push_back({number, std::move(what)});
   };
-  while (std::getline(in, line)) {
+  while (next_line(line)) {
     ++number;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.find_first_not_of(" \t") == std::string::npos) continue;  // blank line
-    const auto fields = detail::tick_log::split(line);
+    const auto fields = split(line);
     if (fields.size() != log.columns.size()) {
       drop(std::to_string(fields.size()) + " fields, the header has " +
            std::to_string(log.columns.size()));
@@ -185,7 +191,7 @@ class TickLog {
     }
     bool ok = true;
     for (std::size_t c = 0; c < fields.size() && ok; ++c) {
-      ok = detail::tick_log::parse(fields[c], values[c]);
+      ok = parse(fields[c], values[c]);
       if (!ok) {
         drop("column '" + excerpt(log.columns[c]) + "': not a number: '" + excerpt(fields[c]) +
              "'");
@@ -203,18 +209,37 @@ class TickLog {
     }
     if (ok) log.append(values);
   }
+  return log;
+}
+
+}  // namespace detail::tick_log
+
+//! Reads a tick log from `in` (its first line is the header). `source` names it in messages.
+//! Throws Error on a missing or malformed header (empty, duplicate or empty names), on an I/O
+//! error, and with `options.strict` on the first malformed line; otherwise malformed lines are
+//! dropped and counted in `TickLog::dropped` / `issues`. (`options.max_bytes` is read_tick_log's.)
+[[nodiscard]] inline TickLog parse_tick_log(std::istream& in, std::string source,
+                                            const TickLogOptions& options = {}) {
+  std::size_t number = 0;
+  TickLog log = detail::tick_log::parse_lines(
+      [&in](std::string& line) { return static_cast<bool>(std::getline(in, line)); },
+      std::move(source), options, number);
   if (in.bad())
     ENDOHAPTICS_THROW(Error(log.source + ": read error after line " + std::to_string(number)));
   return log;
 }
 
-//! Reads the tick log file `path` (teleop::TickRecorder's CSV). Throws Error as parse_tick_log,
-//! or when the file cannot be opened.
+//! Reads the tick log file `path` (teleop::TickRecorder's CSV) line by line: a regular file of at
+//! most `options.max_bytes` (a FIFO or device is refused without blocking). Throws Error as
+//! parse_tick_log, or naming the file when it cannot be opened, is not a regular file or is
+//! larger than the limit.
 [[nodiscard]] inline TickLog read_tick_log(const std::filesystem::path& path,
                                            const TickLogOptions& options = {}) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) ENDOHAPTICS_THROW(Error(path.string() + ": cannot read the tick log"));
-  return parse_tick_log(in, path.string(), options);
+  detail::log_text::LineReader reader(path.string(), "tick log", options.max_bytes,
+                                      "raise TickLogOptions::max_bytes to read it");
+  std::size_t number = 0;
+  return detail::tick_log::parse_lines([&reader](std::string& line) { return reader.next(line); },
+                                       path.string(), options, number);
 }
 
 //! Tick-to-tick periods of a tick log as LoopStats (its `period()` histogram, quantiles, mean,

@@ -1,8 +1,9 @@
 //! @file
 //! Key files for protocol v2: exactly 32 random bytes (libsodium randombytes_buf), no text, mode
 //! 0600. generate_key_file refuses to overwrite; load_key_file refuses a file that group or
-//! others may read, or of any other length. Configuration time: throws Error naming the file and
-//! the reason, never the key. POSIX. See docs/protocol.md, "Key file".
+//! others may read, or of any other length, and anything but a regular file (a FIFO or device is
+//! refused without blocking: core/regular_file.hpp). Configuration time: throws Error naming the
+//! file and the reason, never the key. POSIX. See docs/protocol.md, "Key file".
 #pragma once
 
 #include <fcntl.h>
@@ -13,12 +14,15 @@
 #include <array>
 #include <cerrno>
 #include <cstddef>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <span>
 #include <string>
 #include <utility>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/core/regular_file.hpp"
 #include "endohaptics/protocol/secure_codec.hpp"
 
 namespace endohaptics::protocol {
@@ -38,6 +42,13 @@ inline std::string key_file_error(const std::string& path, const std::string& wh
   std::string m = "key file '" + path + "': " + what;
   if (err != 0) m += ": " + std::string(std::strerror(err));
   return m;
+}
+
+//! Throws: the key file holds `length` bytes, not 32.
+[[noreturn]] inline void refuse_key_length(const std::string& path, std::uint64_t length) {
+  ENDOHAPTICS_THROW(Error(key_file_error(
+      path, "must hold exactly " + std::to_string(SecureKey::size) + " bytes, holds " +
+                std::to_string(length) + " (make one with --generate-key FILE)")));
 }
 
 }  // namespace detail
@@ -82,43 +93,46 @@ inline void generate_key_file(const std::string& path) {
   }
 }
 
-//! Reads the key file at `path`: a regular file of exactly 32 bytes that neither group nor others
-//! may read or write (chmod 600). Throws Error naming the file and the reason.
-inline SecureKey load_key_file(const std::string& path) {
-  detail::FdGuard f{::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW)};
-  if (f.fd < 0) ENDOHAPTICS_THROW(Error(detail::key_file_error(path, "cannot open", errno)));
-  struct stat st {};
-  if (::fstat(f.fd, &st) != 0) {
-    ENDOHAPTICS_THROW(Error(detail::key_file_error(path, "cannot stat", errno)));
-  }
-  if (!S_ISREG(st.st_mode)) ENDOHAPTICS_THROW(Error(detail::key_file_error(path, "not a file")));
-  if ((st.st_mode & (S_IRWXG | S_IRWXO)) != 0) {
-    char mode[8];
-    std::snprintf(mode, sizeof(mode), "%04o", static_cast<unsigned>(st.st_mode & 07777));
+//! Refuses the mode of key file `path` (st_mode) when group or others may read or write it.
+//! Throws Error naming the file, the mode and the fix (chmod 600).
+inline void check_key_file_mode(mode_t mode, const std::string& path) {
+  if ((mode & (S_IRWXG | S_IRWXO)) != 0) {
+    char text[8];
+    std::snprintf(text, sizeof(text), "%04o", static_cast<unsigned>(mode & 07777));
     ENDOHAPTICS_THROW(Error(detail::key_file_error(
-        path, std::string("mode ") + mode +
+        path, std::string("mode ") + text +
                   " lets group or others read or write the key; run: chmod 600 " + path)));
   }
-  if (st.st_size != static_cast<off_t>(SecureKey::size)) {
-    ENDOHAPTICS_THROW(Error(detail::key_file_error(
-        path, "must hold exactly " + std::to_string(SecureKey::size) + " bytes, holds " +
-                  std::to_string(st.st_size) + " (make one with --generate-key FILE)")));
-  }
-  std::array<std::byte, SecureKey::size> key{};
+}
+
+//! The key held by `bytes`, the content of key file `path`: exactly 32 bytes. Throws Error naming
+//! the file and the length, never the bytes.
+inline SecureKey key_from_bytes(std::span<const std::byte> bytes, const std::string& path) {
+  if (bytes.size() != SecureKey::size) detail::refuse_key_length(path, bytes.size());
+  return SecureKey{bytes.first<SecureKey::size>()};
+}
+
+//! Reads the key file at `path`: a regular file (not a symbolic link, FIFO or device) of exactly
+//! 32 bytes that neither group nor others may read or write (chmod 600), through the descriptor
+//! whose type, mode and size were checked. Throws Error naming the file and the reason.
+inline SecureKey load_key_file(const std::string& path) {
+  RegularFile file(path, "key file", /*follow_symlinks=*/false);
+  check_key_file_mode(file.mode(), path);
+  if (file.size() != SecureKey::size) detail::refuse_key_length(path, file.size());
+  file.limit(SecureKey::size, "a key file holds exactly 32 bytes");  // it may not grow either
+  struct Buffer {  // wiped however the function ends
+    std::array<std::byte, SecureKey::size> bytes{};
+    ~Buffer() { sodium_memzero(bytes.data(), bytes.size()); }
+  } buffer;
   std::size_t got = 0;
-  while (got < key.size()) {
-    const ssize_t n = ::read(f.fd, key.data() + got, key.size() - got);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      sodium_memzero(key.data(), key.size());
-      ENDOHAPTICS_THROW(
-          Error(detail::key_file_error(path, "cannot read 32 bytes", n < 0 ? errno : 0)));
-    }
-    got += static_cast<std::size_t>(n);
+  while (got < buffer.bytes.size()) {
+    const std::size_t n = file.read(buffer.bytes.data() + got, buffer.bytes.size() - got);
+    if (n == 0) break;  // it shrank: key_from_bytes names the length
+    got += n;
   }
-  SecureKey result{std::span<const std::byte, SecureKey::size>(key)};
-  sodium_memzero(key.data(), key.size());
-  return result;
+  char more = 0;
+  (void)file.read(&more, 1);  // a byte beyond 32: the limit refuses it
+  return key_from_bytes(std::span<const std::byte>(buffer.bytes.data(), got), path);
 }
 
 }  // namespace endohaptics::protocol

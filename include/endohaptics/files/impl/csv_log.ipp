@@ -11,9 +11,9 @@ ENDOHAPTICS_DECL Log read_csv(const std::string& path, const CsvOptions& options
   namespace lt = detail::log_text;
   namespace lr = detail::log_rows;
   constexpr std::string_view fn = "read_csv";
-  const lt::Text text = lt::read_text(path, fn);
-  LogReport report = lr::start_report(text, path);
-  if (text.lines.empty()) {
+  lt::Lines lines(path, fn, options.read.max_bytes);
+  LogReport report = lr::start_report(path);
+  if (lines.peek() == nullptr) {
     ENDOHAPTICS_THROW(Error(std::string(fn) + ": " + path + ": no usable rows (file is empty)"));
   }
   if (options.separator != '\0' && options.separator != ',' && options.separator != ';' &&
@@ -21,15 +21,15 @@ ENDOHAPTICS_DECL Log read_csv(const std::string& path, const CsvOptions& options
     ENDOHAPTICS_THROW(Error(std::string(fn) + ": separator must be ',', ';', tab or blank, got '" +
                             std::string(1, options.separator) + "'"));
   }
-  const auto& head = text.lines.front();
+  const lt::Line head = *lines.peek();
   const char separator =
-      options.separator != '\0' ? options.separator : lt::detect_separator(text.text(head));
-  const bool has_header = lt::looks_like_header(text.text(head), separator);
+      options.separator != '\0' ? options.separator : lt::detect_separator(head.text);
+  const bool has_header = lt::looks_like_header(head.text, separator);
   std::vector<std::string> names;
   if (!options.column_names.empty()) {
     names = options.column_names;
   } else if (has_header) {
-    for (std::string_view field : lt::split(text.text(head), separator)) {
+    for (std::string_view field : lt::split(head.text, separator)) {
       if (field.size() >= 2 && field.front() == '"' && field.back() == '"') {
         field = lt::trim(field.substr(1, field.size() - 2));
       }
@@ -75,7 +75,8 @@ ENDOHAPTICS_DECL Log read_csv(const std::string& path, const CsvOptions& options
   layout.separator = separator;
   layout.time_column = time_column;
   layout.sample_time = options.sample_time;
-  const lr::Rows rows = lr::read_rows(text, has_header ? 1 : 0, layout, options.read, report);
+  if (has_header) (void)lines.next();
+  const lr::Rows rows = lr::read_rows(lines, layout, options.read, report);
 
   Log log;
   log.source = path;

@@ -12,13 +12,13 @@ ENDOHAPTICS_DECL Log read_endowrist_2016(const std::string& path,
   namespace lt = detail::log_text;
   namespace lr = detail::log_rows;
   constexpr std::string_view fn = "read_endowrist_2016";
-  const lt::Text text = lt::read_text(path, fn);
-  LogReport report = lr::start_report(text, path);
-  if (text.lines.empty()) {
+  lt::Lines lines(path, fn, options.read.max_bytes);
+  LogReport report = lr::start_report(path);
+  if (lines.peek() == nullptr) {
     ENDOHAPTICS_THROW(Error(std::string(fn) + ": " + path + ": no usable rows (file is empty)"));
   }
   std::size_t first = 0;
-  if (lt::looks_like_header(text.text(text.lines.front()), ',')) {
+  if (lt::looks_like_header(lines.peek()->text, ',')) {
     report.header = true;
     first = 1;
   }
@@ -26,8 +26,8 @@ ENDOHAPTICS_DECL Log read_endowrist_2016(const std::string& path,
   Endowrist2016Layout layout = options.layout;
   if (layout == Endowrist2016Layout::detect) {
     std::map<std::size_t, std::size_t> counts;
-    for (std::size_t i = first; i < std::min(text.lines.size(), first + 20); ++i) {
-      ++counts[lt::split(text.text(text.lines[i]), ',').size()];
+    for (std::size_t i = first; i < first + 20 && lines.peek(i) != nullptr; ++i) {
+      ++counts[lt::split(lines.peek(i)->text, ',').size()];
     }
     std::size_t fields = 0;
     std::size_t seen = 0;
@@ -43,7 +43,7 @@ ENDOHAPTICS_DECL Log read_endowrist_2016(const std::string& path,
       layout = Endowrist2016Layout::friction;
     } else {
       const std::size_t line =
-          first < text.lines.size() ? text.lines[first].number : text.lines.front().number;
+          lines.peek(first) != nullptr ? lines.peek(first)->number : lines.peek()->number;
       ENDOHAPTICS_THROW(Error(std::string(fn) + ": " + path + ":" + std::to_string(line) +
                               ": cannot tell the log layout: most lines have " +
                               std::to_string(fields) +
@@ -64,7 +64,8 @@ ENDOHAPTICS_DECL Log read_endowrist_2016(const std::string& path,
                                      "position", "current",          "current_demand"}
           : std::vector<std::string>{"time", "ticks", "current"};
   const std::size_t columns = rows_layout.labels.size();
-  const lr::Rows rows = lr::read_rows(text, first, rows_layout, options.read, report);
+  if (report.header) (void)lines.next();
+  const lr::Rows rows = lr::read_rows(lines, rows_layout, options.read, report);
 
   Log log;
   log.source = path;

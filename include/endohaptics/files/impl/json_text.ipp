@@ -27,52 +27,6 @@ ENDOHAPTICS_DECL std::string key_name(std::string_view key) {
   return "'" + excerpt(std::string_view(escaped).substr(1, escaped.size() - 2)) + "'";
 }
 
-ENDOHAPTICS_DECL void check_depth(std::string_view text, std::string_view source, int max_depth,
-                                  std::string_view needed) {
-  int depth = 0;
-  std::size_t line = 1;
-  std::size_t column = 0;
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    const char ch = text[i];
-    ++column;
-    if (ch == '\n') {
-      ++line;
-      column = 0;
-    } else if (ch == '"') {  // a string: skip to its closing quote
-      for (++i; i < text.size() && text[i] != '"'; ++i) {
-        if (text[i] == '\\') ++i;
-        if (i < text.size() && text[i] == '\n') {  // invalid JSON; keep the position right
-          ++line;
-          column = 0;
-        }
-        ++column;
-      }
-      ++column;
-    } else if (ch == '/' && i + 1 < text.size() && text[i + 1] == '/') {
-      while (i < text.size() && text[i] != '\n') ++i;
-      ++line;
-      column = 0;
-    } else if (ch == '/' && i + 1 < text.size() && text[i + 1] == '*') {
-      for (i += 2; i + 1 < text.size() && !(text[i] == '*' && text[i + 1] == '/'); ++i) {
-        if (text[i] == '\n') {
-          ++line;
-          column = 0;
-        }
-      }
-      ++i;
-    } else if (ch == '[' || ch == '{') {
-      if (++depth > max_depth) {
-        ENDOHAPTICS_THROW(Error(std::string(source) + ": line " + std::to_string(line) +
-                                ", column " + std::to_string(column) + ": nested deeper than " +
-                                std::to_string(max_depth) + " levels (the limit; " +
-                                std::string(needed) + ")"));
-      }
-    } else if (ch == ']' || ch == '}') {
-      --depth;
-    }
-  }
-}
-
 ENDOHAPTICS_DECL std::string parse_message(const json::exception& e) {
   std::string m = e.what();
   if (const auto p = m.find("] "); m.rfind("[json.exception", 0) == 0 && p != std::string::npos) {
@@ -98,85 +52,177 @@ ENDOHAPTICS_DECL std::string parse_message(const json::exception& e) {
   return excerpt(m, 300);
 }
 
-ENDOHAPTICS_DECL json parse_strict(std::string_view text, std::string_view source,
-                                   const Limits& limits) {
-  check_depth(text, source, limits.max_depth, limits.needed);
+namespace strict {
+
+//! A pointer into the text that the parser advances; every copy reports the furthest position
+//! read to `furthest`, so that the handler knows where the parser stands (nlohmann's SAX events
+//! carry no position).
+class TrackingIterator {
+ public:
+  using iterator_category = std::forward_iterator_tag;  //!< as a const char*
+  using value_type = char;                              //!< bytes
+  using difference_type = std::ptrdiff_t;               //!< as a const char*
+  using pointer = const char*;                          //!< as a const char*
+  using reference = const char&;                        //!< as a const char*
+
+  TrackingIterator() = default;
+  //! At `p`; advancing records the furthest position in `*furthest`.
+  TrackingIterator(const char* p, const char** furthest) : p_(p), furthest_(furthest) {}
+  reference operator*() const { return *p_; }
+  TrackingIterator& operator++() {
+    ++p_;
+    if (furthest_ != nullptr && p_ > *furthest_) *furthest_ = p_;
+    return *this;
+  }
+  TrackingIterator operator++(int) {
+    TrackingIterator old = *this;
+    ++*this;
+    return old;
+  }
+  bool operator==(const TrackingIterator& other) const { return p_ == other.p_; }
+
+ private:
+  const char* p_ = nullptr;
+  const char** furthest_ = nullptr;
+};
+
+//! nlohmann's SAX events -> a json value, as its json_sax_dom_parser builds it, with the depth
+//! limit and duplicate keys checked as the events come: returning false stops the parser at once.
+class Handler {
+ public:
+  using number_integer_t = json::number_integer_t;    //!< nlohmann's
+  using number_unsigned_t = json::number_unsigned_t;  //!< nlohmann's
+  using number_float_t = json::number_float_t;        //!< nlohmann's
+  using string_t = json::string_t;                    //!< nlohmann's
+  using binary_t = json::binary_t;                    //!< nlohmann's
+
+  Handler(std::string_view text, const char* const* furthest, const Limits& limits)
+      : text_(text), furthest_(furthest), limits_(limits) {}
+
+  bool null() { return value(nullptr); }
+  bool boolean(bool v) { return value(v); }
+  bool number_integer(number_integer_t v) { return value(v); }
+  bool number_unsigned(number_unsigned_t v) { return value(v); }
+  bool number_float(number_float_t v, const string_t& /*text*/) { return value(v); }
+  bool string(string_t& v) { return value(std::move(v)); }
+  bool binary(binary_t& v) { return value(std::move(v)); }
+  bool start_object(std::size_t /*elements*/) { return start(json::value_t::object); }
+  bool start_array(std::size_t /*elements*/) { return start(json::value_t::array); }
+  bool end_object() { return end(); }
+  bool end_array() { return end(); }
+  bool key(string_t& k) {
+    Frame& f = frames_.back();
+    if (!f.keys.insert(k).second) {
+      error_ = position() + "duplicate key " + key_name((f.path.empty() ? "" : f.path + ".") + k) +
+               " (a key may appear only once)";
+      return false;
+    }
+    f.key = std::move(k);
+    return true;
+  }
+  bool parse_error(std::size_t /*position*/, const std::string& /*last_token*/,
+                   const json::exception& e) {
+    error_ = "not valid JSON: " + parse_message(e);
+    return false;
+  }
+
+  //! The value parsed (when sax_parse returned true).
+  [[nodiscard]] json& root() { return root_; }
+  //! Why parsing stopped ("" if it did not).
+  [[nodiscard]] const std::string& error() const { return error_; }
+
+ private:
   struct Frame {
-    bool object = false;
-    std::string path;         // "" for the root, "safety", "a.b", "list[]"
-    std::string current_key;  // the object's newest key
+    json* container = nullptr;
+    std::string path;  // "" for the root, "safety", "a.b", "list[]"
+    std::string key;   // an object's newest key
     std::set<std::string> keys;
   };
-  std::vector<Frame> frames;
-  std::string duplicate;
-  const json::parser_callback_t callback = [&](int, json::parse_event_t event, json& parsed) {
-    switch (event) {
-      case json::parse_event_t::object_start:
-      case json::parse_event_t::array_start: {
-        Frame f;
-        f.object = event == json::parse_event_t::object_start;
-        if (!frames.empty()) {
-          const Frame& parent = frames.back();
-          f.path = parent.object
-                       ? (parent.path.empty() ? "" : parent.path + ".") + parent.current_key
-                       : parent.path + "[]";
-        }
-        frames.push_back(std::move(f));
-        break;
-      }
-      case json::parse_event_t::object_end:
-      case json::parse_event_t::array_end:
-        if (!frames.empty()) frames.pop_back();
-        break;
-      case json::parse_event_t::key:
-        if (!frames.empty()) {
-          Frame& f = frames.back();
-          f.current_key = parsed.get<std::string>();
-          if (!f.keys.insert(f.current_key).second && duplicate.empty()) {
-            duplicate = (f.path.empty() ? "" : f.path + ".") + f.current_key;
-          }
-        }
-        break;
-      case json::parse_event_t::value:
-        break;
+
+  // "line L, column C: " of the last byte the parser read (a bracket or a key's closing quote:
+  // the lexer reads no further before reporting them); lines counted at '\n', as nlohmann does.
+  [[nodiscard]] std::string position() const {
+    const std::size_t at = static_cast<std::size_t>(*furthest_ - text_.data()) - 1;
+    const std::string_view before = text_.substr(0, at);
+    const std::size_t line =
+        1 + static_cast<std::size_t>(std::count(before.begin(), before.end(), '\n'));
+    const std::size_t newline = before.rfind('\n');
+    const std::size_t column = newline == std::string_view::npos ? at + 1 : at - newline;
+    return "line " + std::to_string(line) + ", column " + std::to_string(column) + ": ";
+  }
+
+  // Places `v` where the parser stands: the root, the end of an array, or the value of the
+  // object's newest key; returns where it went.
+  template <typename Value>
+  json* place(Value&& v) {
+    if (frames_.empty()) {
+      root_ = json(std::forward<Value>(v));
+      return &root_;
     }
+    Frame& f = frames_.back();
+    if (f.container->is_array()) {
+      f.container->emplace_back(std::forward<Value>(v));
+      return &f.container->back();
+    }
+    json& slot = (*f.container)[f.key];
+    slot = json(std::forward<Value>(v));
+    return &slot;
+  }
+  template <typename Value>
+  bool value(Value&& v) {
+    (void)place(std::forward<Value>(v));
     return true;
-  };
-  json j;
-#if defined(__cpp_exceptions)
-  try {
-    j = json::parse(text.begin(), text.end(), callback, /*allow_exceptions=*/true, limits.comments);
-  } catch (const json::exception& e) {  // parse_error; out_of_range for a number overflow
-    ENDOHAPTICS_THROW(Error(std::string(source) + ": not valid JSON: " + parse_message(e)));
   }
-#else
-  j = json::parse(text.begin(), text.end(), callback, /*allow_exceptions=*/false, limits.comments);
-  if (j.is_discarded()) ENDOHAPTICS_THROW(Error(std::string(source) + ": not valid JSON"));
-#endif
-  if (!duplicate.empty()) {
-    ENDOHAPTICS_THROW(Error(std::string(source) + ": duplicate key " + key_name(duplicate) +
-                            " (a key may appear only once)"));
+  bool start(json::value_t type) {
+    if (static_cast<int>(frames_.size()) >= limits_.max_depth) {
+      error_ = position() + "nested deeper than " + std::to_string(limits_.max_depth) +
+               " levels (the limit; " + std::string(limits_.needed) + ")";
+      return false;
+    }
+    Frame f;
+    if (!frames_.empty()) {
+      const Frame& parent = frames_.back();
+      f.path = parent.container->is_object()
+                   ? (parent.path.empty() ? "" : parent.path + ".") + parent.key
+                   : parent.path + "[]";
+    }
+    f.container = place(type);
+    frames_.push_back(std::move(f));
+    return true;
   }
-  return j;
+  bool end() {
+    frames_.pop_back();
+    return true;
+  }
+
+  std::string_view text_;
+  const char* const* furthest_;
+  const Limits& limits_;
+  json root_;
+  std::vector<Frame> frames_;
+  std::string error_;
+};
+
+}  // namespace strict
+
+ENDOHAPTICS_DECL json parse_strict(std::string_view text, std::string_view source,
+                                   const Limits& limits) {
+  const char* furthest = text.data();
+  strict::Handler handler(text, &furthest, limits);
+  const bool parsed = json::sax_parse(strict::TrackingIterator(text.data(), &furthest),
+                                      strict::TrackingIterator(text.data() + text.size(), nullptr),
+                                      &handler, json::input_format_t::json, /*strict=*/true,
+                                      /*ignore_comments=*/limits.comments);
+  if (!parsed) {
+    ENDOHAPTICS_THROW(Error(std::string(source) + ": " +
+                            (handler.error().empty() ? "not valid JSON" : handler.error())));
+  }
+  return std::move(handler.root());
 }
 
 ENDOHAPTICS_DECL std::string read_bounded(const std::filesystem::path& path, std::size_t max_bytes,
-                                          std::string_view what) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    ENDOHAPTICS_THROW(Error(std::string(what) + " " + path.string() + ": cannot be opened"));
-  }
-  std::string text(max_bytes + 1, '\0');
-  in.read(text.data(), static_cast<std::streamsize>(text.size()));
-  if (in.bad()) {
-    ENDOHAPTICS_THROW(Error(std::string(what) + " " + path.string() + ": cannot be read"));
-  }
-  text.resize(static_cast<std::size_t>(in.gcount()));
-  if (text.size() > max_bytes) {
-    ENDOHAPTICS_THROW(Error(std::string(what) + " " + path.string() + ": larger than " +
-                            std::to_string(max_bytes) + " bytes (the limit)"));
-  }
-  return text;
+                                          std::string_view what, std::string_view limit) {
+  return read_regular_file(path.string(), what, max_bytes, limit);
 }
 
 }  // namespace endohaptics::files::detail::json_text

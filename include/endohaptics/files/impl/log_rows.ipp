@@ -20,16 +20,15 @@ ENDOHAPTICS_DECL std::string where(const Layout& layout, const std::string& path
   return std::string(layout.function) + ": " + path + ":" + std::to_string(line) + ": ";
 }
 
-ENDOHAPTICS_DECL Rows parse_rows(const Text& text, std::size_t first, const Layout& layout,
-                                 const LogReadOptions& options, LogReport& report) {
+ENDOHAPTICS_DECL Rows parse_rows(Lines& lines, const Layout& layout, const LogReadOptions& options,
+                                 LogReport& report) {
   const std::size_t columns = layout.labels.size();
   Rows rows;
-  rows.values.reserve(text.lines.size() * columns);
   std::vector<double> row(columns);
   std::size_t ordinal = 0;
-  for (std::size_t li = first; li < text.lines.size(); ++li, ++ordinal) {
-    const auto& line = text.lines[li];
-    const auto fields = split(text.text(line), layout.separator);
+  for (const log_text::Line* next = lines.next(); next != nullptr; next = lines.next(), ++ordinal) {
+    const log_text::Line& line = *next;
+    const auto fields = split(line.text, layout.separator);
     // Classify: the first bad field (in field order) is the reason a row is dropped; a row whose
     // fields all read but are too few is a short line.
     LogIssueKind kind = LogIssueKind::extra_fields;
@@ -105,14 +104,18 @@ ENDOHAPTICS_DECL Rows parse_rows(const Text& text, std::size_t first, const Layo
   return rows;
 }
 
-ENDOHAPTICS_DECL Rows read_rows(const Text& text, std::size_t first, const Layout& layout,
-                                const LogReadOptions& options, LogReport& report) {
+ENDOHAPTICS_DECL Rows read_rows(Lines& lines, const Layout& layout, const LogReadOptions& options,
+                                LogReport& report) {
   if (!std::isfinite(options.gap_threshold) || options.gap_threshold < 0) {
     ENDOHAPTICS_THROW(Error(std::string(layout.function) +
                             ": gap_threshold must be finite and >= 0, got " +
                             format(options.gap_threshold)));
   }
-  Rows rows = parse_rows(text, first, layout, options, report);
+  Rows rows = parse_rows(lines, layout, options, report);
+  report.lines = lines.total_lines();
+  report.crlf_lines = lines.crlf_lines();
+  report.blank_lines = lines.blank_lines();
+  report.byte_order_mark = lines.byte_order_mark();
   report.rows = rows.time.size();
   if (report.rows < std::max<std::size_t>(options.min_rows, 1)) {
     ENDOHAPTICS_THROW(Error(std::string(layout.function) + ": " + report.source +
@@ -143,13 +146,9 @@ ENDOHAPTICS_DECL Rows read_rows(const Text& text, std::size_t first, const Layou
   return rows;
 }
 
-ENDOHAPTICS_DECL LogReport start_report(const Text& text, const std::string& path) {
+ENDOHAPTICS_DECL LogReport start_report(const std::string& path) {
   LogReport report;
   report.source = path;
-  report.lines = text.total_lines;
-  report.crlf_lines = text.crlf_lines;
-  report.blank_lines = text.blank_lines;
-  report.byte_order_mark = text.byte_order_mark;
   return report;
 }
 

@@ -21,45 +21,86 @@ ENDOHAPTICS_DECL std::string_view trim(std::string_view s) {
   return s.substr(first, last - first + 1);
 }
 
-ENDOHAPTICS_DECL Text read_text(const std::string& path, std::string_view function) {
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) {
-    ENDOHAPTICS_THROW(Error(std::string(function) + ": " + path + ": file does not exist"));
-  }
-  if (std::filesystem::is_directory(path, ec)) {
-    ENDOHAPTICS_THROW(Error(std::string(function) + ": " + path + ": is a directory"));
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) ENDOHAPTICS_THROW(Error(std::string(function) + ": " + path + ": cannot be opened"));
-  Text t;
-  t.content.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  if (in.bad()) ENDOHAPTICS_THROW(Error(std::string(function) + ": " + path + ": read error"));
-  std::size_t pos = 0;
-  if (t.content.starts_with("\xEF\xBB\xBF")) {
-    t.byte_order_mark = true;
-    pos = 3;
-  }
-  std::size_t number = 0;
-  while (pos < t.content.size()) {
-    std::size_t end = t.content.find('\n', pos);
-    const bool terminated = end != std::string::npos;
-    if (!terminated) end = t.content.size();
-    std::size_t length = end - pos;
-    ++number;
-    if (terminated && length > 0 && t.content[end - 1] == '\r') {
-      ++t.crlf_lines;
-      --length;
+ENDOHAPTICS_DECL LineReader::LineReader(const std::string& path, std::string_view what,
+                                        std::uint64_t max_bytes, std::string_view raise)
+    : file_(path, what) {
+  file_.limit(max_bytes, raise);
+  buffer_.resize(std::size_t{1} << 16);
+}
+
+ENDOHAPTICS_DECL bool LineReader::next(std::string& line, bool& terminated) {
+  line.clear();
+  for (;;) {
+    if (begin_ < end_) {
+      const char* first = buffer_.data() + begin_;
+      const auto* newline = static_cast<const char*>(std::memchr(first, '\n', end_ - begin_));
+      if (newline != nullptr) {
+        line.append(first, newline);
+        begin_ += static_cast<std::size_t>(newline - first) + 1;
+        terminated = true;
+        return true;
+      }
+      line.append(first, end_ - begin_);
+      begin_ = end_ = 0;
     }
-    const std::string_view line = std::string_view(t.content).substr(pos, length);
+    if (at_end_) break;
+    end_ = file_.read(buffer_.data(), buffer_.size());
+    begin_ = 0;
+    at_end_ = end_ == 0;
+  }
+  terminated = false;
+  return !line.empty();  // a last line without '\n'; nothing: the end
+}
+
+ENDOHAPTICS_DECL Lines::Lines(const std::string& path, std::string_view function,
+                              std::uint64_t max_bytes)
+    : reader_(path, std::string(function) + ": log file", max_bytes,
+              "raise LogReadOptions::max_bytes to read it") {}
+
+ENDOHAPTICS_DECL bool Lines::read(Line& out) {
+  bool terminated = false;
+  while (reader_.next(raw_, terminated)) {
+    std::string_view line = raw_;
+    if (first_) {
+      first_ = false;
+      if (line.starts_with("\xEF\xBB\xBF")) {
+        byte_order_mark_ = true;
+        line.remove_prefix(3);
+        if (line.empty() && !terminated) break;  // the mark alone: no line
+      }
+    }
+    ++total_lines_;
+    if (terminated && !line.empty() && line.back() == '\r') {
+      ++crlf_lines_;
+      line.remove_suffix(1);
+    }
     if (trim(line).empty()) {
-      ++t.blank_lines;
-    } else {
-      t.lines.push_back({number, pos, length});
+      ++blank_lines_;
+      continue;
     }
-    pos = end + 1;
+    out.number = total_lines_;
+    out.text.assign(line);
+    return true;
   }
-  t.total_lines = number;
-  return t;
+  return false;
+}
+
+ENDOHAPTICS_DECL const Line* Lines::peek(std::size_t ahead) {
+  while (ahead_.size() <= ahead) {
+    Line line;
+    if (!read(line)) return nullptr;
+    ahead_.push_back(std::move(line));
+  }
+  return &ahead_[ahead];
+}
+
+ENDOHAPTICS_DECL const Line* Lines::next() {
+  if (!ahead_.empty()) {
+    current_ = std::move(ahead_.front());
+    ahead_.pop_front();
+    return &current_;
+  }
+  return read(current_) ? &current_ : nullptr;
 }
 
 ENDOHAPTICS_DECL std::vector<std::string_view> split(std::string_view line, char separator) {

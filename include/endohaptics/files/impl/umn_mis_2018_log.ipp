@@ -37,15 +37,16 @@ ENDOHAPTICS_DECL Log read_umn_mis_2018(const std::string& path, const UmnMis2018
       ENDOHAPTICS_THROW(Error(std::string(fn) + ": conversion constants must be finite and > 0"));
     }
   }
-  const lt::Text text = lt::read_text(path, fn);
-  LogReport report = lr::start_report(text, path);
+  lt::Lines lines(path, fn, options.read.max_bytes);
+  LogReport report = lr::start_report(path);
   std::vector<std::pair<std::string, std::string>> metadata;
   std::size_t first = 0;
-  while (first < text.lines.size()) {
-    const std::string_view line = text.text(text.lines[first]);
+  for (const lt::Line* head = lines.peek(); head != nullptr; head = lines.peek()) {
+    const std::string_view line = head->text;
     if (line.empty() || line.front() != '%') break;
     std::pair<std::string, std::string> kv;
     if (detail::umn_mis_2018::key_value(line, kv)) metadata.push_back(std::move(kv));
+    (void)lines.next();
     ++first;
   }
   if (first == 0) {
@@ -60,7 +61,7 @@ ENDOHAPTICS_DECL Log read_umn_mis_2018(const std::string& path, const UmnMis2018
                    "jaw encoder",   "grip torque",      "reaction command", "motor command",
                    "motor encoder", "trajectory target"};
   const std::size_t columns = layout.labels.size();
-  const lr::Rows rows = lr::read_rows(text, first, layout, options.read, report);
+  const lr::Rows rows = lr::read_rows(lines, layout, options.read, report);
 
   Log log;
   log.source = path;
