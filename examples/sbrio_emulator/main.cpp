@@ -63,6 +63,16 @@ struct RunOptions {
 // passed off as fresh).
 using Delayed = sim::DelayedSendTransport<transport::UdpServerTransport, endohaptics::SteadyClock>;
 
+// Datagrams the v2 layer refused (none for the 2016 wire).
+template <typename Transport>
+std::uint64_t refused(const Transport& transport) {
+  if constexpr (requires { transport.counters(); }) {
+    return transport.counters().rejected();
+  } else {
+    return 0;
+  }
+}
+
 // Serves setpoints through `transport` (v2 SecureTransport over `delayed`, or `delayed` itself)
 // until the duration or a signal; `udp` is the socket underneath.
 template <typename Transport>
@@ -98,6 +108,22 @@ int run(Transport& transport, Delayed& delayed, transport::UdpServerTransport& u
                delay_ms, jitter_ms, 100 * loss);
   }
 
+  // The 2016 wire obeys one console at a time (pinned); v2 authenticates instead.
+  constexpr bool pin_mode = !requires { transport.counters(); };
+  std::uint64_t pins_seen = 0, releases_seen = 0;
+  const auto announce_peer = [&] {  // whom a 2016 emulator obeys, whenever that changes
+    if (udp.releases() != releases_seen) {
+      releases_seen = udp.releases();
+      fmt::print(
+          "sbrio-emulator: the pinned console fell silent for {} ms: the next console heard "
+          "is obeyed\n",
+          watchdog_ms);
+    }
+    if (udp.pins() != pins_seen && udp.pinned()) {
+      pins_seen = udp.pins();
+      fmt::print("sbrio-emulator: obeying {} only\n", udp.peer_name());
+    }
+  };
   const auto start = clock.now();
   const auto truth_period = std::chrono::nanoseconds(static_cast<long>(truth_period_ms * 1e6));
   auto next_row = start;
@@ -107,6 +133,7 @@ int run(Transport& transport, Delayed& delayed, transport::UdpServerTransport& u
     const auto now = clock.now();
     if (duration > 0 && now - start >= std::chrono::duration<double>(duration)) break;
     (void)emulator.poll(std::chrono::milliseconds(1));
+    if (pin_mode) announce_peer();
     if (emulator.watchdog_tripped() != was_tripped) {
       was_tripped = emulator.watchdog_tripped();
       if (!quiet) {
@@ -141,27 +168,36 @@ int run(Transport& transport, Delayed& delayed, transport::UdpServerTransport& u
     if (!quiet && t >= next_report) {
       next_report += std::chrono::seconds(1);
       const auto& c = emulator.counters();
-      fmt::print("sbrio-emulator: {} packets answered, {} rejected, clamp force {:.2f} N\n",
-                 c.answered, c.rejected, rig.truth().contact_force[2]);
+      fmt::print("sbrio-emulator: {} packets answered, {} rejected, clamp force {:.2f} N{}\n",
+                 c.answered, c.rejected + refused(transport), rig.truth().contact_force[2],
+                 pin_mode ? fmt::format(", obeying {}, {} datagrams from others ignored",
+                                        udp.pinned() ? udp.peer_name() : "nobody yet",
+                                        udp.foreign_datagrams())
+                          : std::string());
     }
   }
   const auto& c = emulator.counters();
+  std::uint64_t unbound = 0;
   if constexpr (requires { transport.counters(); }) {
+    unbound = transport.counters().unbound;
     fmt::print("sbrio-emulator: protocol v2 setpoints: {}\n",
                protocol::describe(transport.counters()));
   } else {
     fmt::print(
-        "sbrio-emulator: protocol 2016: {} datagrams from other senders than the pinned "
-        "peer ignored\n",
+        "sbrio-emulator: protocol 2016: obeyed {} ({} pinned, {} released after silence); {} "
+        "datagrams from other senders ignored\n",
+        udp.pinned() ? udp.peer_name() : "nobody", udp.pins(), udp.releases(),
         udp.foreign_datagrams());
   }
+  // One count of refusals: the v2 layer's (never reached the emulator) and the 2016 payload's.
   fmt::print(
-      "sbrio-emulator: done after {:.1f} s: {} setpoint packets, {} answered, {} rejected "
-      "(wrong size {}, non-finite {}, bad mask {}), {} stale dropped, {} transport errors, {} "
-      "watchdog trips\n",
-      std::chrono::duration<double>(clock.now() - start).count(), c.received, c.answered,
-      c.rejected, c.rejected_size, c.rejected_non_finite, c.rejected_mask, c.stale_dropped,
-      c.transport_errors, c.watchdog_trips);
+      "sbrio-emulator: done after {:.1f} s: {} setpoint packets obeyed or answered, {} answered "
+      "with every motor disabled (unbound), {} rejected (protocol v2 {}; 2016 payload: wrong size "
+      "{}, non-finite {}, bad mask {}), {} stale dropped, {} transport errors, {} watchdog "
+      "trips\n",
+      std::chrono::duration<double>(clock.now() - start).count(), c.received, unbound,
+      c.rejected + refused(transport), refused(transport), c.rejected_size, c.rejected_non_finite,
+      c.rejected_mask, c.stale_dropped, c.transport_errors, c.watchdog_trips);
   if (delay_ms > 0 || jitter_ms > 0 || loss > 0) {
     fmt::print("sbrio-emulator: send path: {} answers lost, {} refused by a full delay line\n",
                delayed.lost(), delayed.overflowed());
@@ -192,6 +228,8 @@ int main(int argc, char** argv) {
   std::string wire = "2";  // --protocol: "2" (v2, authenticated) or "2016" (legacy)
   std::string key_path;
   std::string generate_key;
+  std::string peer;              // --peer: 2016 mode, the only console obeyed
+  double max_round_trip_ms = 0;  // --max-round-trip: v2 binding (0: derived)
   const std::map<std::string, sim::Environment> environments{
       {"free", sim::Environment::free_space},
       {"loadcell", sim::Environment::load_cell},
@@ -235,6 +273,14 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"2", "2016"}))
       ->capture_default_str();
   app.add_option("--key", key_path, "protocol v2: the 32-byte key file (mode 0600)");
+  app.add_option("--peer", peer,
+                 "protocol 2016: obey only the console at HOST:PORT (default: the first one "
+                 "heard, released after --watchdog-ms of its silence)");
+  app.add_option("--max-round-trip", max_round_trip_ms,
+                 "protocol v2: ms a binding setpoint may take to acknowledge a state (0: the "
+                 "watchdog + --delay + --jitter)")
+      ->check(examples::number_in(0.0, 10000.0))
+      ->capture_default_str();
   app.add_option("--generate-key", generate_key,
                  "write a new random key file (mode 0600; refuses an existing file) and exit");
   CLI11_PARSE(app, argc, argv);
@@ -250,11 +296,29 @@ int main(int argc, char** argv) {
           "protocol v2 needs --key FILE (the key the bridge holds; make one with --generate-key "
           "FILE), or --protocol 2016 for the unauthenticated 2016 wire");
     }
+    // Options that cannot apply are refused, never ignored.
+    if (wire == "2016" && !key_path.empty()) {
+      throw endohaptics::Error("--key applies to protocol v2; --protocol 2016 has no key");
+    }
+    if (wire == "2016" && max_round_trip_ms > 0) {
+      throw endohaptics::Error(
+          "--max-round-trip applies to protocol v2 (session binding); --protocol 2016 has none");
+    }
+    if (wire != "2016" && !peer.empty()) {
+      throw endohaptics::Error(
+          "--peer applies to --protocol 2016; protocol v2 obeys the console holding the key");
+    }
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
     (void)endohaptics::teleop::apply_realtime({.timer_slack_ns = 1});  // prompt poll timeouts
-    transport::UdpServerConfig udp{bind, port};
+    transport::UdpServerConfig udp;
+    udp.bind_address = bind;
+    udp.port = port;
     udp.pin_first_peer = wire == "2016";  // v2 authenticates instead
+    udp.peer = peer;
+    // A console silent for the watchdog time has lost the robot (its motors are off): the next
+    // console heard may take over (a restarted bridge has a new source port).
+    udp.repin_after = std::chrono::nanoseconds(static_cast<std::int64_t>(watchdog_ms * 1e6));
     transport::UdpServerTransport udp_transport(udp);
     endohaptics::SteadyClock clock;
     sim::SimulatedRig<4> rig(sim::endowrist_2016_rig<4>(environments.at(environment)));
@@ -269,11 +333,24 @@ int main(int argc, char** argv) {
     if (wire == "2016") {
       fmt::print(
           "sbrio-emulator: WARNING: --protocol 2016: unauthenticated; setpoints are obeyed from "
-          "the first sender only (address and port pinned), others are counted\n");
+          "{}, others are counted\n",
+          peer.empty() ? fmt::format("the first console heard only (released after {} ms of its "
+                                     "silence)",
+                                     watchdog_ms)
+                       : "only " + udp_transport.peer_name() + " (--peer)");
     } else {
+      // A binding setpoint acknowledges a state answered at most this long ago: the watchdog,
+      // plus the delay this emulator adds to its answers (else no session binds beyond it).
+      const auto round_trip = max_round_trip_ms > 0
+                                  ? ms(max_round_trip_ms)
+                                  : config.watchdog_timeout + ms(delay_ms) + ms(jitter_ms);
       secure.emplace(delayed, protocol::SecureResponder<4>(protocol::load_key_file(key_path),
                                                            protocol::random_session_id(),
-                                                           config.watchdog_timeout));
+                                                           config.watchdog_timeout, round_trip));
+      fmt::print(
+          "sbrio-emulator: protocol v2: obeys the console holding the key; binding "
+          "accepts round trips up to {:.0f} ms\n",
+          std::chrono::duration<double, std::milli>(round_trip).count());
     }
     const RunOptions opts{truth_path,  truth_period_ms, duration, watchdog_ms, motors,
                           environment, quiet,           delay_ms, jitter_ms,   loss};

@@ -19,6 +19,7 @@
 #include <endohaptics/sim/haptic_device_model.hpp>
 #include <endohaptics/sim/scripted_operator.hpp>
 #include <endohaptics/sim/simulated_rig.hpp>
+#include <endohaptics/teleop/link_diagnosis.hpp>
 #include <endohaptics/teleop/realtime.hpp>
 #include <endohaptics/teleop/teleop_loop.hpp>
 #include <endohaptics/teleop/tick_recorder.hpp>
@@ -29,6 +30,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <tuple>
 
 #include "../cli_numbers.hpp"
 #ifdef ENDOHAPTICS_HAVE_OPENHAPTICS
@@ -49,6 +51,7 @@ extern "C" void on_signal(int) { g_stop.store(true); }
 
 struct Options {
   std::string sbrio = "169.254.4.42:61556";
+  std::string local;  // --local HOST:PORT: where the bridge sends from (empty: any free port)
   std::string rate = "1000";
   double duration = 0.0;
   std::string device = "sim";
@@ -76,20 +79,38 @@ struct Window {
   tp::LinkState link = tp::LinkState::waiting;
   double clamp_force = 0.0;       // N, the estimate for clamp 1 at the end of the window
   protocol::SecureCounters v2{};  // v2 datagrams accepted and refused by cause, so far
+  std::uint8_t active = 0;        // the active mask of the newest state
+  std::uint8_t enabled = 0;       // the enable mask sent last
+  bool diagnose_only = false;     // the early look (0.9 s): warn if nothing obeyed yet, no line
 };
+
+// What the protocol layer refused, for the link's diagnosis.
+tp::LinkEvidence evidence(bool v2, const protocol::SecureCounters& c, std::uint8_t enabled,
+                          std::uint8_t active) {
+  return {.authenticated = v2,
+          .forged = c.forged,
+          .wrong_size = c.wrong_size,
+          .wrong_session = c.wrong_session,
+          .late = c.stale_answer,
+          .enable_mask = enabled,
+          .last_active = active};
+}
 
 // Ranges of the numeric options (stated in --help; examples::number_in refuses the rest).
 constexpr double min_rate_hz = 1.0;
 constexpr double max_rate_hz = 100000.0;
 constexpr double max_duration_s = 1e7;  // ~116 days; 0 runs until SIGINT
+// Setpoints a v2 answer may lag: 10 s at 1 kHz, within SecureTransport's round-trip history.
+constexpr int max_answer_lag = 10000;
 
-std::pair<std::string, std::uint16_t> parse_endpoint(const std::string& s) {
+std::pair<std::string, std::uint16_t> parse_endpoint(const std::string& s,
+                                                     const std::string& option = "--sbrio") {
   const auto colon = s.rfind(':');
   if (colon == std::string::npos || colon == 0 || colon + 1 == s.size()) {
-    throw endohaptics::Error("--sbrio must be HOST:PORT, got '" + s + "'");
+    throw endohaptics::Error(option + " must be HOST:PORT, got '" + s + "'");
   }
   const auto port = endohaptics::workflow::parse_number<std::uint16_t>(
-      std::string_view(s).substr(colon + 1), "--sbrio port", 1, 65535);
+      std::string_view(s).substr(colon + 1), option + " port", 1, 65535);
   return {s.substr(0, colon), port};
 }
 
@@ -123,8 +144,34 @@ int run_loop(Transport& transport, Device& device, endohaptics::SteadyClock& clo
   } else {
     const double hz =
         endohaptics::workflow::parse_number(opt.rate, "--rate", min_rate_hz, max_rate_hz);
+    // A lost link reaches the safe state after max_consecutive_misses + 1 missed periods, within
+    // TeleopLoopConfig::max_watchdog_time: that bounds the rate from below.
+    const double watchdog_s =
+        std::chrono::duration<double>(tp::TeleopLoopConfig::max_watchdog_time).count();
+    const double slowest =
+        static_cast<double>(loop_config.safety.max_consecutive_misses + 1) / watchdog_s;
+    if (hz < slowest) {
+      throw endohaptics::Error(fmt::format(
+          "--rate {}: at this rate {} missed periods (safety.max_consecutive_misses + 1) take "
+          "{:.0f} ms, longer than the {:.0f} ms a lost link may take to reach the safe state; use "
+          "--rate {} or more, or a lower safety.max_consecutive_misses",
+          opt.rate, loop_config.safety.max_consecutive_misses + 1,
+          1e3 * (loop_config.safety.max_consecutive_misses + 1) / hz, 1e3 * watchdog_s,
+          std::ceil(slowest)));
+    }
     loop_config.period = nanoseconds(static_cast<std::int64_t>(1e9 / hz + 0.5));
   }
+  // A motor enabled must be reported active within the activation timeout, or the robot is
+  // not obeying; on a link whose answers lag (--max-answer-lag) that includes the round trip.
+  const double tick_s =
+      std::chrono::duration<double>(loop_config.period.count() > 0 ? loop_config.period
+                                                                   : std::chrono::milliseconds(1))
+          .count();
+  loop_config.safety.activation_timeout =
+      std::min(tp::SafetyBounds::max_activation_timeout,
+               std::max(loop_config.safety.activation_timeout,
+                        static_cast<double>(opt.max_answer_lag + 1) * tick_s +
+                            tp::SafetyConfig{}.activation_timeout));
   if (opt.passivity == "tdpa") {  // the robot port is booked one round trip late, in ticks
     loop_config.passivity.mode = tp::PassivityMode::tdpa;
     const double period_ms =
@@ -151,8 +198,10 @@ int run_loop(Transport& transport, Device& device, endohaptics::SteadyClock& clo
   std::string log_error;  // set by the writer thread when the log cannot be written
   // Started before apply_realtime and reset explicitly: the writer never runs SCHED_FIFO or on
   // the loop's CPU.
+  const std::string peer = fmt::format("{}:{}", host, port);
   std::thread writer([&] {
     for (const auto& m : tp::leave_realtime()) fmt::print("bridge: log writer: {}\n", m);
+    bool warned = false;
     tp::LoopSnapshot previous;
     auto print_window = [&previous, &opt](const Window& w) {
       const tp::LoopWindow s = w.stats.since(previous);
@@ -179,7 +228,21 @@ int run_loop(Transport& transport, Device& device, endohaptics::SteadyClock& clo
       }
       Window w;
       while (windows.pop(w)) {
-        if (opt.stats) print_window(w);
+        // Within the first second: say so if nothing obeyed yet, and the likely cause.
+        if (!warned) {
+          const tp::LinkDiagnosis d =
+              tp::diagnose_link(w.stats.since(tp::LoopSnapshot{}),
+                                evidence(opt.protocol != "2016", w.v2, w.enabled, w.active), peer);
+          if (!d.up()) {
+            fmt::print("bridge: WARNING: no obeyed state after {:.1f} s: {}\n", w.t, d.message);
+            std::fflush(stdout);  // now, not at exit: a supervisor reads it while we run
+          }
+          warned = true;
+        }
+        if (opt.stats && !w.diagnose_only) {
+          print_window(w);
+          std::fflush(stdout);
+        }
       }
       if (last) break;
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -201,13 +264,23 @@ int run_loop(Transport& transport, Device& device, endohaptics::SteadyClock& clo
                                                   std::chrono::duration<double>(opt.duration))
                                     : nanoseconds::max();
   auto next_window = start + std::chrono::seconds(1);
+  // The early look at the link, so a dead or refusing robot is named within the first second.
+  auto early_look = start + std::chrono::milliseconds(900);
+  std::uint8_t last_active = 0, last_enabled = 0;
   loop.run([&] { return g_stop.load(std::memory_order_relaxed) || clock.now() >= end; },
            [&](const tp::TickResult& r) {
              const auto now = clock.now();
              if (recorder) (void)recorder->push(tp::TickRecord::from(r, now));
-             if (now >= next_window) {
-               next_window += std::chrono::seconds(1);
+             last_active = r.measured.active_mask;
+             last_enabled = r.enable_mask;
+             if (now >= next_window || now >= early_look) {
                Window w;
+               w.diagnose_only = now < next_window;
+               if (w.diagnose_only) {
+                 early_look = nanoseconds::max();
+               } else {
+                 next_window += std::chrono::seconds(1);
+               }
                w.t = std::chrono::duration<double>(now - start).count();
                w.stats = loop.stats().snapshot();
                w.link_losses = loop.watchdog().link_losses();
@@ -215,6 +288,8 @@ int run_loop(Transport& transport, Device& device, endohaptics::SteadyClock& clo
                w.link = r.link;
                w.clamp_force = r.motor_force[2];
                w.v2 = v2_counters(transport);
+               w.active = r.measured.active_mask;
+               w.enabled = r.enable_mask;
                (void)windows.push(w);
              }
            },
@@ -253,10 +328,23 @@ int run_loop(Transport& transport, Device& device, endohaptics::SteadyClock& clo
   if (opt.protocol != "2016") {
     fmt::print("bridge: protocol v2 states: {}\n", protocol::describe(v2_counters(transport)));
   }
+  // The verdict: "up" only if the robot obeyed (a valid state showing the enabled motors
+  // active); otherwise the likely cause, and a non-zero exit.
+  const tp::LinkDiagnosis verdict = tp::diagnose_link(
+      s.snapshot().since(tp::LoopSnapshot{}),
+      evidence(opt.protocol != "2016", v2_counters(transport), last_enabled, last_active), peer);
+  if (verdict.up()) {
+    fmt::print(
+        "bridge: link: up: the robot obeyed {} of {} exchanges ({} answered but did not "
+        "obey), ended {}\n",
+        s.received(), s.exchanges(), s.not_obeyed(), to_string(loop.watchdog().state()));
+  } else {
+    fmt::print("bridge: link: never up ({}): {}\n", to_string(verdict.problem), verdict.message);
+  }
   // No false success: a log that could not be written (full disk) fails the run.
   if (!log_error.empty()) throw endohaptics::Error(log_error);
   endohaptics::workflow::require_written(stdout, "standard output");
-  return 0;
+  return verdict.up() ? 0 : 3;
 }
 
 // The link: v2 (SecureTransport over UDP, key from --key) or the unauthenticated 2016 wire.
@@ -268,10 +356,17 @@ int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& o
   udp.remote_address = host;
   udp.remote_port = port;
   udp.local_address = host.find(':') != std::string::npos ? "::" : "0.0.0.0";
+  if (!opt.local.empty()) {  // a fixed source, for a robot side that obeys one console (--peer)
+    std::tie(udp.local_address, udp.local_port) = parse_endpoint(opt.local, "--local");
+  }
   if (opt.protocol == "2016") {
     fmt::print(
         "bridge: WARNING: --protocol 2016: unauthenticated; anyone who can send UDP to this "
         "host can spoof the robot's state (docs/protocol.md)\n");
+    fmt::print(
+        "bridge: states are taken from {}:{} only (a connected socket: the kernel drops "
+        "datagrams from any other source)\n",
+        host, port);
     transport::UdpTransport transport(udp);
     return run_loop(transport, device, clock, opt, cfg, host, port);
   }
@@ -295,6 +390,9 @@ int main(int argc, char** argv) {
   CLI::App app{"endohaptics bridge: stylus <-> sbRIO teleoperation with sensorless force feedback"};
   Options opt;
   app.add_option("--sbrio", opt.sbrio, "sbRIO address HOST:PORT")->capture_default_str();
+  app.add_option("--local", opt.local,
+                 "send from this HOST:PORT (default: any free port; give it when the robot side "
+                 "obeys one console, e.g. the emulator's --peer)");
   app.add_option("--rate", opt.rate, "loop rate in Hz, or 'max' (as fast as the link allows)")
       ->check(examples::number_in(min_rate_hz, max_rate_hz, {"max"}))
       ->capture_default_str();
@@ -333,14 +431,26 @@ int main(int argc, char** argv) {
   app.add_option("--max-answer-lag", opt.max_answer_lag,
                  "protocol v2: accept a state answering a setpoint up to N older than the newest "
                  "(0: only the newest; raise it on a link slower than one period, e.g. the "
-                 "emulator's --delay)")
-      ->check(examples::number_in(0, 1000))
+                 "emulator's --delay: N >= the round trip in periods)")
+      ->check(examples::number_in(0, max_answer_lag))
       ->capture_default_str();
   app.add_option("--generate-key", opt.generate_key,
                  "write a new random key file (mode 0600; refuses an existing file) and exit");
   CLI11_PARSE(app, argc, argv);
 
   try {
+    // Options that cannot apply are refused with the reason, never ignored.
+    if (opt.protocol == "2016" && !opt.key_path.empty()) {
+      throw endohaptics::Error("--key applies to protocol v2; --protocol 2016 has no key");
+    }
+    if (opt.protocol == "2016" && app.count("--max-answer-lag") > 0) {
+      throw endohaptics::Error(
+          "--max-answer-lag applies to protocol v2 (its states name the setpoint they answer); "
+          "the 2016 wire cannot tell");
+    }
+    if (opt.passivity != "tdpa" && app.count("--passivity-round-trip") > 0) {
+      throw endohaptics::Error("--passivity-round-trip applies to --passivity tdpa only");
+    }
     if (!opt.generate_key.empty()) {
       protocol::generate_key_file(opt.generate_key);
       fmt::print("bridge: wrote a new key to {} (32 bytes, mode 0600)\n", opt.generate_key);

@@ -174,6 +174,10 @@ BRIDGE_CASES = {
 }
 
 
+# The cases in which no valid state ever arrives: the bridge must exit non-zero saying so.
+NEVER_UP = {"huge-position", "float-max", "nan", "wrong-length", "overcurrent"}
+
+
 def summary_of(text):
     for line in text.splitlines():
         if line.startswith("bridge: summary "):
@@ -219,7 +223,11 @@ def run_bridge_case(bin_dir, name, report):
         has_log = os.path.exists(log) and "state_fault" in open(log).readline()
         sp_log, f_log = log_envelope(log) if os.path.exists(log) else (float("nan"), float("nan"))
     wire_max = fake.enabled_max
-    held = wire_max <= JOINT_LIMIT + 1e-6 and f_log <= FORCE_LIMIT + 1e-9 and proc.returncode == 0
+    # A run that never received a valid, obeyed state fails (exit 3, "link: never up") and says
+    # why; every other run exits 0.
+    expected_exit = 3 if name in NEVER_UP else 0
+    held = (wire_max <= JOINT_LIMIT + 1e-6 and f_log <= FORCE_LIMIT + 1e-9 and
+            proc.returncode == expected_exit)
     did = (f"exit {proc.returncode}; max |setpoint| enabled on the wire {wire_max:.3g} rad; "
            f"max stylus force {f_log:.3g} N; complete {s.get('complete', '?')}, "
            f"state faults {s.get('state_faults', '?')}, rejected {s.get('rejected', '?')}, "
@@ -230,8 +238,10 @@ def run_bridge_case(bin_dir, name, report):
         print(row)
         return True
     failures = []
-    if proc.returncode != 0:
-        failures.append(f"bridge exited with {proc.returncode}:\n{out}")
+    if proc.returncode != expected_exit:
+        failures.append(f"bridge exited with {proc.returncode}, expected {expected_exit}:\n{out}")
+    if expected_exit == 3 and "bridge: link: never up (" not in out:
+        failures.append(f"a run without a valid state did not say why:\n{out}")
     if not s:
         failures.append(f"no summary line:\n{out}")
     if not has_log:
@@ -333,7 +343,13 @@ def run_emulator_case(bin_dir, name, report):
         pos_max = max((abs(float(r[col[c]])) for r in rows for c in pos_cols), default=float("nan"))
     s = summary_of(bridge.stdout)
     done = [l for l in em_text.splitlines() if "done after" in l]
-    held = em.returncode == 0 and bridge.returncode == 0 and pos_max <= JOINT_LIMIT + 0.01
+    # "steer": the intruder speaks first and the emulator (no --peer) pins it, so the bridge never
+    # gets an answer: it must say so and exit 3 (tests/e2e/link_truth.py peer-2016 shows --peer
+    # refusing such an intruder). "flood": junk pins nothing; the bridge runs normally.
+    bridge_exit = 3 if name == "steer" else 0
+    held = (em.returncode == 0 and bridge.returncode == bridge_exit and
+            pos_max <= JOINT_LIMIT + 0.01 and
+            (bridge_exit == 0 or "bridge: link: never up (" in bridge.stdout))
     did = (f"emulator exit {em.returncode}, bridge exit {bridge.returncode}; max |joint position| "
            f"{pos_max:.3g} rad; bridge complete {s.get('complete', '?')}, link losses "
            f"{s.get('link_losses', '?')}; emulator: {done[0].split(': ', 1)[1] if done else '?'}")

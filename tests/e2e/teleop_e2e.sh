@@ -108,9 +108,13 @@ case $scenario in
     # setpoint it answered 20 ticks ago. The bridge refuses them as stale answers by default
     # (no link, never a stale state passed off as fresh) and accepts them with --max-answer-lag.
     start_emulator 0 --delay 20
+    status=0
     "$bin/endohaptics-bridge" --sbrio "127.0.0.1:$port" --key "$key" --duration 1.5 \
-      >"$work/strict.out" 2>&1 || fail "bridge exited with $?: $(cat "$work/strict.out")"
+      >"$work/strict.out" 2>&1 || status=$?
     cat "$work/strict.out"
+    # No state accepted: the run says why (the answers are late) and fails.
+    [[ $status == 3 ]] || fail "bridge without --max-answer-lag exited with $status, expected 3"
+    grep -q "bridge: link: never up (late answers)" "$work/strict.out" || fail "no verdict"
     received=$(summary_value received "$work/strict.out")
     [[ $received == 0 ]] || fail "$received delayed states accepted without --max-answer-lag"
     "$bin/endohaptics-bridge" --sbrio "127.0.0.1:$port" --key "$key" --duration 2 \

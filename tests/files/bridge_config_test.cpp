@@ -133,7 +133,16 @@ TEST_CASE("file errors name the file") {
   const auto range = dir.path() / "range.json";
   write_text(range, R"({"loop": {"receive_timeout": 2}})");
   CHECK(message_of([&] { (void)files::load_bridge_config(range); }) ==
-        range.string() + ": loop.receive_timeout: must be a number in [0, 1] s, got 2");
+        range.string() + ": loop.receive_timeout: must be a number in (0, 0.5] s, got 2");
+  // 0 would never wait for an answer: v2 never connected (before: accepted).
+  write_text(range, R"({"loop": {"receive_timeout": 0}})");
+  CHECK(message_of([&] { (void)files::load_bridge_config(range); }) ==
+        range.string() + ": loop.receive_timeout: must be a number in (0, 0.5] s, got 0");
+  // A mapping gain of 0 silently removed the clamp's force feedback (before: accepted).
+  write_text(range, R"({"mapping": {"a_clamp": 0}})");
+  CHECK(message_of([&] { (void)files::load_bridge_config(range); })
+            .find("a_clamp must be of magnitude in [1e-6, 1e6] (a gain of 0 freezes the joint and "
+                  "removes its force feedback), got 0") != std::string::npos);
 
   const auto big = dir.path() / "big.json";
   write_text(big, "{}" + std::string(files::bridge_config_max_bytes, ' '));
@@ -151,8 +160,8 @@ TEST_CASE("unknown keys are errors that list the allowed keys") {
         "bridge.json: unknown key 'loop.recieve_timeout' (allowed in 'loop': receive_timeout)");
   CHECK(error_of(R"({"safety": {"polcy": "zero_force"}})") ==
         "bridge.json: unknown key 'safety.polcy' (allowed in 'safety': max_consecutive_misses, "
-        "policy, force_ramp_time, max_setpoint_rate, max_stylus_force, enable_mask, joint_lower, "
-        "joint_upper)");
+        "policy, force_ramp_time, max_setpoint_rate, max_stylus_force, enable_mask, "
+        "activation_timeout, joint_lower, joint_upper)");
   // loop_period and motor_order are the program's, not the file's.
   CHECK(error_of(R"({"estimator": {"loop_period": 0.002}})")
             .rfind("bridge.json: unknown key 'estimator.loop_period' (allowed in 'estimator': "
@@ -243,7 +252,7 @@ TEST_CASE("out-of-range numbers name the key and the allowed range") {
   CHECK(error_of(R"({"operator": {"close_time": 0}})") ==
         "bridge.json: operator.close_time: must be a finite number > 0 s, got 0");
   CHECK(error_of(R"({"loop": {"receive_timeout": -0.001}})") ==
-        "bridge.json: loop.receive_timeout: must be a number in [0, 1] s, got -0.001");
+        "bridge.json: loop.receive_timeout: must be a number in (0, 0.5] s, got -0.001");
 }
 
 TEST_CASE("cross-field checks of the library come with the file name") {
@@ -266,7 +275,7 @@ TEST_CASE("validate_bridge_config checks a configuration built in code") {
   c = {};
   c.loop.receive_timeout = std::chrono::seconds(2);
   CHECK(message_of([&] { files::validate_bridge_config(c, "built"); }) ==
-        "built: loop.receive_timeout: must be a number in [0, 1] s, got 2");
+        "built: loop.receive_timeout: must be a number in (0, 0.5] s, got 2");
   c = {};
   c.operator_script.r_open = std::numeric_limits<double>::quiet_NaN();
   CHECK(message_of([&] { files::validate_bridge_config(c, "built"); }) ==
@@ -281,9 +290,11 @@ TEST_CASE("echoed values and keys are cut to 60 characters") {
         "\"zero_force\", got \"" +
             std::string(59, 'x') + "...");
   const std::string key = error_of(R"({"safety": {")" + long_text + "\": 1}}");
-  CHECK(key == "bridge.json: unknown key 'safety." + std::string(53, 'x') +
-                   "...' (allowed in 'safety': max_consecutive_misses, policy, force_ramp_time, "
-                   "max_setpoint_rate, max_stylus_force, enable_mask, joint_lower, joint_upper)");
+  CHECK(key ==
+        "bridge.json: unknown key 'safety." + std::string(53, 'x') +
+            "...' (allowed in 'safety': max_consecutive_misses, policy, force_ramp_time, "
+            "max_setpoint_rate, max_stylus_force, enable_mask, activation_timeout, joint_lower, "
+            "joint_upper)");
   const std::string array =
       error_of(R"({"mapping": {"lower": [)" + std::string(50000, '1') + ", 2, 3]}}");
   CHECK(array ==
@@ -414,6 +425,19 @@ TEST_CASE("estimator.clamp_model of a lower order runs in the bridge's 6 states,
       message_of([&] { (void)files::load_bridge_config(dir.path() / "bridge_unstable.json"); });
   CHECK(unstable_error.find("unstable.json: the clamp model is not stable (spectral radius 1.01, "
                             "must be < 1)") != std::string::npos);
+  // A number far beyond any force model (C = 1e308) is refused (before: accepted, the estimate
+  // pinned at its limit on every tick).
+  const endohaptics::model::StateSpace<2, 2, 1> huge(Eigen::Matrix2d{{0.9, 0.0}, {0.0, 0.5}}, B,
+                                                     Eigen::Matrix<double, 1, 2>{{1e308, 0.0}}, D,
+                                                     0.001);
+  files::save_model(
+      dir.path() / "huge.json",
+      files::make_model_file(huge, {{"current", "A"}, {"velocity", "rad/s"}}, {{"force", "N"}}));
+  write_text(dir.path() / "bridge_huge.json", R"({"estimator": {"clamp_model": "huge.json"}})");
+  const std::string huge_error =
+      message_of([&] { (void)files::load_bridge_config(dir.path() / "bridge_huge.json"); });
+  CHECK(huge_error.find("huge.json: C[0][0] is 1e+308: a clamp force model's numbers must lie in "
+                        "[-1e6, 1e6]") != std::string::npos);
 }
 
 TEST_CASE("safety-relevant values have physical bounds (issue 14's field cases)") {

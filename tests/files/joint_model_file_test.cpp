@@ -338,6 +338,13 @@ TEST_CASE("joint-model files: hostile and out-of-range content is refused naming
         "in [1e-9, 1e6], got 1e-12");
   CHECK(error_of(obs_with("back_variance", 0.0)) ==
         "model file m.json: field \"parameters.back_variance\" must be in (0, 1e6], got 0");
+  // Beyond the joint-model bound of docs/rig.md (before: accepted).
+  CHECK(error_of(obs_with("direction_scale", 1e308)) ==
+        "model file m.json: field \"parameters.direction_scale\" must be in (0, 1e6] rad, got "
+        "1e+308");
+  CHECK(error_of(obs_with("velocity_threshold", 1e308)) ==
+        "model file m.json: field \"parameters.velocity_threshold\" must be in [0, 1e6] rad/s, got "
+        "1e+308");
   CHECK(error_of(obs_with("back_current_offset", -1e300)) ==
         "model file m.json: field \"parameters.back_current_offset\" must be in [-1e6, 1e6], got "
         "-1e+300");

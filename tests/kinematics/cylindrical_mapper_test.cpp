@@ -465,8 +465,9 @@ TEST_CASE("force scale per cylindrical axis and the sign of the position scales"
   CHECK(force.isApprox(Vector3(1.0, 0.5, 0.0), 1e-15));
 
   Config mirrored;
-  mirrored.a_roll = -0.7096;  // roll runs the other way round: so does its feedback
-  mirrored.a_clamp = 0.0;     // clamp not driven by r: no clamp feedback
+  mirrored.a_roll = -0.7096;      // roll runs the other way round: so does its feedback
+  mirrored.force_scale[0] = 0.0;  // no clamp feedback: a force scale of 0 says so (a gain of
+                                  // 0 is refused: it silently removed the feedback)
   Mapper other(mirrored);
   REQUIRE(other.map_force(joint_forces(1.0, 0.0, -1.0, 1.0), 0.0, force).ok());
   CHECK(force == Vector3(-1.0, 0.0, 0.0));
@@ -584,14 +585,13 @@ TEST_CASE("huge finite positions are clamped and never NaN") {
   CHECK(out[3] == 1.028);
   CHECK(result.clamped_mask == (bit(Motor::pitch) | bit(Motor::clamp1) | bit(Motor::clamp2)));
 
-  // With a zero clamp scale, 0 * inf would be NaN: refused instead of sent.
+  // A zero clamp gain (which would make 0 * inf = NaN) is refused at configuration.
   Config config;
   config.a_clamp = 0.0;
-  Mapper zero(config);
-  const Motors before = out;
-  result = zero.map_position(Vector3(1.5e308, 1.5e308, 0.0), out);
-  CHECK(result.status == MapperStatus::non_finite);
-  CHECK(out == before);
+  CHECK_THROWS_WITH_AS((void)Mapper{config},
+                       "CylindricalMapper: a_clamp must be of magnitude in [1e-6, 1e6] (a gain of "
+                       "0 freezes the joint and removes its force feedback), got 0",
+                       endohaptics::Error);
 }
 
 TEST_CASE("invalid configurations throw endohaptics::Error naming field and value") {

@@ -287,10 +287,6 @@ TEST_CASE("SecureSession: exchanges allocate nothing") {
   CHECK(allocations == 0);
 }
 
-}  // namespace protocol_secure_session_test
-
-namespace protocol_secure_session_test {
-
 TEST_CASE(
     "SecureSession: a binding setpoint held back by an attacker and delivered later never binds") {
   Initiator pc(test_key(), 0x1111);
@@ -325,6 +321,30 @@ TEST_CASE(
   CHECK(sbrio.open(next_setpoint(pc, 0x0F), got, 100ms) == SecureStatus::ok);
   CHECK(sbrio.bound());
   CHECK(got.back() == std::byte{0x0F});
+}
+
+TEST_CASE("SecureSession: a round trip beyond the expiry binds within max_round_trip, not after") {
+  // The emulator's --delay 105 against a 100 ms watchdog (expiry): the echo takes 106 ms. With
+  // max_round_trip 0 (= the expiry) it never binds; with 205 ms it binds; beyond that it does not.
+  for (const auto& c : {std::tuple{0ms, 107ms, false}, std::tuple{205ms, 107ms, true},
+                        std::tuple{205ms, 207ms, false}}) {
+    const auto round_trip = std::get<0>(c);
+    const auto arrives = std::get<1>(c);
+    const bool binds = std::get<2>(c);
+    CAPTURE(round_trip.count());
+    CAPTURE(arrives.count());
+    Initiator pc(test_key(), 0x1111, 200);
+    Responder sbrio(test_key(), 0x2222, 100ms, round_trip);
+    SetpointPayload got{};
+    StatePayload state{};
+    REQUIRE(sbrio.open(next_setpoint(pc), got, 1ms) == SecureStatus::unbound);
+    REQUIRE(pc.open(answer(sbrio), state) == SecureStatus::ok);
+    CHECK(sbrio.open(next_setpoint(pc, 0x0F), got, arrives) ==
+          (binds ? SecureStatus::ok : SecureStatus::unbound));
+    CHECK(sbrio.bound() == binds);
+    CHECK(got.back() == (binds ? std::byte{0x0F} : std::byte{0}));
+  }
+  CHECK_THROWS_AS(Responder(test_key(), 0x2222, 100ms, -1ms), endohaptics::Error);
 }
 
 }  // namespace protocol_secure_session_test

@@ -517,7 +517,10 @@ TEST_CASE("safety configuration: physical bounds, with the field and range in th
   CHECK(message([](C& c) { c.period = 100ms; }).find("11 x 100000000 ns") != std::string::npos);
   CHECK(message([](C& c) {
           c.receive_timeout = 1s;
-        }).starts_with("TeleopLoopConfig: receive_timeout must be in [0, 500000000] ns"));
+        }).starts_with("TeleopLoopConfig: receive_timeout must be in (0, 0.5] s, got 1 s"));
+  CHECK(message([](C& c) {
+          c.receive_timeout = 0s;
+        }).starts_with("TeleopLoopConfig: receive_timeout must be in (0, 0.5] s, got 0 s"));
 }
 
 TEST_CASE(

@@ -25,12 +25,14 @@ struct FakeSbrio {
   Codec::State state;
   std::uint64_t requests = 0;
   bool ever_enabled_before_contact = false;
+  bool disobey = false;  // answers every setpoint but enables nothing (a refusing robot)
 
   template <typename Reply>
   void operator()(std::span<const std::byte> in, Reply& reply) noexcept {
     ++requests;
     Codec::Setpoint sp;
     if (Codec::decode_setpoint(in, sp) != endohaptics::protocol::CodecStatus::ok) return;
+    if (disobey) sp.enable_mask = 0;
     for (int i = 0; i < 4; ++i) {
       if (sp.enable_mask & (1u << i)) {
         const double step = 0.05 * (sp.position[i] - state.position[i]);
@@ -186,7 +188,7 @@ TEST_CASE("every fault kind: never a non-finite or over-limit output, counters c
     const auto& f = rig.faulty.counters();
     CHECK(s.exchanges() == 5000);
     CHECK(s.received() + s.timeouts() + s.decode_errors() + s.transport_errors() +
-              s.state_faults() ==
+              s.state_faults() + s.not_obeyed() ==
           5000);
     CHECK_FALSE(rig.device.non_finite_force);
     if (c.rates.drop_receive > 0 && c.rates.drop_send == 0 && c.rates.delay == 0) {
@@ -389,10 +391,10 @@ TEST_CASE("a stall (clock jumps 100 ms): rate limit and force ramp still hold pe
     config.receive_timeout = 2ms;
     check_stall(config, 2e-3);
   }
-  SUBCASE("period 0 with receive timeout 0: dt at most 1 ms") {
+  SUBCASE("period 0 with receive timeout 0.5 ms: dt at most 1 ms") {
     tp::TeleopLoopConfig config;
     config.period = 0ns;
-    config.receive_timeout = 0ns;
+    config.receive_timeout = 500us;
     check_stall(config, 1e-3);
   }
 }
@@ -411,6 +413,50 @@ TEST_CASE("an enable_mask with a bit at or above the motor count is refused at c
   for (const std::uint8_t ok : std::initializer_list<std::uint8_t>{0x00, 0x01, 0x0F}) {
     safety.enable_mask = ok;
     CHECK_NOTHROW(safety.validate());
+  }
+}
+
+TEST_CASE("link up means obeyed: a robot that answers but leaves the enabled motors off is lost") {
+  Rig rig;
+  rig.link.responder().disobey = true;
+  tp::TickResult r;
+  for (int i = 0; i < 5; ++i) r = rig.tick();
+  // First contact: nothing enabled yet, so the answers are obeyed; then the motors are enabled.
+  CHECK(r.enable_mask == 0x0F);
+  const int grace = static_cast<int>(rig.loop.config().safety.activation_timeout / 1e-3);
+  for (int i = 0; i < grace - 6; ++i) {
+    r = rig.tick();
+    REQUIRE(r.not_obeyed_mask == 0);  // within the activation timeout: still fine
+  }
+  int not_obeyed = 0;
+  for (int i = 0; i < 40; ++i) {
+    r = rig.tick();
+    if (r.exchange == tp::TickOutcome::not_obeyed) ++not_obeyed;
+  }
+  CHECK(not_obeyed >= 35);
+  CHECK(r.not_obeyed_mask == 0x0F);
+  CHECK(r.link == tp::LinkState::lost);
+  CHECK(r.stylus_force.isZero());
+  CHECK(rig.loop.stats().not_obeyed() == static_cast<std::uint64_t>(not_obeyed));
+  CHECK(rig.loop.stats().received() < 60);
+  // The robot obeys again: the link recovers.
+  rig.link.responder().disobey = false;
+  for (int i = 0; i < 5; ++i) r = rig.tick();
+  CHECK(r.exchange == tp::TickOutcome::received);
+  CHECK(r.link == tp::LinkState::recovering);
+}
+
+TEST_CASE("activation_timeout: an obeying robot is never counted against it, bounds refused") {
+  Rig rig;
+  for (int i = 0; i < 200; ++i) (void)rig.tick();
+  CHECK(rig.loop.stats().not_obeyed() == 0);
+  CHECK(rig.loop.stats().received() == 200);
+  tp::SafetyConfig safety;
+  for (const double bad : {0.0, -1.0, 10.5, std::numeric_limits<double>::quiet_NaN()}) {
+    safety.activation_timeout = bad;
+    CHECK_THROWS_WITH_AS(safety.validate(),
+                         doctest::Contains("activation_timeout must be in (0, 10] s"),
+                         endohaptics::Error);
   }
 }
 

@@ -220,6 +220,14 @@ TEST_CASE("push-load observer: filters start at the first sample, allocation-fre
   p.back_variance = 0.0;
   CHECK(message_of([&] { est::PushLoadObserver<double> bad(p); }) ==
         "PushLoadObserverParameters: back_variance must be in (0, 1e6], got 0");
+  p = {};
+  p.direction_scale = 1e308;  // before: accepted (bounded like every joint-model parameter now)
+  CHECK(message_of([&] { est::PushLoadObserver<double> bad(p); }) ==
+        "PushLoadObserverParameters: direction_scale must be in (0, 1e6] rad, got 1e+308");
+  p = {};
+  p.velocity_threshold = 1e308;
+  CHECK(message_of([&] { est::PushLoadObserver<double> bad(p); }) ==
+        "PushLoadObserverParameters: velocity_threshold must be in [0, 1e6] rad/s, got 1e+308");
 }
 
 TEST_CASE("push-load observer on the UMN grasper, one session to the other, scored causally" *

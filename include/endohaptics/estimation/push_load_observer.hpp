@@ -71,10 +71,11 @@ struct PushLoadObserverParameters {
             "in (0, Nyquist) Hz");
     require(velocity_cutoff > 0 && velocity_cutoff < nyquist, "velocity_cutoff", velocity_cutoff,
             "in (0, Nyquist) Hz");
-    require(std::isfinite(direction_scale) && direction_scale > 0, "direction_scale",
-            direction_scale, "finite and > 0 rad");
-    require(std::isfinite(velocity_threshold) && velocity_threshold >= 0, "velocity_threshold",
-            velocity_threshold, "finite and >= 0 rad/s");
+    const auto bound = static_cast<Scalar>(max_joint_model_parameter);  // false for NaN below
+    require(direction_scale > 0 && direction_scale <= bound, "direction_scale", direction_scale,
+            "in (0, 1e6] rad");
+    require(velocity_threshold >= 0 && velocity_threshold <= bound, "velocity_threshold",
+            velocity_threshold, "in [0, 1e6] rad/s");
     require(direction_threshold > 0 && direction_threshold <= 1, "direction_threshold",
             direction_threshold, "in (0, 1]");
     require(push_sign == 1 || push_sign == -1, "push_sign", push_sign, "+1 or -1");

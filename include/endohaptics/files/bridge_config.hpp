@@ -34,6 +34,7 @@
 #include "endohaptics/files/json_text.hpp"
 #include "endohaptics/files/model_file.hpp"
 #include "endohaptics/kinematics/cylindrical_mapper.hpp"
+#include "endohaptics/model/joint_model_bounds.hpp"
 #include "endohaptics/model/state_space.hpp"
 #include "endohaptics/sim/scripted_operator.hpp"
 #include "endohaptics/teleop/safety.hpp"
@@ -184,6 +185,9 @@ void visit_schema(Config& c, Visitor& v) {
   v.number("safety", "max_stylus_force", s.max_stylus_force,
            Range::between(0.0, SB::max_stylus_force, "N"));
   v.integer("safety", "enable_mask", s.enable_mask, 0, 15);
+  Range activation = Range::between(0.0, SB::max_activation_timeout, "s");
+  activation.lo_open = true;
+  v.number("safety", "activation_timeout", s.activation_timeout, activation);
   v.vector("safety", "joint_lower", s.joint_lower,
            Range::described(-pi, pi, "a number in [-pi, pi] rad"));
   v.vector("safety", "joint_upper", s.joint_upper,
@@ -220,7 +224,11 @@ void visit_schema(Config& c, Visitor& v) {
   v.number("operator", "hold_time", o.hold_time, Range::at_least(0.0, "s"));
   v.number("operator", "release_time", o.release_time, Range::above(0.0, "s"));
 
-  v.seconds("loop", "receive_timeout", c.loop.receive_timeout, Range::between(0.0, 1.0, "s"));
+  // (0, the loop's watchdog bound]: 0 would never wait for an answer (the link never comes up).
+  Range timeout = Range::between(
+      0.0, std::chrono::duration<double>(teleop::TeleopLoopConfig::max_watchdog_time).count(), "s");
+  timeout.lo_open = true;
+  v.seconds("loop", "receive_timeout", c.loop.receive_timeout, timeout);
 }
 
 //! "section.key".
@@ -676,6 +684,29 @@ inline constexpr int bridge_clamp_states = 6;
         ENDOHAPTICS_THROW(Error(where + ": the clamp model is not stable (spectral radius " +
                                 endohaptics::detail::format_number(rho) +
                                 ", must be < 1): its estimate would grow without bound"));
+      }
+      // A force model maps A and rad/s to N: every number of it lies within the bound of every
+      // joint-model parameter (model::max_joint_model_parameter); a larger one (a corrupt or
+      // hostile file, C = 1e308) would pin the estimate at its output limit on every tick.
+      const model::DynamicStateSpace<>& ss = file.state_space;
+      const std::pair<const char*, const Eigen::MatrixXd*> blocks[] = {
+          {"A", &ss.A()}, {"B", &ss.B()}, {"C", &ss.C()}, {"D", &ss.D()}};
+      const double bound = model::max_joint_model_parameter;
+      for (const auto& [name, block] : blocks) {
+        for (Eigen::Index r = 0; r < block->rows(); ++r) {
+          for (Eigen::Index c = 0; c < block->cols(); ++c) {
+            if (!(std::fabs((*block)(r, c)) <= bound)) {
+              ENDOHAPTICS_THROW(
+                  Error(where + ": " + name + "[" + std::to_string(r) + "][" + std::to_string(c) +
+                        "] is " + endohaptics::detail::format_number((*block)(r, c)) +
+                        ": a clamp force model's numbers must lie in [-1e6, 1e6] (A, rad/s -> N)"));
+            }
+          }
+        }
+      }
+      if (!(ss.state().cwiseAbs().maxCoeff() <= bound)) {
+        ENDOHAPTICS_THROW(Error(where + ": x0 holds a value beyond 1e6: a clamp force model's "
+                                        "numbers must lie in [-1e6, 1e6]"));
       }
       ModelFile six = file;
       if (six.state_space.state_size() < bridge_clamp_states) {

@@ -175,8 +175,10 @@ struct BidirectionalObserverSettings {
 //! empty state): `model_from_json`, `make_model_file` or `ModelFile{.state_space = ...}`.
 struct ModelFile {
   static constexpr int format_version = 1;  //!< "version" written and accepted
-  //! Largest "states" accepted on load: A alone is states^2 numbers (8 MB at 1000).
-  static constexpr int max_states = 1000;
+  //! Largest "states" accepted on load: the largest order identification fits
+  //! (workflow::limits::max_order). A step costs states^2 multiply-adds: replaying a 100-state
+  //! model over 600 000 samples (a minute at 0.1 ms) takes about 6e9, seconds, not hours.
+  static constexpr int max_states = 100;
   //! Largest magnitude of a joint-model parameter and smallest |current_per_load| accepted: the
   //! bounds the estimation types check too (model/joint_model_bounds.hpp).
   static constexpr double max_parameter = model::max_joint_model_parameter;

@@ -141,9 +141,11 @@ template <typename Scalar = double>
 template <typename Scalar = double>
 class CylindricalMapper {
  public:
-  static constexpr int num_joints = 4;                       //!< EndoWrist tool joints (= motors)
-  using Config = CylindricalMapperConfig<Scalar>;            //!< eq. 5.8/5.9 parameters
-  using Vector3 = Eigen::Matrix<Scalar, 3, 1>;               //!< stylus position (m) or force (N)
+  static constexpr int num_joints = 4;              //!< EndoWrist tool joints (= motors)
+  static constexpr Scalar min_gain = Scalar(1e-6);  //!< smallest |a_roll|, |a_pitch|, |a_clamp|
+  static constexpr Scalar max_gain = Scalar(1e6);   //!< largest |a_roll|, |a_pitch|, |a_clamp|
+  using Config = CylindricalMapperConfig<Scalar>;   //!< eq. 5.8/5.9 parameters
+  using Vector3 = Eigen::Matrix<Scalar, 3, 1>;      //!< stylus position (m) or force (N)
   using MotorVector = Eigen::Matrix<Scalar, num_joints, 1>;  //!< motor order
   using Coordinates = Cylindrical<Scalar>;                   //!< (theta, r, z) of the stylus
 
@@ -313,6 +315,18 @@ class CylindricalMapper {
     endohaptics::detail::require_finite(config_.b_pitch, "CylindricalMapper", "b_pitch");
     endohaptics::detail::require_finite(config_.a_clamp, "CylindricalMapper", "a_clamp");
     endohaptics::detail::require_finite(config_.b_clamp, "CylindricalMapper", "b_clamp");
+    // The gains of eq. 5.9 scale the motion and, through eq. 5.8's transpose, the force felt:
+    // a gain of 0 would freeze the joint and silently remove its force feedback.
+    for (const auto& [gain, name] :
+         {std::pair{config_.a_roll, "a_roll"}, std::pair{config_.a_pitch, "a_pitch"},
+          std::pair{config_.a_clamp, "a_clamp"}}) {
+      if (!(std::fabs(gain) >= min_gain && std::fabs(gain) <= max_gain)) {
+        ENDOHAPTICS_THROW(Error(std::string("CylindricalMapper: ") + name +
+                                " must be of magnitude in [1e-6, 1e6] (a gain of 0 freezes the "
+                                "joint and removes its force feedback), got " +
+                                endohaptics::detail::format_number(gain)));
+      }
+    }
     for (int j = 0; j < num_joints; ++j) {
       const std::string name(to_string(static_cast<Motor>(j)));
       endohaptics::detail::require_finite(config_.lower[j], "CylindricalMapper",

@@ -229,14 +229,24 @@ class SecureResponder {
   static constexpr PacketType receive_type = PacketType::setpoint;  //!< what it verifies
 
   //! `session`: non-zero (random_session_id()); `expiry`: a bound session silent this long is
-  //! dropped (> 0). Throws Error.
+  //! dropped (> 0); `max_round_trip`: a binding setpoint must acknowledge a state answering a
+  //! setpoint received at most this long ago (> 0; 0: the expiry), so a link whose round trip
+  //! exceeds the expiry still binds. Throws Error.
   SecureResponder(const SecureKey& key, std::uint64_t session,
-                  std::chrono::nanoseconds expiry = std::chrono::milliseconds(100))
-      : key_(key), session_(session), expiry_(expiry) {
+                  std::chrono::nanoseconds expiry = std::chrono::milliseconds(100),
+                  std::chrono::nanoseconds max_round_trip = std::chrono::nanoseconds(0))
+      : key_(key),
+        session_(session),
+        expiry_(expiry),
+        max_round_trip_(max_round_trip.count() == 0 ? expiry : max_round_trip) {
     if (session == 0) ENDOHAPTICS_THROW(Error("SecureResponder: session id must be non-zero"));
     if (expiry.count() <= 0) {
       ENDOHAPTICS_THROW(
           Error("SecureResponder: expiry must be > 0 ns, got " + std::to_string(expiry.count())));
+    }
+    if (max_round_trip.count() < 0) {
+      ENDOHAPTICS_THROW(Error("SecureResponder: max_round_trip must be >= 0 ns, got " +
+                              std::to_string(max_round_trip.count())));
     }
   }
 
@@ -323,14 +333,16 @@ class SecureResponder {
   [[nodiscard]] std::uint64_t peer_session() const noexcept { return peer_session_; }
   //! The replay window over the bound PC session's sequence numbers.
   [[nodiscard]] const ReplayWindow& window() const noexcept { return window_; }
+  //! The longest round trip a binding setpoint may have taken (its acknowledged state's age).
+  [[nodiscard]] std::chrono::nanoseconds max_round_trip() const noexcept { return max_round_trip_; }
 
  private:
   // True when state `ack` of this session is among the last answered_at_.size() states and the
-  // setpoint it answered was committed at most `expiry` before `now`.
+  // setpoint it answered was committed at most `max_round_trip` before `now`.
   [[nodiscard]] bool answered_recently(std::uint64_t ack,
                                        std::chrono::nanoseconds now) const noexcept {
     if (ack == 0 || ack > sent_ || sent_ - ack >= answered_at_.size()) return false;
-    return now - answered_at_[ack % answered_at_.size()] <= expiry_;
+    return now - answered_at_[ack % answered_at_.size()] <= max_round_trip_;
   }
 
   void renew() noexcept {
@@ -347,6 +359,7 @@ class SecureResponder {
   SecureKey key_;
   std::uint64_t session_;
   std::chrono::nanoseconds expiry_;
+  std::chrono::nanoseconds max_round_trip_;
   bool bound_ = false;
   std::uint64_t peer_session_ = 0;
   ReplayWindow window_{};
@@ -354,9 +367,10 @@ class SecureResponder {
   std::uint64_t sent_ = 0;
   std::uint64_t answer_session_ = 0;
   std::uint64_t answer_sequence_ = 0;
-  // When the setpoint answered by each of the last 1024 states was committed (by sequence mod
-  // 1024): a binding setpoint must acknowledge one of them, answered within `expiry`.
-  std::array<std::chrono::nanoseconds, 1024> answered_at_{};
+  // When the setpoint answered by each of the last 4096 states was committed (by sequence mod
+  // 4096: 4 s of states at 1 kHz, longer than any round trip the bridge accepts): a binding
+  // setpoint must acknowledge one of them, answered within `max_round_trip`.
+  std::array<std::chrono::nanoseconds, 4096> answered_at_{};
 };
 
 }  // namespace endohaptics::protocol

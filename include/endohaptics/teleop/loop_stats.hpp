@@ -101,6 +101,9 @@ enum class TickOutcome : std::uint8_t {
   decode_error,     //!< a datagram arrived but the codec rejected it (also a miss)
   transport_error,  //!< send or receive failed at the OS level (also a miss)
   state_fault,      //!< a state decoded but is implausible (StateFault): never used (a miss)
+  //! a plausible state that reports inactive a motor the loop has enabled for longer than
+  //! SafetyConfig::activation_timeout: the robot does not obey (a miss)
+  not_obeyed,
 };
 
 //! Figures of the ticks between two LoopSnapshots (a window, e.g. one second), as a LoopStats
@@ -121,6 +124,7 @@ struct LoopWindow {
   std::uint64_t transport_errors = 0;  //!< send or receive failed
   std::uint64_t stale_dropped = 0;     //!< older datagrams drained
   std::uint64_t state_faults = 0;      //!< implausible states refused
+  std::uint64_t not_obeyed = 0;        //!< states showing enabled motors inactive
   std::uint64_t rejected = 0;          //!< datagrams the drain refused (any cause)
   double loss_percent = 0.0;           //!< exchanges without a valid state packet, %
 };
@@ -147,6 +151,7 @@ struct LoopSnapshot {
   std::uint64_t transport_errors = 0;            //!< sends or receives that failed
   std::uint64_t stale_dropped = 0;               //!< older datagrams drained
   std::uint64_t state_faults = 0;                //!< implausible states refused
+  std::uint64_t not_obeyed = 0;                  //!< states showing enabled motors inactive
   std::uint64_t rejected = 0;                    //!< datagrams the drain refused
   std::uint64_t deadline_misses = 0;             //!< periods more than 10 % over nominal
   std::uint64_t period_errors = 0;               //!< periods summed in period_error_sum
@@ -181,8 +186,10 @@ struct LoopSnapshot {
     w.transport_errors = transport_errors - earlier.transport_errors;
     w.stale_dropped = stale_dropped - earlier.stale_dropped;
     w.state_faults = state_faults - earlier.state_faults;
+    w.not_obeyed = not_obeyed - earlier.not_obeyed;
     w.rejected = rejected - earlier.rejected;
-    w.exchanges = w.received + w.timeouts + w.decode_errors + w.transport_errors + w.state_faults;
+    w.exchanges = w.received + w.timeouts + w.decode_errors + w.transport_errors + w.state_faults +
+                  w.not_obeyed;
     w.loss_percent = ratio(100.0 * static_cast<double>(w.exchanges - w.received), w.exchanges);
     return w;
   }
@@ -261,6 +268,9 @@ class LoopStats {
       case TickOutcome::state_fault:
         ++state_faults_total_;
         break;
+      case TickOutcome::not_obeyed:
+        ++not_obeyed_;
+        break;
     }
   }
 
@@ -298,6 +308,9 @@ class LoopStats {
   [[nodiscard]] std::uint64_t transport_errors() const noexcept { return transport_errors_; }
   //! Exchanges whose state decoded but was implausible (never used).
   [[nodiscard]] std::uint64_t state_faults() const noexcept { return state_faults_total_; }
+  //! Exchanges whose state showed a motor inactive that the loop had enabled for longer than
+  //! the activation timeout: the robot answered but did not obey (never counted as received).
+  [[nodiscard]] std::uint64_t not_obeyed() const noexcept { return not_obeyed_; }
   //! Implausible states of one cause (StateFault::none: always 0).
   [[nodiscard]] std::uint64_t state_faults(StateFault fault) const noexcept {
     const auto i = static_cast<std::size_t>(fault);
@@ -310,9 +323,11 @@ class LoopStats {
   [[nodiscard]] std::uint64_t stale_dropped() const noexcept { return stale_dropped_; }
   //! Ticks that started later than one nominal period after the previous one.
   [[nodiscard]] std::uint64_t deadline_misses() const noexcept { return deadline_misses_; }
-  //! All exchanges: received + timeouts + decode errors + transport errors + state faults.
+  //! All exchanges: received + timeouts + decode errors + transport errors + state faults +
+  //! states not obeyed.
   [[nodiscard]] std::uint64_t exchanges() const noexcept {
-    return received_ + timeouts_ + decode_errors_ + transport_errors_ + state_faults_total_;
+    return received_ + timeouts_ + decode_errors_ + transport_errors_ + state_faults_total_ +
+           not_obeyed_;
   }
   //! Percentage of exchanges without a valid state packet (table 3.1's "packet loss").
   [[nodiscard]] double loss_percent() const noexcept {
@@ -352,6 +367,7 @@ class LoopStats {
     s.transport_errors = transport_errors_;
     s.stale_dropped = stale_dropped_;
     s.state_faults = state_faults_total_;
+    s.not_obeyed = not_obeyed_;
     s.rejected = rejected_.total();
     s.deadline_misses = deadline_misses_;
     s.period_errors = period_error_.count();
@@ -376,7 +392,7 @@ class LoopStats {
         "round trip  mean %8.1f us  std %7.2f us  p99 %7.1f us  max %8.1f us\n"
         "compute     mean %8.2f us  p99 %7.1f us  max %8.1f us\n"
         "packets     %llu ticks, %llu received, loss %.3f %% (timeouts %llu, decode errors "
-        "%llu, transport errors %llu, state faults %llu), stale dropped %llu\n"
+        "%llu, transport errors %llu, state faults %llu, not obeyed %llu), stale dropped %llu\n"
         "rejected    %llu datagrams (wrong size %llu, non-finite %llu, bad mask %llu)\n",
         rate(), nominal.c_str(), us(period_.mean()), us(period_.stddev()),
         us(period_.quantile(0.99)), us(period_.max()), us(period_error_.mean()),
@@ -389,6 +405,7 @@ class LoopStats {
         static_cast<unsigned long long>(decode_errors_),
         static_cast<unsigned long long>(transport_errors_),
         static_cast<unsigned long long>(state_faults_total_),
+        static_cast<unsigned long long>(not_obeyed_),
         static_cast<unsigned long long>(stale_dropped_),
         static_cast<unsigned long long>(rejected_.total()),
         static_cast<unsigned long long>(rejected_.wrong_size),
@@ -422,6 +439,7 @@ class LoopStats {
   std::uint64_t transport_errors_ = 0;
   std::uint64_t stale_dropped_ = 0;
   std::uint64_t state_faults_total_ = 0;
+  std::uint64_t not_obeyed_ = 0;
   std::array<std::uint64_t, state_fault_count> state_faults_{};
   RejectedDatagrams rejected_{};
   std::uint64_t deadline_misses_ = 0;

@@ -69,6 +69,9 @@ enum class LinkState : std::uint8_t {
 struct SafetyBounds {
   static constexpr int max_consecutive_misses = 1000;  //!< see also TeleopLoopConfig's 0.5 s
   static constexpr double max_force_ramp_time = 10.0;  //!< s
+  //! s: the longest a robot may take to report a motor active once enabled (a round trip of up
+  //! to a few seconds on a delayed link included).
+  static constexpr double max_activation_timeout = 10.0;
   //! rad/s at the gear output: what the motor can do at all (PlausibilityBounds::max_velocity).
   static constexpr double max_setpoint_rate = PlausibilityBounds::max_velocity;
   static constexpr double max_stylus_force = 3.3;  //!< N, the Geomagic Touch's peak force
@@ -88,6 +91,10 @@ struct SafetyConfig {
   double max_setpoint_rate = 4.0;   //!< rad/s per joint (motor side); the tool cannot go faster
   double max_stylus_force = 3.0;    //!< N, last guard before the device (Touch peak: 3.3 N)
   std::uint8_t enable_mask = 0x0F;  //!< motors to enable while the link is usable
+  //! s: a motor enabled in every setpoint sent for longer than this must be reported active. A
+  //! state that shows it inactive was not obeyed (the robot ignores or refuses the setpoints):
+  //! a miss, never "link up". Raise it above the link's round trip on a delayed link.
+  double activation_timeout = 0.05;
   //! rad, motor order: every setpoint the loop sends lies in [joint_lower, joint_upper],
   //! whatever the stylus, the mapper or the robot's reported state say. Default: the +-1.028 rad
   //! of the 2016 tuning logs (CylindricalMapperConfig's range).
@@ -127,6 +134,11 @@ struct SafetyConfig {
     if (!(force_ramp_time >= 0.0 && force_ramp_time <= SafetyBounds::max_force_ramp_time)) {
       fail("force_ramp_time must be in [0, " + format_number(SafetyBounds::max_force_ramp_time) +
            "] s, got " + format_number(force_ramp_time));
+    }
+    if (!(activation_timeout > 0.0 && activation_timeout <= SafetyBounds::max_activation_timeout)) {
+      fail("activation_timeout must be in (0, " +
+           format_number(SafetyBounds::max_activation_timeout) + "] s, got " +
+           format_number(activation_timeout));
     }
     if (!(max_setpoint_rate > 0.0 && max_setpoint_rate <= SafetyBounds::max_setpoint_rate)) {
       fail("max_setpoint_rate must be in (0, " + format_number(SafetyBounds::max_setpoint_rate) +

@@ -82,6 +82,9 @@ struct [[nodiscard]] TickResult {
   TickOutcome exchange = TickOutcome::timeout;               //!< how the send/receive ended
   protocol::CodecStatus decode = protocol::CodecStatus::ok;  //!< decoding of the state packet
   StateFault state_fault = StateFault::none;  //!< why the decoded state was refused, if it was
+  //! Motors enabled for longer than SafetyConfig::activation_timeout that the state reported
+  //! inactive (TickOutcome::not_obeyed; 0 otherwise).
+  std::uint8_t not_obeyed_mask = 0;
   //! Status of the send, or of the receive when the send succeeded.
   transport::TransportStatus transport = transport::TransportStatus::ok;
   //! Stylus read status; error also when commanding the force failed.
@@ -133,10 +136,15 @@ struct TeleopLoopConfig {
                 "allows), got " +
                 std::to_string(period.count())));
     }
-    if (receive_timeout.count() < 0 || receive_timeout > max_watchdog_time) {
-      ENDOHAPTICS_THROW(Error("TeleopLoopConfig: receive_timeout must be in [0, " +
-                              std::to_string(max_watchdog_time.count()) + "] ns, got " +
-                              std::to_string(receive_timeout.count())));
+    if (receive_timeout.count() <= 0 || receive_timeout > max_watchdog_time) {
+      // 0 would never wait for an answer: the link could never come up.
+      ENDOHAPTICS_THROW(Error("TeleopLoopConfig: receive_timeout must be in (0, " +
+                              endohaptics::detail::format_number(
+                                  std::chrono::duration<double>(max_watchdog_time).count()) +
+                              "] s, got " +
+                              endohaptics::detail::format_number(
+                                  std::chrono::duration<double>(receive_timeout).count()) +
+                              " s"));
     }
     safety.validate(protocol::endowrist_motors);
     passivity.validate();
@@ -178,7 +186,11 @@ class TeleopLoop {
         limiter_(config.safety.max_setpoint_rate),
         stats_(config.period),
         passivity_(config.passivity),
-        max_dt_(config.max_tick_dt()) {}
+        max_dt_(config.max_tick_dt()),
+        activation_timeout_(std::chrono::duration_cast<std::chrono::nanoseconds>(
+            std::chrono::duration<double>(config.safety.activation_timeout))) {
+    enabled_since_.fill(never_enabled);
+  }
 
   //! One cycle. Never throws, never allocates; the result says what happened.
   TickResult tick() noexcept {
@@ -246,6 +258,16 @@ class TeleopLoop {
     passivity_.commit(out.position);
     r.setpoint = out.position;
     r.enable_mask = out.enable_mask;
+    // When each motor's enable bit was last switched on (it stays "enabled since" while every
+    // setpoint sent keeps it): the robot must report it active once activation_timeout passed.
+    for (int j = 0; j < loop_motors; ++j) {
+      const bool on = ((out.enable_mask >> j) & 1u) != 0;
+      if (!on) {
+        enabled_since_[static_cast<std::size_t>(j)] = never_enabled;
+      } else if (enabled_since_[static_cast<std::size_t>(j)] == never_enabled) {
+        enabled_since_[static_cast<std::size_t>(j)] = start;
+      }
+    }
 
     // 3. Exchange: send, then wait for the newest state that decodes until the deadline; check
     //    that it is plausible before anything uses it.
@@ -269,6 +291,12 @@ class TeleopLoop {
         r.rejected = decoder_.rejected;
         r.rejected.wrong_size += rx.oversized;
         if (rx.status == transport::TransportStatus::ok) {
+          // A transport that knows which packet an answer acknowledges (protocol v2) gives the
+          // true round trip; the time this receive waited is less on a pipelined, delayed link.
+          if constexpr (requires(const Transport& t) { t.answer_round_trip(); }) {
+            const auto answer = transport_->answer_round_trip();
+            if (answer.count() > 0) r.round_trip = answer;
+          }
           MotorState4 candidate = state_;
           r.decode = Codec::decode_state(std::span<const std::byte>(rx_buffer_.data(), rx.size),
                                          candidate);
@@ -283,8 +311,15 @@ class TeleopLoop {
               state_ = candidate;
               have_valid_ = true;
               last_valid_at_ = received_at;
+              // Obeyed? A motor enabled for longer than the activation timeout must be active:
+              // otherwise the robot answers but ignores the setpoints (a refused session, a
+              // foreign console pinned, its own fault), and the link is not up.
+              r.not_obeyed_mask = not_obeyed(candidate.active_mask, received_at);
+              received = r.not_obeyed_mask == 0;
             }
-            r.exchange = received ? TickOutcome::received : TickOutcome::state_fault;
+            r.exchange = r.state_fault != StateFault::none ? TickOutcome::state_fault
+                         : received                        ? TickOutcome::received
+                                                           : TickOutcome::not_obeyed;
           } else {
             r.exchange = TickOutcome::decode_error;
           }
@@ -452,6 +487,20 @@ class TeleopLoop {
   }
 
  private:
+  static constexpr std::chrono::nanoseconds never_enabled = std::chrono::nanoseconds::max();
+
+  // The motors enabled for longer than the activation timeout at `now` that `active` omits.
+  [[nodiscard]] std::uint8_t not_obeyed(std::uint8_t active,
+                                        std::chrono::nanoseconds now) const noexcept {
+    unsigned missing = 0;
+    for (int j = 0; j < loop_motors; ++j) {
+      const auto since = enabled_since_[static_cast<std::size_t>(j)];
+      if (since == never_enabled || now - since <= activation_timeout_) continue;
+      if (((active >> j) & 1u) == 0) missing |= 1u << j;
+    }
+    return static_cast<std::uint8_t>(missing);
+  }
+
   Transport* transport_;
   Device* device_;
   Estimator* estimator_;
@@ -500,6 +549,9 @@ class TeleopLoop {
   // still hands over a wrong size, never the first state_packet_size bytes of a longer one.
   std::array<std::byte, Codec::state_packet_size + 1> rx_buffer_{};
   std::chrono::nanoseconds max_dt_;
+  std::chrono::nanoseconds activation_timeout_;
+  // Per motor: tick start when its enable bit was switched on (never_enabled while off).
+  std::array<std::chrono::nanoseconds, loop_motors> enabled_since_{};
   std::chrono::nanoseconds last_start_{0};
 };
 

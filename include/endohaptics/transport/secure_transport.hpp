@@ -28,8 +28,22 @@ class SecureTransport {
   //! Seals the 2016 packet `datagram` and sends it; error when it has the wrong size.
   TransportStatus send(std::span<const std::byte> datagram) noexcept {
     if (session_.seal(datagram, tx_) != protocol::SecureStatus::ok) return TransportStatus::error;
-    return inner_->send(tx_);
+    const TransportStatus s = inner_->send(tx_);
+    if constexpr (requires { session_.sent(); }) {
+      sent_at_[session_.sent() % sent_at_.size()] = now();
+    }
+    return s;
   }
+
+  //! The true round trip of the newest accepted answer: from sending the packet it acknowledges
+  //! to receiving it (0 before the first, or when that packet is older than the last
+  //! `round_trip_history` sent). On a delayed link this is the delay, not the time a receive
+  //! waited.
+  [[nodiscard]] std::chrono::nanoseconds answer_round_trip() const noexcept {
+    return answer_round_trip_;
+  }
+  //! How many packets back answer_round_trip() can look (16 s at 1 kHz).
+  static constexpr std::size_t round_trip_history = 16384;
 
   //! As receive(buffer, timeout, filter) with a filter that accepts every authentic payload.
   ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds timeout) noexcept {
@@ -74,6 +88,11 @@ class SecureTransport {
  private:
   using Codec = typename Session::Codec;
 
+  static std::chrono::nanoseconds now() noexcept {
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(
+        std::chrono::steady_clock::now().time_since_epoch());
+  }
+
   // The inner drain's filter: verify, then the caller's filter on the payload, then commit.
   template <typename F>
   struct Gate {
@@ -82,8 +101,7 @@ class SecureTransport {
     bool filter_refused = false;  // the caller's filter refused an authentic, fresh payload
     bool last_unbound = false;
     bool operator()(std::span<const std::byte> datagram) noexcept {
-      const auto now = std::chrono::duration_cast<std::chrono::nanoseconds>(
-          std::chrono::steady_clock::now().time_since_epoch());
+      const auto now = SecureTransport::now();
       protocol::SecureVerified v;
       const protocol::SecureStatus s = self->session_.verify(datagram, now, v);
       const bool unbound = s == protocol::SecureStatus::unbound;
@@ -104,6 +122,13 @@ class SecureTransport {
       } else {
         self->session_.commit(v);
       }
+      if constexpr (requires { self->session_.sent(); }) {
+        const std::uint64_t ack = v.header.ack;
+        const std::uint64_t sent = self->session_.sent();
+        if (ack > 0 && ack <= sent && sent - ack < self->sent_at_.size()) {
+          self->answer_round_trip_ = now - self->sent_at_[ack % self->sent_at_.size()];
+        }
+      }
       self->counters_.record(s);
       last_unbound = unbound;
       return true;
@@ -116,6 +141,9 @@ class SecureTransport {
   std::array<std::byte, Session::send_packet_size> tx_{};
   // One byte longer than a v2 packet: a longer datagram is refused as a wrong size.
   std::array<std::byte, Session::receive_packet_size + 1> rx_{};
+  // When each of the last round_trip_history packets was sent (by sequence modulo the size).
+  std::array<std::chrono::nanoseconds, round_trip_history> sent_at_{};
+  std::chrono::nanoseconds answer_round_trip_{0};
 };
 
 }  // namespace endohaptics::transport

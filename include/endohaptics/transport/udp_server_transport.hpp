@@ -4,6 +4,8 @@
 //! Same receive semantics as UdpTransport (deadline by ppoll, queue of one). POSIX only.
 #pragma once
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
 #include <sys/socket.h>
 
 #include <array>
@@ -13,6 +15,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstdint>
+#include <cstring>
 #include <span>
 #include <string>
 
@@ -32,6 +35,14 @@ struct UdpServerConfig {
   //! address or port are read, counted (foreign_datagrams()) and never offered to the filter. For
   //! the unauthenticated 2016 protocol, where the source is the only check there is.
   bool pin_first_peer = false;
+  //! With pin_first_peer: the pin is released once the pinned peer has sent nothing accepted for
+  //! this long (> 0; the robot side's watchdog: its motors are off by then), so a restarted
+  //! console (a new source port) can take over; 0 keeps the first peer for ever.
+  std::chrono::nanoseconds repin_after{0};
+  //! The only peer to obey, "HOST:PORT" (IPv4 or IPv6 literal; for IPv6 "[addr]:port" or
+  //! "addr:port" with the last colon before the port); empty: pin per pin_first_peer. Datagrams
+  //! from anyone else are counted (foreign_datagrams()) and never answered, from the start.
+  std::string peer;
 };
 
 //! Server (sbRIO) side of the UDP link: bound, unconnected socket that replies to the sender of
@@ -43,9 +54,16 @@ class UdpServerTransport {
   explicit UdpServerTransport(const UdpServerConfig& config)
       : socket_(io_),
         max_drain_(detail::checked_max_drain(config.max_drain, "UdpServerTransport")),
-        pin_(config.pin_first_peer) {
+        pin_(config.pin_first_peer || !config.peer.empty()),
+        fixed_peer_(!config.peer.empty()),
+        repin_after_(config.repin_after) {
     namespace ip = boost::asio::ip;
     boost::system::error_code ec;
+    if (config.repin_after.count() < 0) {
+      ENDOHAPTICS_THROW(Error("UdpServerTransport: repin_after must be >= 0 ns, got " +
+                              std::to_string(config.repin_after.count())));
+    }
+    if (fixed_peer_) set_fixed_peer(config.peer);
     const ip::address local = ip::make_address(config.bind_address, ec);
     if (ec) {
       ENDOHAPTICS_THROW(
@@ -95,16 +113,50 @@ class UdpServerTransport {
   ReceiveResult receive(std::span<std::byte> buffer, std::chrono::nanoseconds timeout,
                         F& filter) noexcept {
     sockaddr_storage from{};
-    const bool pinned = pin_ && peer_size_ != 0;
+    const auto now = std::chrono::steady_clock::now();
+    if (pinned_ && !fixed_peer_ && repin_after_.count() > 0 &&
+        now - last_from_peer_ > repin_after_) {
+      pinned_ = false;  // the pinned console has been silent past the watchdog: free the robot
+      ++releases_;
+    }
     const ReceiveResult r =
         detail::receive_newest(socket_.native_handle(), buffer, timeout, &from, max_drain_,
-                               scratch_, filter, pinned ? &peer_ : nullptr, &foreign_);
+                               scratch_, filter, pinned_ ? &peer_ : nullptr, &foreign_);
     if (r.status == TransportStatus::ok) {
+      if (pin_ && !pinned_) {
+        pinned_ = true;
+        ++pins_;
+      }
+      last_from_peer_ = std::chrono::steady_clock::now();
       peer_ = from;
       peer_size_ = from.ss_family == AF_INET6 ? sizeof(sockaddr_in6) : sizeof(sockaddr_in);
     }
     return r;
   }
+
+  //! The peer answered now (and, when pinned, the only one obeyed), "HOST:PORT"; empty: none yet.
+  //! Allocates: not for a tick.
+  [[nodiscard]] std::string peer_name() const {
+    if (peer_size_ == 0) return {};
+    char host[INET6_ADDRSTRLEN] = {};
+    std::uint16_t port = 0;
+    if (peer_.ss_family == AF_INET6) {
+      const auto& a = reinterpret_cast<const sockaddr_in6&>(peer_);  // NOLINT: socket API
+      ::inet_ntop(AF_INET6, &a.sin6_addr, host, sizeof host);
+      port = ntohs(a.sin6_port);
+      return "[" + std::string(host) + "]:" + std::to_string(port);
+    }
+    const auto& a = reinterpret_cast<const sockaddr_in&>(peer_);  // NOLINT: socket API
+    ::inet_ntop(AF_INET, &a.sin_addr, host, sizeof host);
+    port = ntohs(a.sin_port);
+    return std::string(host) + ":" + std::to_string(port);
+  }
+  //! True while only one peer is obeyed (a configured peer, or the first one heard).
+  [[nodiscard]] bool pinned() const noexcept { return pinned_; }
+  //! Times a peer was pinned (the first console, and each one after a release).
+  [[nodiscard]] std::uint64_t pins() const noexcept { return pins_; }
+  //! Times the pin was released because the pinned peer fell silent (UdpServerConfig::repin_after).
+  [[nodiscard]] std::uint64_t releases() const noexcept { return releases_; }
 
   //! The bound local endpoint (useful with port = 0).
   [[nodiscard]] boost::asio::ip::udp::endpoint local_endpoint() const {
@@ -121,13 +173,53 @@ class UdpServerTransport {
   [[nodiscard]] std::size_t foreign_datagrams() const noexcept { return foreign_; }
 
  private:
+  // Parses "HOST:PORT" (IPv6 may be bracketed) into peer_; throws Error naming the text.
+  void set_fixed_peer(const std::string& text) {
+    namespace ip = boost::asio::ip;
+    const auto colon = text.rfind(':');
+    const auto bad = [&text](const std::string& why) {
+      ENDOHAPTICS_THROW(
+          Error("UdpServerTransport: peer must be HOST:PORT (an IP address and a port "
+                "1..65535), got '" +
+                text.substr(0, 80) + "': " + why));
+    };
+    if (colon == std::string::npos || colon == 0 || colon + 1 == text.size()) bad("no port");
+    std::string host = text.substr(0, colon);
+    if (host.size() >= 2 && host.front() == '[' && host.back() == ']') {
+      host = host.substr(1, host.size() - 2);
+    }
+    const std::string port_text = text.substr(colon + 1);
+    unsigned long port = 0;
+    for (const char c : port_text) {
+      if (c < '0' || c > '9' || port > 65535) bad("the port is not a number in 1..65535");
+      port = port * 10 + static_cast<unsigned long>(c - '0');
+    }
+    if (port == 0 || port > 65535 || port_text.size() > 5) {
+      bad("the port is not a number in 1..65535");
+    }
+    boost::system::error_code ec;
+    const ip::address address = ip::make_address(host, ec);
+    if (ec) bad("not an IP address");
+    const ip::udp::endpoint endpoint(address, static_cast<std::uint16_t>(port));
+    std::memcpy(&peer_, endpoint.data(), endpoint.size());
+    peer_size_ = static_cast<socklen_t>(endpoint.size());
+    pinned_ = true;
+    pins_ = 1;
+  }
+
   boost::asio::io_context io_;
   boost::asio::ip::udp::socket socket_;
   std::size_t max_drain_;
   std::array<std::byte, detail::max_datagram_bytes> scratch_{};
   sockaddr_storage peer_{};
   socklen_t peer_size_ = 0;
-  bool pin_ = false;
+  bool pin_ = false;         // obey one peer at a time
+  bool fixed_peer_ = false;  // that peer is configured (UdpServerConfig::peer), never released
+  std::chrono::nanoseconds repin_after_{0};
+  bool pinned_ = false;
+  std::uint64_t pins_ = 0;
+  std::uint64_t releases_ = 0;
+  std::chrono::steady_clock::time_point last_from_peer_{};
   std::size_t foreign_ = 0;
 };
 

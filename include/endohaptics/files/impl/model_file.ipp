@@ -40,10 +40,10 @@ ENDOHAPTICS_DECL void validate_settings(const PushLoadObserverSettings& p, doubl
                     p.current_cutoff, "in (0, Nyquist = 0.5 / sample_time_s) Hz");
   require_parameter(p.velocity_cutoff > 0 && p.velocity_cutoff < nyquist, where, "velocity_cutoff",
                     p.velocity_cutoff, "in (0, Nyquist = 0.5 / sample_time_s) Hz");
-  require_parameter(std::isfinite(p.direction_scale) && p.direction_scale > 0, where,
-                    "direction_scale", p.direction_scale, "finite and > 0 rad");
-  require_parameter(std::isfinite(p.velocity_threshold) && p.velocity_threshold >= 0, where,
-                    "velocity_threshold", p.velocity_threshold, "finite and >= 0 rad/s");
+  require_parameter(p.direction_scale > 0 && p.direction_scale <= max_parameter, where,
+                    "direction_scale", p.direction_scale, "in (0, 1e6] rad");
+  require_parameter(p.velocity_threshold >= 0 && p.velocity_threshold <= max_parameter, where,
+                    "velocity_threshold", p.velocity_threshold, "in [0, 1e6] rad/s");
   require_parameter(p.direction_threshold > 0 && p.direction_threshold <= 1, where,
                     "direction_threshold", p.direction_threshold, "in (0, 1]");
   require_parameter(p.push_sign == 1 || p.push_sign == -1, where, "push_sign", p.push_sign,
