@@ -35,7 +35,7 @@ const std::string rig_example = R"({
                  "a_clamp": 5.384, "b_clamp": 0.7,
                  "lower": [-1.028, -1.028, -1.028, -1.028], "upper": [1.028, 1.028, 1.028, 1.028],
                  "force_scale": [1, 1, 1], "force_limit": 2.5 },
-  "safety":    { "max_consecutive_misses": 10, "policy": "hold_position",
+  "safety":    { "max_consecutive_misses": 10, "policy": "disable_motors", "max_hold_time": 2.0,
                  "force_ramp_time": 0.5, "max_setpoint_rate": 4.0, "max_stylus_force": 3.0,
                  "enable_mask": 15 },
   "estimator": { "current_sign": [-1, -1, -1, -1], "friction_level": [0.7, 0.17, 0.21, 0.20],
@@ -65,7 +65,8 @@ TEST_CASE("defaults: an empty object, and the defaults written and read back, gi
   CHECK(back.mapping.lower == defaults.mapping.lower);
   CHECK(back.mapping.theta_neutral == defaults.mapping.theta_neutral);
   CHECK(back.loop.safety.max_consecutive_misses == 10);
-  CHECK(back.loop.safety.policy == tp::SafeStatePolicy::hold_position);
+  CHECK(back.loop.safety.policy == tp::SafeStatePolicy::disable_motors);
+  CHECK(back.loop.safety.max_hold_time == 2.0);
   CHECK(back.loop.safety.enable_mask == 0x0F);
   CHECK(back.loop.receive_timeout == defaults.loop.receive_timeout);
   CHECK(back.estimator.friction == defaults.estimator.friction);
@@ -73,9 +74,10 @@ TEST_CASE("defaults: an empty object, and the defaults written and read back, gi
   CHECK(back.operator_script.r_closed == defaults.operator_script.r_closed);
   CHECK(back.clamp_model.empty());
   // Every section and key is written.
-  for (const char* key : {"\"mapping\"", "\"safety\"", "\"estimator\"", "\"operator\"", "\"loop\"",
-                          "\"max_consecutive_misses\"", "\"friction_level\"", "\"receive_timeout\"",
-                          "\"theta_neutral\"", "\"hold_position\""}) {
+  for (const char* key :
+       {"\"mapping\"", "\"safety\"", "\"estimator\"", "\"operator\"", "\"loop\"",
+        "\"max_consecutive_misses\"", "\"friction_level\"", "\"receive_timeout\"",
+        "\"theta_neutral\"", "\"disable_motors\"", "\"max_hold_time\"", "\"activation_timeout\""}) {
     CHECK(text.find(key) != std::string::npos);
   }
 }
@@ -160,7 +162,7 @@ TEST_CASE("unknown keys are errors that list the allowed keys") {
         "bridge.json: unknown key 'loop.recieve_timeout' (allowed in 'loop': receive_timeout)");
   CHECK(error_of(R"({"safety": {"polcy": "zero_force"}})") ==
         "bridge.json: unknown key 'safety.polcy' (allowed in 'safety': max_consecutive_misses, "
-        "policy, force_ramp_time, max_setpoint_rate, max_stylus_force, enable_mask, "
+        "policy, max_hold_time, force_ramp_time, max_setpoint_rate, max_stylus_force, enable_mask, "
         "activation_timeout, joint_lower, joint_upper)");
   // loop_period and motor_order are the program's, not the file's.
   CHECK(error_of(R"({"estimator": {"loop_period": 0.002}})")
@@ -292,7 +294,8 @@ TEST_CASE("echoed values and keys are cut to 60 characters") {
   const std::string key = error_of(R"({"safety": {")" + long_text + "\": 1}}");
   CHECK(key ==
         "bridge.json: unknown key 'safety." + std::string(53, 'x') +
-            "...' (allowed in 'safety': max_consecutive_misses, policy, force_ramp_time, "
+            "...' (allowed in 'safety': max_consecutive_misses, policy, max_hold_time, "
+            "force_ramp_time, "
             "max_setpoint_rate, max_stylus_force, enable_mask, activation_timeout, joint_lower, "
             "joint_upper)");
   const std::string array =

@@ -175,4 +175,28 @@ TEST_CASE("key file: the checks on bytes and on the mode, apart from the file") 
   }
 }
 
+TEST_CASE("key file: owned by the running user, in a directory only its owner may write") {
+  using endohaptics::protocol::check_key_file_owner;
+  // Before: a root bridge loaded a 0600 key owned by nobody (uid 65534).
+  CHECK_THROWS_WITH_AS(check_key_file_owner(65534, 0, "k.key"),
+                       doctest::Contains("is owned by uid 65534, not by the user running this (uid "
+                                         "0): another account could replace the key"),
+                       Error);
+  CHECK_NOTHROW(check_key_file_owner(1000, 1000, "k.key"));
+  TempDir dir;
+  const std::string path = dir.file("open_dir.key");
+  generate_key_file(path);
+  CHECK_NOTHROW((void)load_key_file(path));
+  // Before: a key in a world-writable directory (anyone could swap it between runs) loaded.
+  REQUIRE(::chmod(dir.path.c_str(), 01777) == 0);
+  CHECK_THROWS_WITH_AS((void)load_key_file(path),
+                       doctest::Contains("lets group or others write there, so the key could be "
+                                         "swapped"),
+                       Error);
+  REQUIRE(::chmod(dir.path.c_str(), 0770) == 0);
+  CHECK_THROWS_AS((void)load_key_file(path), Error);
+  REQUIRE(::chmod(dir.path.c_str(), 0700) == 0);
+  CHECK_NOTHROW((void)load_key_file(path));
+}
+
 }  // namespace protocol_key_file_test

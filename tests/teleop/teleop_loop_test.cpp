@@ -282,6 +282,40 @@ TEST_CASE_TEMPLATE_INVOKE(link_loss, Policy<tp::SafeStatePolicy::hold_position>,
                           Policy<tp::SafeStatePolicy::disable_motors>,
                           Policy<tp::SafeStatePolicy::zero_force>);
 
+TEST_CASE("lost link: disable_motors by default, and a hold is bounded by max_hold_time") {
+  CHECK(tp::SafetyConfig{}.policy == tp::SafeStatePolicy::disable_motors);
+  for (const auto policy : {tp::SafeStatePolicy::hold_position, tp::SafeStatePolicy::zero_force}) {
+    CAPTURE(to_string(policy));
+    tp::TeleopLoopConfig config;
+    config.safety.policy = policy;
+    config.safety.max_hold_time = 0.1;
+    Rig rig({}, config);
+    for (int i = 0; i < 300; ++i) (void)rig.tick();
+    rig.faulty.set_rates({.drop_receive = 1.0});
+    tp::TickResult r;
+    int ticks_lost = 0;
+    int held_enabled = 0;
+    for (int i = 0; i < 400; ++i) {
+      r = rig.tick();
+      if (r.link != tp::LinkState::lost) continue;
+      ++ticks_lost;
+      if (r.enable_mask != 0) ++held_enabled;
+      // Enabled only within max_hold_time (100 ticks of 1 ms) of the loss, released after.
+      REQUIRE((r.enable_mask == 0) == (ticks_lost > 101));
+    }
+    CHECK(held_enabled >= 99);
+    CHECK(r.enable_mask == 0);
+    // Back: the motors were released, so the limiter restarts from the measured position.
+    rig.faulty.set_rates({});
+    r = rig.tick();
+    CHECK(r.link == tp::LinkState::recovering);
+  }
+  tp::SafetyConfig safety;
+  safety.max_hold_time = 0.0;
+  CHECK_THROWS_WITH_AS(safety.validate(), doctest::Contains("max_hold_time must be in (0, 60] s"),
+                       endohaptics::Error);
+}
+
 TEST_CASE("garbage from the estimator or the device never reaches the other side") {
   Rig rig;
   for (int i = 0; i < 100; ++i) (void)rig.tick();
@@ -417,7 +451,9 @@ TEST_CASE("an enable_mask with a bit at or above the motor count is refused at c
 }
 
 TEST_CASE("link up means obeyed: a robot that answers but leaves the enabled motors off is lost") {
-  Rig rig;
+  tp::TeleopLoopConfig config;
+  config.safety.policy = tp::SafeStatePolicy::hold_position;  // keeps asking: stays lost
+  Rig rig({}, config);
   rig.link.responder().disobey = true;
   tp::TickResult r;
   for (int i = 0; i < 5; ++i) r = rig.tick();

@@ -68,6 +68,7 @@ class RegularFile {
       (void)::fcntl(fd_, F_SETFL, fl & ~O_NONBLOCK);
     size_ = static_cast<std::uint64_t>(st.st_size);
     mode_ = st.st_mode;
+    owner_ = st.st_uid;
   }
   ~RegularFile() {
     if (fd_ >= 0) ::close(fd_);
@@ -78,6 +79,7 @@ class RegularFile {
         fd_(std::exchange(other.fd_, -1)),
         size_(other.size_),
         mode_(other.mode_),
+        owner_(other.owner_),
         limit_(other.limit_),
         limit_hint_(std::move(other.limit_hint_)),
         read_(other.read_) {}
@@ -142,6 +144,8 @@ class RegularFile {
   [[nodiscard]] std::uint64_t size() const noexcept { return size_; }
   //! The file's mode (type and permission bits) when it was opened.
   [[nodiscard]] mode_t mode() const noexcept { return mode_; }
+  //! The owner (st_uid) of the file opened.
+  [[nodiscard]] uid_t owner() const noexcept { return owner_; }
   //! Bytes read so far.
   [[nodiscard]] std::uint64_t bytes_read() const noexcept { return read_; }
 
@@ -168,6 +172,7 @@ class RegularFile {
   int fd_ = -1;
   std::uint64_t size_ = 0;
   mode_t mode_ = 0;
+  uid_t owner_ = 0;
   std::uint64_t limit_ = unlimited;
   std::string limit_hint_;
   std::uint64_t read_ = 0;

@@ -177,6 +177,9 @@ void visit_schema(Config& c, Visitor& v) {
   v.integer("safety", "max_consecutive_misses", s.max_consecutive_misses, 0,
             SB::max_consecutive_misses);
   v.policy("safety", "policy", s.policy);
+  Range hold = Range::between(0.0, SB::max_hold_time, "s");
+  hold.lo_open = true;
+  v.number("safety", "max_hold_time", s.max_hold_time, hold);
   v.number("safety", "force_ramp_time", s.force_ramp_time,
            Range::between(0.0, SB::max_force_ramp_time, "s"));
   Range rate = Range::between(0.0, SB::max_setpoint_rate, "rad/s");

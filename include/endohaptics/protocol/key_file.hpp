@@ -105,6 +105,42 @@ inline void check_key_file_mode(mode_t mode, const std::string& path) {
   }
 }
 
+//! Refuses key file `path` owned by `owner` when the running user (`user`, the effective uid) is
+//! someone else: a key another account owns may be replaced by that account (a root bridge loading
+//! a key `nobody` owns). Throws Error naming the file, both users and the fix.
+inline void check_key_file_owner(uid_t owner, uid_t user, const std::string& path) {
+  if (owner != user) {
+    ENDOHAPTICS_THROW(Error(detail::key_file_error(
+        path, "is owned by uid " + std::to_string(owner) + ", not by the user running this (uid " +
+                  std::to_string(user) + "): another account could replace the key; run: chown " +
+                  std::to_string(user) + " " + path)));
+  }
+}
+
+//! Refuses key file `path` whose directory others may write to (group- or world-writable,
+//! sticky or not): anyone who can write there can swap the file between two runs. Throws Error
+//! naming the directory and the fix.
+inline void check_key_directory(const std::string& path) {
+  const auto slash = path.rfind('/');
+  const std::string dir = slash == std::string::npos ? "."
+                          : slash == 0               ? "/"
+                                                     : path.substr(0, slash);
+  struct stat st {};
+  if (::stat(dir.c_str(), &st) != 0) {
+    ENDOHAPTICS_THROW(Error(
+        detail::key_file_error(path, "its directory '" + dir + "' cannot be examined", errno)));
+  }
+  if ((st.st_mode & (S_IWGRP | S_IWOTH)) != 0) {
+    char text[8];
+    std::snprintf(text, sizeof(text), "%04o", static_cast<unsigned>(st.st_mode & 07777));
+    ENDOHAPTICS_THROW(Error(detail::key_file_error(
+        path, "its directory '" + dir + "' (mode " + text +
+                  ") lets group or others write there, so the key could be swapped; keep keys in "
+                  "a directory only you can write (e.g. chmod 700 " +
+                  dir + ")")));
+  }
+}
+
 //! The key held by `bytes`, the content of key file `path`: exactly 32 bytes. Throws Error naming
 //! the file and the length, never the bytes.
 inline SecureKey key_from_bytes(std::span<const std::byte> bytes, const std::string& path) {
@@ -118,6 +154,8 @@ inline SecureKey key_from_bytes(std::span<const std::byte> bytes, const std::str
 inline SecureKey load_key_file(const std::string& path) {
   RegularFile file(path, "key file", /*follow_symlinks=*/false);
   check_key_file_mode(file.mode(), path);
+  check_key_file_owner(file.owner(), ::geteuid(), path);
+  check_key_directory(path);
   if (file.size() != SecureKey::size) detail::refuse_key_length(path, file.size());
   file.limit(SecureKey::size, "a key file holds exactly 32 bytes");  // it may not grow either
   struct Buffer {  // wiped however the function ends

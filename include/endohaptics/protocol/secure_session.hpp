@@ -159,6 +159,8 @@ class SecureInitiator {
       if (const WindowStatus w = window_.check(h.sequence); w != WindowStatus::ok) {
         return w == WindowStatus::replayed ? SecureStatus::replayed : SecureStatus::too_old;
       }
+      // Strictly in order: a state older than the newest accepted is a step back in time.
+      if (h.sequence < window_.top()) return SecureStatus::too_old;
     } else {
       // A new sbRIO session: only from a state answering a newer setpoint than any accepted.
       if (h.ack <= highest_ack_) return SecureStatus::wrong_session;
@@ -269,6 +271,9 @@ class SecureResponder {
       if (const WindowStatus w = window_.check(h.sequence); w != WindowStatus::ok) {
         return w == WindowStatus::replayed ? SecureStatus::replayed : SecureStatus::too_old;
       }
+      // Commands strictly in order: a setpoint older than the newest obeyed (held back on the
+      // link, reordered) would send the tool back; it is counted, never executed.
+      if (h.sequence < window_.top()) return SecureStatus::too_old;
       out = v;
       return SecureStatus::ok;
     }

@@ -69,6 +69,7 @@ enum class LinkState : std::uint8_t {
 struct SafetyBounds {
   static constexpr int max_consecutive_misses = 1000;  //!< see also TeleopLoopConfig's 0.5 s
   static constexpr double max_force_ramp_time = 10.0;  //!< s
+  static constexpr double max_hold_time = 60.0;        //!< s, the longest bounded hold
   //! s: the longest a robot may take to report a motor active once enabled (a round trip of up
   //! to a few seconds on a delayed link included).
   static constexpr double max_activation_timeout = 10.0;
@@ -86,7 +87,13 @@ using JointVector = Eigen::Matrix<double, protocol::endowrist_motors, 1>;
 //! Units: s, rad, rad/s, N. Every field has a physical range (SafetyBounds, StatePlausibility).
 struct SafetyConfig {
   int max_consecutive_misses = 10;  //!< link lost when misses exceed this (2016: "superior to 10")
-  SafeStatePolicy policy = SafeStatePolicy::hold_position;  //!< robot behaviour while lost
+  //! Robot behaviour while the link is lost. Default: release the motors (the sbRIO's own
+  //! watchdog does the same); holding or following is an explicit choice, bounded in time by
+  //! max_hold_time.
+  SafeStatePolicy policy = SafeStatePolicy::disable_motors;
+  //! s: with hold_position or zero_force, the motors are released (enable mask 0) once the link
+  //! has been lost this long: a lost link never keeps the tool powered indefinitely.
+  double max_hold_time = 2.0;
   double force_ramp_time = 0.5;     //!< s, force scale 0 -> 1 after recovery (and at start)
   double max_setpoint_rate = 4.0;   //!< rad/s per joint (motor side); the tool cannot go faster
   double max_stylus_force = 3.0;    //!< N, last guard before the device (Touch peak: 3.3 N)
@@ -134,6 +141,10 @@ struct SafetyConfig {
     if (!(force_ramp_time >= 0.0 && force_ramp_time <= SafetyBounds::max_force_ramp_time)) {
       fail("force_ramp_time must be in [0, " + format_number(SafetyBounds::max_force_ramp_time) +
            "] s, got " + format_number(force_ramp_time));
+    }
+    if (!(max_hold_time > 0.0 && max_hold_time <= SafetyBounds::max_hold_time)) {
+      fail("max_hold_time must be in (0, " + format_number(SafetyBounds::max_hold_time) +
+           "] s, got " + format_number(max_hold_time));
     }
     if (!(activation_timeout > 0.0 && activation_timeout <= SafetyBounds::max_activation_timeout)) {
       fail("activation_timeout must be in (0, " +

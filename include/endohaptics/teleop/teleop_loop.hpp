@@ -188,7 +188,9 @@ class TeleopLoop {
         passivity_(config.passivity),
         max_dt_(config.max_tick_dt()),
         activation_timeout_(std::chrono::duration_cast<std::chrono::nanoseconds>(
-            std::chrono::duration<double>(config.safety.activation_timeout))) {
+            std::chrono::duration<double>(config.safety.activation_timeout))),
+        max_hold_(std::chrono::duration_cast<std::chrono::nanoseconds>(
+            std::chrono::duration<double>(config.safety.max_hold_time))) {
     enabled_since_.fill(never_enabled);
   }
 
@@ -232,12 +234,13 @@ class TeleopLoop {
       out.enable_mask = 0;  // until the robot's position is known, nothing moves
       out.position = have_desired_ ? desired_ : MotorVector::Zero();
     } else if ((link_before == LinkState::lost &&
-                config_.safety.policy != SafeStatePolicy::zero_force) ||
+                (config_.safety.policy != SafeStatePolicy::zero_force || hold_expired(start))) ||
                !device_ok) {
       out.position = limiter_.previous();  // hold
       if (link_before == LinkState::lost &&
-          config_.safety.policy == SafeStatePolicy::disable_motors) {
-        out.enable_mask = 0;
+          (config_.safety.policy == SafeStatePolicy::disable_motors || hold_expired(start))) {
+        out.enable_mask = 0;  // released: disable_motors, or a bounded hold that ran out
+        released_during_loss_ = true;
       }
     } else {
       // The limiter moves towards the desired setpoint inside the joint range, so a stylus beyond
@@ -346,6 +349,7 @@ class TeleopLoop {
     const LinkState link = r.state_fault != StateFault::none
                                ? watchdog_.fault()
                                : watchdog_.update(received, ramp_.done());
+    if (link == LinkState::lost && link_before != LinkState::lost) lost_since_ = start;
     if (received && (link_before == LinkState::waiting || link_before == LinkState::lost)) {
       ramp_.restart();
       // The limiter starts from where the robot is: on first contact for every joint; after a
@@ -355,8 +359,8 @@ class TeleopLoop {
       // tracked the limiter's setpoint and keeps it (no step of its tracking error).
       const MotorVector measured = config_.safety.clamp_to_range(state_.position);
       MotorVector from = limiter_.previous();
-      const bool released_all = link_before == LinkState::waiting ||
-                                config_.safety.policy == SafeStatePolicy::disable_motors;
+      const bool released_all = link_before == LinkState::waiting || released_during_loss_;
+      released_during_loss_ = false;
       for (int j = 0; j < loop_motors; ++j) {
         const bool active = ((state_.active_mask >> j) & 1u) != 0;
         if (released_all || !active) from[j] = measured[j];
@@ -489,6 +493,11 @@ class TeleopLoop {
  private:
   static constexpr std::chrono::nanoseconds never_enabled = std::chrono::nanoseconds::max();
 
+  // True once a loss has lasted max_hold_time: hold_position and zero_force release the motors.
+  [[nodiscard]] bool hold_expired(std::chrono::nanoseconds now) const noexcept {
+    return now - lost_since_ > max_hold_;
+  }
+
   // The motors enabled for longer than the activation timeout at `now` that `active` omits.
   [[nodiscard]] std::uint8_t not_obeyed(std::uint8_t active,
                                         std::chrono::nanoseconds now) const noexcept {
@@ -550,6 +559,9 @@ class TeleopLoop {
   std::array<std::byte, Codec::state_packet_size + 1> rx_buffer_{};
   std::chrono::nanoseconds max_dt_;
   std::chrono::nanoseconds activation_timeout_;
+  std::chrono::nanoseconds max_hold_;
+  std::chrono::nanoseconds lost_since_{0};  // when the link was last declared lost
+  bool released_during_loss_ = false;       // enable mask 0 was sent during the current loss
   // Per motor: tick start when its enable bit was switched on (never_enabled while off).
   std::array<std::chrono::nanoseconds, loop_motors> enabled_since_{};
   std::chrono::nanoseconds last_start_{0};
