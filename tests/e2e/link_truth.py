@@ -177,7 +177,41 @@ def refused_options(bin_dir, work):
     return checks
 
 
-CASES = {"never-up": never_up, "restart-2016": restart_2016, "peer-2016": peer_2016,
+def signals(bin_dir, work):
+    """SIGINT and SIGTERM end the bridge and the emulator within 1 s wherever they wait."""
+    import signal
+    k = key(bin_dir, work, "d.key")
+    fifo = os.path.join(work, "fifo.json")
+    os.mkfifo(fifo)
+    checks = []
+    runs = [
+        ("bridge, no robot", [os.path.join(bin_dir, "endohaptics-bridge"), "--sbrio",
+                              "127.0.0.1:9", "--key", k]),
+        ("emulator, idle", [os.path.join(bin_dir, "endohaptics-sbrio-emulator"), "--bind",
+                            "127.0.0.1", "--port", "0", "--key", k]),
+        ("bridge, a FIFO as its configuration", [os.path.join(bin_dir, "endohaptics-bridge"),
+                                                 "--sbrio", "127.0.0.1:9", "--key", k,
+                                                 "--config", fifo]),
+    ]
+    for name, argv in runs:
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            p = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+            time.sleep(0.5)
+            t0 = time.monotonic()
+            if p.poll() is None:
+                p.send_signal(sig)
+            try:
+                out, _ = p.communicate(timeout=5)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                out, _ = p.communicate()
+            took = time.monotonic() - t0
+            checks.append((f"{name}, {sig.name}: ended after {took:.2f} s (exit {p.returncode})",
+                           took <= 1.0, out[-300:], out))
+    return checks
+
+
+CASES = {"signals": signals, "never-up": never_up, "restart-2016": restart_2016, "peer-2016": peer_2016,
          "refused-options": refused_options}
 
 
