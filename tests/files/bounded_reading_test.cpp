@@ -202,7 +202,7 @@ TEST_CASE("regular files only: a FIFO, a device or a directory is refused at onc
         "read_csv: log file '" + link + "' is a FIFO (named pipe), not a regular file");
 }
 
-TEST_CASE("size limits: every reader states one; the log readers' are options") {
+TEST_CASE("size limits: every reader states one, the log readers' are options") {
   const TempDir dir("size_limits");
   // The default is far above the largest log of ../shared/data.
   const files::LogReadOptions defaults;
