@@ -73,6 +73,7 @@ class RegularFile {
   ~RegularFile() {
     if (fd_ >= 0) ::close(fd_);
   }
+  //! Takes over the descriptor of `other` (left closed).
   RegularFile(RegularFile&& other) noexcept
       : path_(std::move(other.path_)),
         what_(std::move(other.what_)),

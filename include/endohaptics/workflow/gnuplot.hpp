@@ -28,13 +28,13 @@ enum class KeyPlacement { top_right, top_left, none };
 
 //! One series of a panel: y over x.
 struct PlotSeries {
-  std::string title;                //!< key entry, shown as written (data, never code)
-  std::vector<double> x;            //!< abscissae; non-finite: a missing point
-  std::vector<double> y;            //!< ordinates, as many as x; non-finite: a missing point
-  std::vector<std::size_t> breaks;  //!< indices at which a new line segment starts (gaps)
-  PlotStyle style = PlotStyle::lines;
-  int line_width = 1;      //!< 1..10
-  double box_width = 1.0;  //!< x units, boxes only; finite and > 0
+  std::string title;                   //!< key entry, shown as written (data, never code)
+  std::vector<double> x;               //!< abscissae; non-finite: a missing point
+  std::vector<double> y;               //!< ordinates, as many as x; non-finite: a missing point
+  std::vector<std::size_t> breaks;     //!< indices at which a new line segment starts (gaps)
+  PlotStyle style = PlotStyle::lines;  //!< lines, points or boxes
+  int line_width = 1;                  //!< 1..10
+  double box_width = 1.0;              //!< x units, boxes only; finite and > 0
 
   //! Appends the point (x, y).
   void add(double x_value, double y_value) {
@@ -47,19 +47,19 @@ struct PlotSeries {
 
 //! One panel of a figure: axes, labels and the series drawn in it.
 struct PlotPanel {
-  std::string title;    //!< above the panel (data, never code)
-  std::string x_label;  //!< (data, never code)
-  std::string y_label;  //!< (data, never code)
-  std::vector<PlotSeries> series;
-  bool log_y = false;  //!< logarithmic y axis
-  KeyPlacement key = KeyPlacement::top_right;
+  std::string title;                           //!< above the panel (data, never code)
+  std::string x_label;                         //!< (data, never code)
+  std::string y_label;                         //!< (data, never code)
+  std::vector<PlotSeries> series;              //!< drawn in order
+  bool log_y = false;                          //!< logarithmic y axis
+  KeyPlacement key = KeyPlacement::top_right;  //!< where the key (legend) goes
 };
 
 //! A PNG image of panels stacked top to bottom.
 struct PlotFigure {
-  std::vector<PlotPanel> panels;
-  int width = 1400;        //!< pixels, 200..10000
-  int panel_height = 300;  //!< pixels per panel, 100..10000; the image is 100 pixels more
+  std::vector<PlotPanel> panels;  //!< top to bottom
+  int width = 1400;               //!< pixels, 200..10000
+  int panel_height = 300;         //!< pixels per panel, 100..10000; the image is 100 pixels more
   static constexpr int max_height = 32767;  //!< pixels: cairo's largest image
 };
 
