@@ -12,6 +12,7 @@
 #include <algorithm>
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <cstdio>
 #include <endohaptics/workflow/command_line.hpp>
 #include <endohaptics/workflow/format_defaults.hpp>
@@ -39,7 +40,7 @@ int main(int argc, char** argv) {
   int max_order = 10;
   wf::Preprocessing pre;
   wf::ScoringOptions scoring;
-  double max_time_constant = 2.0;
+  double max_time_constant = 0.0;
   bool drop_non_finite = false;
   app.add_option("--log", logs, "log file (repeat for several experiments)")->required();
   app.add_option("--format", format,
@@ -104,10 +105,12 @@ int main(int argc, char** argv) {
                  "s at the start of each segment left out of the score (inputs only set the state)")
       ->check(number_in(0.0, wf::max_warmup))
       ->capture_default_str();
-  app.add_option("--max-time-constant", max_time_constant,
-                 "s; models with a slower mode are refused as near-integrating")
-      ->check(number_in(1e-6, 1e6))
-      ->capture_default_str();
+  auto* max_tc_opt =
+      app.add_option("--max-time-constant", max_time_constant,
+                     "s; models with a slower mode are refused as near-integrating, as are those "
+                     "slower than the longest segment [format: 2 for endowrist-2016 and "
+                     "umn-mis-2018, none for csv]")
+          ->check(number_in(1e-6, 1e6));
   app.add_option("--out", out_path, "write the model here (JSON)");
   CLI11_PARSE(app, argc, argv);
 
@@ -130,7 +133,8 @@ int main(int argc, char** argv) {
     pre.input_offset = wf::offset_mode_from_string(input_offset);
     wf::WorkflowOptions options;
     options.max_order = max_order;
-    options.max_time_constant = max_time_constant;
+    options.max_time_constant =
+        max_tc_opt->count() > 0 ? max_time_constant : defaults.max_time_constant;
     if (order != "auto") options.order = wf::parse_number(order, "--order", 1, limits::max_order);
     // A comma list: n4sid, moesp, cva, best (= the three) and static, all scored alike.
     options.candidates.clear();
@@ -211,11 +215,17 @@ int main(int argc, char** argv) {
       }
     }
     fmt::print("preprocessing for the fit: {}\n", wf::describe(pre));
+    const wf::TimeConstantLimit tc_limit =
+        wf::time_constant_limit(options.max_time_constant, prepared);
     fmt::print(
         "scoring (causal): x0 {}, warm-up {} s per segment excluded, inputs held and low-passed "
         "forward only ({} Hz), output as logged (no offset, filter or detrend); refused: "
-        "spectral radius >= 1 or slowest time constant > {} s\n",
-        x0, scoring.warmup, pre.cutoff, options.max_time_constant);
+        "spectral radius >= 1 or slowest time constant > {}\n",
+        x0, scoring.warmup, pre.cutoff,
+        std::isfinite(tc_limit.seconds)
+            ? fmt::format("{} s{}", tc_limit.seconds,
+                          tc_limit.source.empty() ? "" : " (" + tc_limit.source + ")")
+            : std::string("(no limit)"));
 
     auto units = [&](const std::vector<std::string>& names) {
       std::vector<files::SignalInfo> info;
@@ -334,12 +344,15 @@ int main(int argc, char** argv) {
       const wf::FileComparison& f = choice.files[k];
       // The old, output-fitted score beside the causal one, labelled (linear models only).
       std::string oracle_text = "no oracle score: a joint model has no linear state";
+      wf::FileComparison oracle;
       if (!joint_chosen) {
-        const wf::FileComparison oracle = wf::compare_log(
-            choice.model, prepared[k], {wf::InitialStateMode::oracle, 0.0, scoring.max_lag});
-        oracle_text = fmt::format("oracle x0, zero-phase data: {:.2f} %", oracle.fit[0]);
+        oracle = wf::compare_log(choice.model, prepared[k],
+                                 {wf::InitialStateMode::oracle, 0.0, scoring.max_lag});
       }
       for (Eigen::Index i = 0; i < f.fit.size(); ++i) {
+        if (!joint_chosen) {
+          oracle_text = fmt::format("oracle x0, zero-phase data: {:.2f} %", oracle.fit[i]);
+        }
         fmt::print(
             "fit {}: {} causal {:.2f} %, correlation {:.4f}, RMSE {:.4g} {}, delay {:.0f} ms "
             "({})\n",

@@ -5,6 +5,7 @@
 //! clamp-hits); see docs/identification_results.md. Flags given on the command line win.
 #pragma once
 
+#include <limits>
 #include <string>
 #include <vector>
 #include "endohaptics/core/separate_compilation.hpp"
@@ -29,6 +30,10 @@ struct FormatDefaults {
   std::string current_deadzone = "none";
   //! s, the grid of the joint models (stall_hold and the observers); 0: sample_time.
   double joint_sample_time = 0.0;
+  //! s, WorkflowOptions::max_time_constant: 2 for the force-model formats (twice the longest
+  //! warm-up: a force estimator starts from an unknown state); none (infinity) for generic
+  //! records, where only the record itself bounds it (time_constant_limit).
+  double max_time_constant = std::numeric_limits<double>::infinity();
 };
 
 //! The recommended settings of `format`.

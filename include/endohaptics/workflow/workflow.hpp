@@ -79,9 +79,29 @@ struct WorkflowResult {
 [[nodiscard]] ENDOHAPTICS_DECL double slowest_time_constant(
     const model::DynamicStateSpace<>& linear);
 
-//! Why a candidate must not be chosen as a force estimator, or "" when it may: unstable
-//! (spectral radius >= 1) or near-integrating (slowest time constant > max_time_constant s).
+//! The slowest time constant a candidate may have and what sets it.
+struct TimeConstantLimit {
+  double seconds = std::numeric_limits<double>::infinity();  //!< s; infinity: none
+  //! What sets it, for messages: "" (the number given), or "the longest segment, N samples of
+  //! Ts s: ..." when the logs bound it more tightly.
+  std::string source{};
+};
+
+//! The limit identify_logs applies: `max_time_constant` (s), or the duration of the longest
+//! segment of `fit_logs` (its samples times the sample time) when that is shorter. A mode slower
+//! than the longest stretch of data decays by less than 1/e within it: the data cannot tell it
+//! from a drift set by the unknown initial state, so it is not identifiable from them (issue 32;
+//! docs/identification_results.md).
+[[nodiscard]] ENDOHAPTICS_DECL TimeConstantLimit
+time_constant_limit(double max_time_constant, const std::vector<PreparedLog>& fit_logs);
+
+//! Why a candidate must not be chosen, or "" when it may: unstable (spectral radius >= 1) or
+//! near-integrating (slowest time constant > limit.seconds; the message names limit.source).
 //! The static baseline (method "static...", A = I, B = 0: a constant, not a mode) is exempt.
+[[nodiscard]] ENDOHAPTICS_DECL std::string refusal(const CandidateModel& c,
+                                                   const TimeConstantLimit& limit);
+
+//! `refusal` with a limit of `max_time_constant` s from no stated source.
 [[nodiscard]] ENDOHAPTICS_DECL std::string refusal(const CandidateModel& c,
                                                    double max_time_constant);
 
@@ -101,12 +121,13 @@ ENDOHAPTICS_DECL double ranking_score(const CandidateModel& c);
 //! method, the dead zones of options.deadzone (`fit`: a grid over [0, half the largest |u|], then
 //! golden-section steps, each width a refit), each scored on `score_logs` (the same files
 //! prepared for scoring, same order) with options.scoring; unstable and near-integrating models
-//! are refused. With an automatic order, every order 1..max_order is then tried for the best
-//! subspace method and dead zones; the smallest within options.order_tolerance of the best
-//! replaces it. With options.static_gain the static baseline (same dead-zone search) is one more
-//! candidate. Keeps the best admissible causal score. With several candidates a failing one is
-//! recorded in `failures` and skipped. Throws Error on bad options or data, when every candidate
-//! failed or was refused, or when the log lists differ in length.
+//! (time_constant_limit(options.max_time_constant, fit_logs)) are refused. With an automatic order,
+//! every order 1..max_order is then tried for the best subspace method and dead zones; the smallest
+//! within options.order_tolerance of the best replaces it. With options.static_gain the static
+//! baseline (same dead-zone search) is one more candidate. Keeps the best admissible causal score.
+//! With several candidates a failing one is recorded in `failures` and skipped. Throws Error on bad
+//! options or data, when every candidate failed or was refused, or when the log lists differ in
+//! length.
 [[nodiscard]] ENDOHAPTICS_DECL WorkflowResult
 identify_logs(const std::vector<PreparedLog>& fit_logs, const std::vector<PreparedLog>& score_logs,
               const std::vector<files::SignalInfo>& inputs,

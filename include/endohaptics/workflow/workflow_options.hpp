@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "endohaptics/identification/subspace.hpp"
@@ -48,8 +49,11 @@ struct WorkflowOptions {
   ScoringOptions scoring{};
   //! Candidates whose slowest mode has a time constant -Ts / ln(spectral radius) above this (s)
   //! are refused as near-integrating: their level would come from the initial state, not from the
-  //! inputs. 2 s is twice the longest warm-up. Unstable ones (spectral radius >= 1) always are.
-  double max_time_constant = 2.0;
+  //! inputs. Infinity: no absolute limit (generic records); the force-model formats set 2 s, twice
+  //! the longest warm-up (FormatDefaults::max_time_constant). Whatever it says, a mode slower than
+  //! the longest segment of the logs is refused (time_constant_limit), and so is every unstable
+  //! candidate (spectral radius >= 1).
+  double max_time_constant = std::numeric_limits<double>::infinity();
 };
 
 }  // namespace endohaptics::workflow

@@ -8,6 +8,9 @@
 namespace endohaptics::workflow {
 
 ENDOHAPTICS_DECL FormatDefaults format_defaults(files::LogFormat format) {
+  // A force estimator starts from an unknown state and its score leaves out at most 1 s
+  // (max_warmup): a mode slower than twice that keeps the start's error in the force.
+  constexpr double force_model_max_time_constant = 2.0;
   FormatDefaults d;
   switch (format) {
     case files::LogFormat::endowrist_2016:
@@ -25,6 +28,7 @@ ENDOHAPTICS_DECL FormatDefaults format_defaults(files::LogFormat format) {
       // family with the better inner leave-one-file-out causal fit on the training files.
       d.method = "moesp,stall_hold";
       d.joint_sample_time = 0.01;
+      d.max_time_constant = force_model_max_time_constant;
       break;
     case files::LogFormat::umn_mis_2018:
       // UMN grasper: measured current and encoder velocity -> grip torque on a 10 ms grid, 10 Hz
@@ -46,8 +50,11 @@ ENDOHAPTICS_DECL FormatDefaults format_defaults(files::LogFormat format) {
       // with the better inner cross-validated causal fit on the training files.
       d.method = "moesp,static,push_load_observer,bidirectional_load_observer";
       d.joint_sample_time = 0.001;
+      d.max_time_constant = force_model_max_time_constant;
       break;
     case files::LogFormat::csv:
+      // Any system, any time unit (a CSV without time column counts samples): no absolute bound
+      // on its modes; identify_logs still refuses one slower than the longest segment (issue 32).
       break;
   }
   return d;

@@ -15,17 +15,44 @@ ENDOHAPTICS_DECL double slowest_time_constant(const model::DynamicStateSpace<>& 
   return -linear.sample_time() / std::log(rho);
 }
 
-ENDOHAPTICS_DECL std::string refusal(const CandidateModel& c, double max_time_constant) {
+ENDOHAPTICS_DECL TimeConstantLimit time_constant_limit(double max_time_constant,
+                                                       const std::vector<PreparedLog>& fit_logs) {
+  TimeConstantLimit limit{max_time_constant, {}};
+  Eigen::Index samples = 0;
+  double ts = 0.0;
+  for (const PreparedLog& log : fit_logs) {
+    for (const DataSet& d : log.segments) {
+      if (static_cast<double>(d.y.rows()) * log.sample_time > static_cast<double>(samples) * ts) {
+        samples = d.y.rows();
+        ts = log.sample_time;
+      }
+    }
+  }
+  const double longest = static_cast<double>(samples) * ts;
+  if (samples > 0 && longest < limit.seconds) {
+    limit = {longest, "the longest segment, " + std::to_string(samples) + " samples of " +
+                          detail::format_number(ts) +
+                          " s: a slower mode is not identifiable from the logs"};
+  }
+  return limit;
+}
+
+ENDOHAPTICS_DECL std::string refusal(const CandidateModel& c, const TimeConstantLimit& limit) {
   if (c.method.starts_with("static")) return {};
   if (!(c.spectral_radius < 1.0)) {
     return "unstable (spectral radius " + detail::format_number(c.spectral_radius) + ")";
   }
-  if (c.time_constant > max_time_constant) {
+  if (c.time_constant > limit.seconds) {
     return "near-integrating (slowest time constant " + detail::format_number(c.time_constant) +
-           " s > " + detail::format_number(max_time_constant) + " s; spectral radius " +
+           " s > " + detail::format_number(limit.seconds) + " s" +
+           (limit.source.empty() ? std::string() : ", " + limit.source) + "; spectral radius " +
            detail::format_number(c.spectral_radius) + ")";
   }
   return {};
+}
+
+ENDOHAPTICS_DECL std::string refusal(const CandidateModel& c, double max_time_constant) {
+  return refusal(c, TimeConstantLimit{max_time_constant, {}});
 }
 
 ENDOHAPTICS_DECL std::size_t best_candidate(const std::vector<CandidateModel>& candidates) {
@@ -103,6 +130,11 @@ ENDOHAPTICS_DECL WorkflowResult identify_logs(const std::vector<PreparedLog>& fi
     }
   }
 
+  if (!(options.max_time_constant > 0.0)) {
+    wf::fail("identify: max_time_constant must be > 0 s (infinity: no limit), got " +
+             wf::format_number(options.max_time_constant));
+  }
+  const TimeConstantLimit tc_limit = time_constant_limit(options.max_time_constant, fit_logs);
   WorkflowResult result;
   SubspaceOptions so;
   so.order = options.order;
@@ -141,7 +173,7 @@ ENDOHAPTICS_DECL WorkflowResult identify_logs(const std::vector<PreparedLog>& fi
     }
     c.spectral_radius = c.linear.state_space.spectral_radius();
     c.time_constant = slowest_time_constant(c.model.state_space);
-    c.refused = refusal(c, options.max_time_constant);
+    c.refused = refusal(c, tc_limit);
     double sum = 0.0;
     std::vector<double> per_output(outputs.size(), 0.0);
     for (const PreparedLog& log : score_logs) {
