@@ -84,11 +84,8 @@ int run(Transport& transport, Delayed& delayed, transport::UdpServerTransport& u
   sim::SbrioEmulator emulator(transport, rig, clock, config);
   TruthLog truth;
   if (!truth_path.empty()) {
-    truth.file = std::fopen(truth_path.c_str(), "w");
-    if (truth.file == nullptr) {
-      fmt::print(stderr, "error: cannot write the truth log '{}'\n", truth_path);
-      return 1;
-    }
+    truth.file =
+        endohaptics::workflow::open_output(truth_path, "the truth log '" + truth_path + "'");
     std::fputs(
         "time,enable_mask,active_mask,setpoint0,setpoint1,setpoint2,setpoint3,"
         "position0,position1,position2,position3,velocity0,velocity1,velocity2,velocity3,"

@@ -188,8 +188,7 @@ int run_loop(Transport& transport, Device& device, endohaptics::SteadyClock& clo
   std::unique_ptr<tp::TickRecorder> recorder;
   std::FILE* log = nullptr;
   if (!opt.log_path.empty()) {
-    log = std::fopen(opt.log_path.c_str(), "w");
-    if (log == nullptr) throw endohaptics::Error("cannot write the log '" + opt.log_path + "'");
+    log = endohaptics::workflow::open_output(opt.log_path, "the log '" + opt.log_path + "'");
     recorder = std::make_unique<tp::TickRecorder>();
     tp::TickRecorder::write_header(log);
   }

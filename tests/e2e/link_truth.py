@@ -192,6 +192,12 @@ def signals(bin_dir, work):
         ("bridge, a FIFO as its configuration", [os.path.join(bin_dir, "endohaptics-bridge"),
                                                  "--sbrio", "127.0.0.1:9", "--key", k,
                                                  "--config", fifo]),
+        # Outputs: a FIFO nobody reads blocked open() beyond SIGTERM; now refused at once.
+        ("bridge, a FIFO as its log", [os.path.join(bin_dir, "endohaptics-bridge"), "--sbrio",
+                                       "127.0.0.1:9", "--key", k, "--log", fifo]),
+        ("emulator, a FIFO as its truth log", [os.path.join(bin_dir, "endohaptics-sbrio-emulator"),
+                                               "--bind", "127.0.0.1", "--port", "0", "--key", k,
+                                               "--truth-log", fifo]),
     ]
     for name, argv in runs:
         for sig in (signal.SIGINT, signal.SIGTERM):

@@ -6,6 +6,9 @@
 //! Configuration time: throws endohaptics::Error. Needs only the standard library.
 #pragma once
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -153,6 +156,12 @@ ENDOHAPTICS_DECL void require_written(std::FILE* out, std::string_view what);
 //! Closes `out` and throws Error naming `what` when anything written to it was lost, as
 //! `require_written`, or when closing failed. `out` is closed either way.
 ENDOHAPTICS_DECL void close_written(std::FILE* out, std::string_view what);
+
+//! Opens `path` for writing ("w": created 0644 less the umask, or truncated) without ever
+//! blocking: a FIFO that no one reads is refused at once (ENXIO) instead of hanging the program
+//! beyond the reach of SIGINT/SIGTERM. Devices such as /dev/null and /dev/full open as before.
+//! `what` names the file in messages ("the log 'x.csv'"). Throws Error.
+ENDOHAPTICS_DECL std::FILE* open_output(const std::string& path, std::string_view what);
 
 }  // namespace endohaptics::workflow
 

@@ -25,6 +25,31 @@ ENDOHAPTICS_DECL void require_written(std::FILE* out, std::string_view what) {
   }
 }
 
+ENDOHAPTICS_DECL std::FILE* open_output(const std::string& path, std::string_view what) {
+  int fd = -1;
+  do {
+    fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_NONBLOCK | O_CLOEXEC, 0644);
+  } while (fd < 0 && errno == EINTR);
+  if (fd < 0) {
+    const int error = errno;
+    endohaptics::detail::fail(
+        "cannot write " + std::string(what) +
+        (error == ENXIO ? ": it is a FIFO (named pipe) that no process reads" : "") +
+        detail::reason(error));
+  }
+  // Writes block as usual from here on (a full pipe waits for its reader).
+  if (const int flags = ::fcntl(fd, F_GETFL); flags >= 0) {
+    (void)::fcntl(fd, F_SETFL, flags & ~O_NONBLOCK);
+  }
+  std::FILE* out = ::fdopen(fd, "w");
+  if (out == nullptr) {
+    const int error = errno;
+    ::close(fd);
+    endohaptics::detail::fail("cannot write " + std::string(what) + detail::reason(error));
+  }
+  return out;
+}
+
 ENDOHAPTICS_DECL void close_written(std::FILE* out, std::string_view what) {
   errno = 0;
   const bool failed = std::fflush(out) != 0 || std::ferror(out) != 0;
