@@ -335,6 +335,41 @@ TEST_CASE("garbage from the estimator or the device never reaches the other side
   CHECK(r.setpoint == before);  // robot held while the operator's input is unknown
 }
 
+TEST_CASE("a lost operator follows the lost link's rules: held, released, resumed without a jump") {
+  for (const auto policy :
+       {tp::SafeStatePolicy::disable_motors, tp::SafeStatePolicy::hold_position}) {
+    CAPTURE(static_cast<int>(policy));
+    tp::TeleopLoopConfig config;
+    config.safety.policy = policy;
+    config.safety.max_hold_time = 0.1;
+    Rig rig({}, config);
+    for (int i = 0; i < 300; ++i) (void)rig.tick();
+    rig.device.fail = true;
+    const auto held = rig.loop.tick().setpoint;
+    rig.clock.advance(1ms);
+    for (int i = 0; i < 200; ++i) {
+      const auto r = rig.tick();
+      CHECK(r.status == tp::TickStatus::device_error);
+      CHECK(r.setpoint == held);
+      CHECK(r.stylus_force.norm() == 0.0);
+      // disable_motors: released at once; hold_position: enabled within max_hold_time (100 ms).
+      const bool enabled = policy == tp::SafeStatePolicy::hold_position && i < 100;
+      CHECK(r.enable_mask == (enabled ? 0x0F : 0));
+    }
+    // Back: the limiter starts from where the robot is, and each step stays within the rate.
+    rig.device.fail = false;
+    auto previous = rig.loop.tick().setpoint;
+    rig.clock.advance(1ms);
+    for (int i = 0; i < 100; ++i) {
+      const auto r = rig.tick();
+      CHECK(r.enable_mask == 0x0F);
+      CHECK((r.setpoint - previous).cwiseAbs().maxCoeff() <=
+            config.safety.max_setpoint_rate * 1e-3 + 1e-12);
+      previous = r.setpoint;
+    }
+  }
+}
+
 TEST_CASE("run() paces on absolute deadlines and stops on request") {
   Rig rig;
   int seen = 0;

@@ -228,6 +228,21 @@ class TeleopLoop {
     if (have_desired_) passivity_.track_desired(desired);
     const LinkState link_before = watchdog_.state();
     const bool device_ok = r.device != DeviceStatus::error;
+    // A lost operator (a failing or silent device) follows the lost link's rules: the setpoint is
+    // held, and the motors are released per SafetyConfig::policy (at once, or after
+    // max_hold_time). When the device is back after a release, the limiter restarts from where
+    // the robot is (a released joint may have moved): never a jump back to the held setpoint.
+    if (!device_ok && !device_lost_) {
+      device_lost_ = true;
+      device_lost_since_ = start;
+    } else if (device_ok && device_lost_) {
+      device_lost_ = false;
+      if (released_for_device_ && have_valid_) {
+        limiter_.initialize(config_.safety.clamp_to_range(state_.position));
+        passivity_.reset(limiter_.previous());
+      }
+      released_for_device_ = false;
+    }
     Codec::Setpoint out;
     out.enable_mask = config_.safety.enable_mask;
     if (link_before == LinkState::waiting || !have_desired_) {
@@ -241,6 +256,11 @@ class TeleopLoop {
           (config_.safety.policy == SafeStatePolicy::disable_motors || hold_expired(start))) {
         out.enable_mask = 0;  // released: disable_motors, or a bounded hold that ran out
         released_during_loss_ = true;
+      }
+      if (!device_ok && (config_.safety.policy == SafeStatePolicy::disable_motors ||
+                         start - device_lost_since_ > max_hold_)) {
+        out.enable_mask = 0;  // the operator is lost: released as for a lost link
+        released_for_device_ = true;
       }
     } else {
       // The limiter moves towards the desired setpoint inside the joint range, so a stylus beyond
@@ -560,8 +580,11 @@ class TeleopLoop {
   std::chrono::nanoseconds max_dt_;
   std::chrono::nanoseconds activation_timeout_;
   std::chrono::nanoseconds max_hold_;
-  std::chrono::nanoseconds lost_since_{0};  // when the link was last declared lost
-  bool released_during_loss_ = false;       // enable mask 0 was sent during the current loss
+  std::chrono::nanoseconds lost_since_{0};         // when the link was last declared lost
+  bool released_during_loss_ = false;              // enable mask 0 was sent during the current loss
+  bool device_lost_ = false;                       // the device reported an error on the last read
+  std::chrono::nanoseconds device_lost_since_{0};  // when the device last started failing
+  bool released_for_device_ = false;  // enable mask 0 was sent while the device was failing
   // Per motor: tick start when its enable bit was switched on (never_enabled while off).
   std::array<std::chrono::nanoseconds, loop_motors> enabled_since_{};
   std::chrono::nanoseconds last_start_{0};
