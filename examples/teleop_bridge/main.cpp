@@ -1,470 +1,40 @@
 // endohaptics-bridge: the program between the operator's stylus and the sbRIO. Wires a UDP
 // transport, a haptic device (a scripted operator, or a Geomagic Touch through OpenHaptics), the
 // 2016 force estimator and the cylindrical mapping into a TeleopLoop, then prints table-3.1
-// figures. SIGINT/SIGTERM: zero force, motors disabled, final statistics, exit 0.
-#include <fmt/format.h>
-
-#include <CLI/CLI.hpp>
-#include <atomic>
-#include <boost/lockfree/spsc_queue.hpp>
-#include <chrono>
-#include <csignal>
-#include <cstdio>
-#include <endohaptics/estimation/force_estimator.hpp>
-#include <endohaptics/estimation/paced_estimator.hpp>
-#include <endohaptics/files/bridge_config.hpp>
-#include <endohaptics/kinematics/cylindrical_mapper.hpp>
-#include <endohaptics/protocol/key_file.hpp>
-#include <endohaptics/protocol/secure_session.hpp>
+// figures. SIGINT/SIGTERM: zero force, motors disabled, final statistics, exit 0. The link and
+// the loop are shared with endohaptics-ros-bridge (bridge_app.hpp).
 #include <endohaptics/sim/haptic_device_model.hpp>
 #include <endohaptics/sim/scripted_operator.hpp>
 #include <endohaptics/sim/simulated_rig.hpp>
-#include <endohaptics/teleop/link_diagnosis.hpp>
-#include <endohaptics/teleop/realtime.hpp>
-#include <endohaptics/teleop/teleop_loop.hpp>
-#include <endohaptics/teleop/tick_recorder.hpp>
-#include <endohaptics/transport/secure_transport.hpp>
-#include <endohaptics/transport/udp_transport.hpp>
-#include <endohaptics/workflow/command_line.hpp>
-#include <memory>
-#include <optional>
-#include <string>
-#include <thread>
-#include <tuple>
 
-#include "../cli_numbers.hpp"
+#include "bridge_app.hpp"
 #ifdef ENDOHAPTICS_HAVE_OPENHAPTICS
 #include "openhaptics_device.hpp"
 #endif
 
-namespace tp = endohaptics::teleop;
-namespace est = endohaptics::estimation;
-namespace transport = endohaptics::transport;
 namespace files = endohaptics::files;
-namespace protocol = endohaptics::protocol;
-using std::chrono::nanoseconds;
-
-namespace {
-
-std::atomic<bool> g_stop{false};
-extern "C" void on_signal(int) { g_stop.store(true); }
-
-struct Options {
-  std::string sbrio = "169.254.4.42:61556";
-  std::string local;  // --local HOST:PORT: where the bridge sends from (empty: any free port)
-  std::string rate = "1000";
-  double duration = 0.0;
-  std::string device = "sim";
-  std::string passivity = "off";      // --passivity: off or tdpa (docs/passivity.md)
-  double passivity_round_trip = 0.0;  // ms, --passivity-round-trip
-  std::string config_path;
-  std::string log_path;
-  bool stats = false;
-  int fifo_priority = 0;
-  int cpu = -1;
-  double busy_wait_us = 0.0;
-  std::string protocol = "2";  // "2": v2 (authenticated, docs/protocol.md); "2016": legacy
-  std::string key_path;        // v2: the pre-shared key file
-  std::string generate_key;    // write a new key file and exit
-  int max_answer_lag = 0;      // v2: a state may answer a setpoint this many older than the newest
-};
-
-// The end of one second of the loop: a ~100-byte copy made on the loop thread (no allocation,
-// no LoopStats of its own); the printer thread turns two of them into the second's figures.
-struct Window {
-  double t = 0.0;  // s since start
-  tp::LoopSnapshot stats;
-  std::uint64_t link_losses = 0;
-  std::uint64_t recoveries = 0;
-  tp::LinkState link = tp::LinkState::waiting;
-  double clamp_force = 0.0;       // N, the estimate for clamp 1 at the end of the window
-  protocol::SecureCounters v2{};  // v2 datagrams accepted and refused by cause, so far
-  std::uint8_t active = 0;        // the active mask of the newest state
-  std::uint8_t enabled = 0;       // the enable mask sent last
-  bool diagnose_only = false;     // the early look (0.9 s): warn if nothing obeyed yet, no line
-};
-
-// What the protocol layer refused, for the link's diagnosis.
-tp::LinkEvidence evidence(bool v2, const protocol::SecureCounters& c, std::uint8_t enabled,
-                          std::uint8_t active) {
-  return {.authenticated = v2,
-          .forged = c.forged,
-          .wrong_size = c.wrong_size,
-          .wrong_session = c.wrong_session,
-          .late = c.stale_answer,
-          .enable_mask = enabled,
-          .last_active = active};
-}
-
-// Ranges of the numeric options (stated in --help; examples::number_in refuses the rest).
-constexpr double min_rate_hz = 1.0;
-constexpr double max_rate_hz = 100000.0;
-constexpr double max_duration_s = 1e7;  // ~116 days; 0 runs until SIGINT
-// Setpoints a v2 answer may lag: 10 s at 1 kHz, within SecureTransport's round-trip history.
-constexpr int max_answer_lag = 10000;
-
-std::pair<std::string, std::uint16_t> parse_endpoint(const std::string& s,
-                                                     const std::string& option = "--sbrio") {
-  const auto colon = s.rfind(':');
-  if (colon == std::string::npos || colon == 0 || colon + 1 == s.size()) {
-    throw endohaptics::Error(option + " must be HOST:PORT, got '" + s + "'");
-  }
-  const auto port = endohaptics::workflow::parse_number<std::uint16_t>(
-      std::string_view(s).substr(colon + 1), option + " port", 1, 65535);
-  return {s.substr(0, colon), port};
-}
-
-// The v2 counters of `transport` (none for the 2016 protocol).
-template <typename Transport>
-protocol::SecureCounters v2_counters(const Transport& transport) {
-  if constexpr (requires { transport.counters(); }) {
-    return transport.counters();
-  } else {
-    return {};
-  }
-}
-
-template <typename Transport, typename Device>
-int run_loop(Transport& transport, Device& device, endohaptics::SteadyClock& clock,
-             const Options& opt, const files::BridgeConfig& cfg, const std::string& host,
-             std::uint16_t port) {
-  // The 2016 models run at their own rates (rate::Decimate) on a 1 kHz grid; PacedEstimator
-  // keeps that grid whatever the loop rate (--rate max) and through lost packets.
-  // The clamp model file may be of any kind the library runs (files::ClampForceModel).
-  const files::BridgeForceModels models = files::bridge_force_models(cfg);
-  auto settings = files::bridge_estimator_settings(cfg, models);
-  settings.loop_period = 1e-3;
-  files::BridgeForceEstimator estimator(models, settings);
-  est::PacedEstimator paced(estimator, clock, std::chrono::milliseconds(1));
-  endohaptics::kinematics::CylindricalMapper<> mapper(cfg.mapping);
-
-  tp::TeleopLoopConfig loop_config = cfg.loop;  // safety and receive timeout from --config
-  if (opt.rate == "max") {
-    loop_config.period = nanoseconds(0);
-  } else {
-    const double hz =
-        endohaptics::workflow::parse_number(opt.rate, "--rate", min_rate_hz, max_rate_hz);
-    // A lost link reaches the safe state after max_consecutive_misses + 1 missed periods, within
-    // TeleopLoopConfig::max_watchdog_time: that bounds the rate from below.
-    const double watchdog_s =
-        std::chrono::duration<double>(tp::TeleopLoopConfig::max_watchdog_time).count();
-    const double slowest =
-        static_cast<double>(loop_config.safety.max_consecutive_misses + 1) / watchdog_s;
-    if (hz < slowest) {
-      throw endohaptics::Error(fmt::format(
-          "--rate {}: at this rate {} missed periods (safety.max_consecutive_misses + 1) take "
-          "{:.0f} ms, longer than the {:.0f} ms a lost link may take to reach the safe state; use "
-          "--rate {} or more, or a lower safety.max_consecutive_misses",
-          opt.rate, loop_config.safety.max_consecutive_misses + 1,
-          1e3 * (loop_config.safety.max_consecutive_misses + 1) / hz, 1e3 * watchdog_s,
-          std::ceil(slowest)));
-    }
-    loop_config.period = nanoseconds(static_cast<std::int64_t>(1e9 / hz + 0.5));
-  }
-  // A motor enabled must be reported active within the activation timeout, or the robot is
-  // not obeying; on a link whose answers lag (--max-answer-lag) that includes the round trip.
-  const double tick_s =
-      std::chrono::duration<double>(loop_config.period.count() > 0 ? loop_config.period
-                                                                   : std::chrono::milliseconds(1))
-          .count();
-  loop_config.safety.activation_timeout =
-      std::min(tp::SafetyBounds::max_activation_timeout,
-               std::max(loop_config.safety.activation_timeout,
-                        static_cast<double>(opt.max_answer_lag + 1) * tick_s +
-                            tp::SafetyConfig{}.activation_timeout));
-  if (opt.passivity == "tdpa") {  // the robot port is booked one round trip late, in ticks
-    loop_config.passivity.mode = tp::PassivityMode::tdpa;
-    const double period_ms =
-        std::chrono::duration<double, std::milli>(loop_config.max_tick_dt()).count();
-    loop_config.passivity.round_trip_ticks =
-        static_cast<int>(std::lround(opt.passivity_round_trip / period_ms));
-    // Book only the joint force the mapping renders unclipped, so the observer's operator port
-    // is the force felt.
-    loop_config.passivity.force_limit = mapper.unclipped_joint_force();
-  }
-  tp::TeleopLoop loop(transport, device, paced, mapper, clock, loop_config);
-
-  // Per-tick log and per-second windows leave the loop thread through lock-free rings.
-  std::unique_ptr<tp::TickRecorder> recorder;
-  std::FILE* log = nullptr;
-  if (!opt.log_path.empty()) {
-    log = endohaptics::workflow::open_output(opt.log_path, "the log '" + opt.log_path + "'");
-    recorder = std::make_unique<tp::TickRecorder>();
-    tp::TickRecorder::write_header(log);
-  }
-  boost::lockfree::spsc_queue<Window> windows(64);
-  std::atomic<bool> done{false};
-  std::string log_error;  // set by the writer thread when the log cannot be written
-  // Started before apply_realtime and reset explicitly: the writer never runs SCHED_FIFO or on
-  // the loop's CPU.
-  const std::string peer = fmt::format("{}:{}", host, port);
-  std::thread writer([&] {
-    for (const auto& m : tp::leave_realtime()) fmt::print("bridge: log writer: {}\n", m);
-    bool warned = false;
-    tp::LoopSnapshot previous;
-    auto print_window = [&previous, &opt](const Window& w) {
-      const tp::LoopWindow s = w.stats.since(previous);
-      previous = w.stats;
-      fmt::print(
-          "bridge: t {:5.1f} s  rate {:7.1f} Hz  period err mean {:6.1f} us  deadline misses {}"
-          "  round trip {:6.1f} us  loss {:6.3f} %  decode errors {}  state faults {}  rejected {}"
-          "  link {}  (lost {}, recovered {})  clamp1 {:+.2f} N{}\n",
-          w.t, s.rate, s.period_error_mean * 1e6, s.deadline_misses, s.round_trip_mean * 1e6,
-          s.loss_percent, s.decode_errors, s.state_faults, s.rejected, to_string(w.link),
-          w.link_losses, w.recoveries, w.clamp_force,
-          opt.protocol == "2016" ? std::string()
-                                 : "  v2 rejected " + std::to_string(w.v2.rejected()) +
-                                       " (forged " + std::to_string(w.v2.forged) + ")");
-    };
-    for (;;) {
-      const bool last = done.load();
-      if (recorder && log_error.empty()) {
-        try {
-          recorder->drain(log);
-        } catch (const std::exception& e) {
-          log_error = "writing the log '" + opt.log_path + "' failed: " + e.what();  // full disk
-        }
-      }
-      Window w;
-      while (windows.pop(w)) {
-        // Within the first second: say so if nothing obeyed yet, and the likely cause.
-        if (!warned) {
-          const tp::LinkDiagnosis d =
-              tp::diagnose_link(w.stats.since(tp::LoopSnapshot{}),
-                                evidence(opt.protocol != "2016", w.v2, w.enabled, w.active), peer);
-          if (!d.up()) {
-            fmt::print("bridge: WARNING: no obeyed state after {:.1f} s: {}\n", w.t, d.message);
-            std::fflush(stdout);  // now, not at exit: a supervisor reads it while we run
-          }
-          warned = true;
-        }
-        if (opt.stats && !w.diagnose_only) {
-          print_window(w);
-          std::fflush(stdout);
-        }
-      }
-      if (last) break;
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-  });
-
-  // Timer slack 1 ns always (Linux's 50 us default is 50 us of lateness on every period);
-  // SCHED_FIFO, pinning and mlockall when asked.
-  const auto realtime =
-      tp::apply_realtime({opt.fifo_priority, opt.cpu, opt.fifo_priority > 0, /*slack*/ 1});
-  for (const auto& m : realtime.messages) fmt::print("bridge: realtime: {}\n", m);
-
-  fmt::print("bridge: sbRIO {}:{}, rate {}, device {}, clamp model {} (paced at 1 kHz)\n", host,
-             port, opt.rate == "max" ? "max" : opt.rate + " Hz", opt.device,
-             cfg.clamp_model.empty() ? "appendix C yaw (2016)" : cfg.clamp_model.string());
-  std::fflush(stdout);
-  const auto start = clock.now();
-  const auto end = opt.duration > 0 ? start + std::chrono::duration_cast<nanoseconds>(
-                                                  std::chrono::duration<double>(opt.duration))
-                                    : nanoseconds::max();
-  auto next_window = start + std::chrono::seconds(1);
-  // The early look at the link, so a dead or refusing robot is named within the first second.
-  auto early_look = start + std::chrono::milliseconds(900);
-  std::uint8_t last_active = 0, last_enabled = 0;
-  loop.run([&] { return g_stop.load(std::memory_order_relaxed) || clock.now() >= end; },
-           [&](const tp::TickResult& r) {
-             const auto now = clock.now();
-             if (recorder) (void)recorder->push(tp::TickRecord::from(r, now));
-             last_active = r.measured.active_mask;
-             last_enabled = r.enable_mask;
-             if (now >= next_window || now >= early_look) {
-               Window w;
-               w.diagnose_only = now < next_window;
-               if (w.diagnose_only) {
-                 early_look = nanoseconds::max();
-               } else {
-                 next_window += std::chrono::seconds(1);
-               }
-               w.t = std::chrono::duration<double>(now - start).count();
-               w.stats = loop.stats().snapshot();
-               w.link_losses = loop.watchdog().link_losses();
-               w.recoveries = loop.watchdog().recoveries();
-               w.link = r.link;
-               w.clamp_force = r.motor_force[2];
-               w.v2 = v2_counters(transport);
-               w.active = r.measured.active_mask;
-               w.enabled = r.enable_mask;
-               (void)windows.push(w);
-             }
-           },
-           nanoseconds(static_cast<std::int64_t>(opt.busy_wait_us * 1e3)));
-  loop.shutdown();  // zero force on the device, one packet with every motor disabled
-  done.store(true);
-  writer.join();
-  if (log != nullptr) {
-    try {
-      endohaptics::workflow::close_written(log, "the log '" + opt.log_path + "'");
-    } catch (const std::exception& e) {
-      if (log_error.empty()) log_error = e.what();
-    }
-  }
-
-  const auto& s = loop.stats();
-  fmt::print("bridge: final statistics after {:.2f} s\n{}",
-             std::chrono::duration<double>(clock.now() - start).count(), s.to_table());
-  fmt::print("bridge: link losses {}, recoveries {}, watchdog misses {}\n",
-             loop.watchdog().link_losses(), loop.watchdog().recoveries(),
-             loop.watchdog().total_misses());
-  const auto& pc = paced.counters();
-  fmt::print("bridge: estimator steps {}, held {}, skipped periods {}, rejected {}\n", pc.steps,
-             pc.held, pc.skipped, pc.rejected);
-  if (recorder && log_error.empty()) {
-    fmt::print("bridge: log {} rows written to {}, {} dropped (ring full)\n", recorder->written(),
-               opt.log_path, recorder->dropped());
-  }
-  const double complete =
-      s.ticks() ? 100.0 * static_cast<double>(s.received()) / static_cast<double>(s.ticks()) : 0.0;
-  fmt::print(
-      "bridge: summary ticks={} received={} complete={:.2f}% decode_errors={} state_faults={} "
-      "rejected={} stale_dropped={} link_losses={} recoveries={}\n",
-      s.ticks(), s.received(), complete, s.decode_errors(), s.state_faults(), s.rejected().total(),
-      s.stale_dropped(), loop.watchdog().link_losses(), loop.watchdog().recoveries());
-  if (opt.protocol != "2016") {
-    fmt::print("bridge: protocol v2 states: {}\n", protocol::describe(v2_counters(transport)));
-  }
-  // The verdict: "up" only if the robot obeyed (a valid state showing the enabled motors
-  // active); otherwise the likely cause, and a non-zero exit.
-  const tp::LinkDiagnosis verdict = tp::diagnose_link(
-      s.snapshot().since(tp::LoopSnapshot{}),
-      evidence(opt.protocol != "2016", v2_counters(transport), last_enabled, last_active), peer);
-  if (verdict.up()) {
-    fmt::print(
-        "bridge: link: up: the robot obeyed {} of {} exchanges ({} answered but did not "
-        "obey), ended {}\n",
-        s.received(), s.exchanges(), s.not_obeyed(), to_string(loop.watchdog().state()));
-  } else {
-    fmt::print("bridge: link: never up ({}): {}\n", to_string(verdict.problem), verdict.message);
-  }
-  // No false success: a log that could not be written (full disk) fails the run.
-  if (!log_error.empty()) throw endohaptics::Error(log_error);
-  endohaptics::workflow::require_written(stdout, "standard output");
-  return verdict.up() ? 0 : 3;
-}
-
-// The link: v2 (SecureTransport over UDP, key from --key) or the unauthenticated 2016 wire.
-template <typename Device>
-int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& opt,
-               const files::BridgeConfig& cfg) {
-  const auto [host, port] = parse_endpoint(opt.sbrio);
-  transport::UdpConfig udp;
-  udp.remote_address = host;
-  udp.remote_port = port;
-  udp.local_address = host.find(':') != std::string::npos ? "::" : "0.0.0.0";
-  if (!opt.local.empty()) {  // a fixed source, for a robot side that obeys one console (--peer)
-    std::tie(udp.local_address, udp.local_port) = parse_endpoint(opt.local, "--local");
-  }
-  if (opt.protocol == "2016") {
-    fmt::print(
-        "bridge: WARNING: --protocol 2016: unauthenticated; anyone who can send UDP to this "
-        "host can spoof the robot's state (docs/protocol.md)\n");
-    fmt::print(
-        "bridge: states are taken from {}:{} only (a connected socket: the kernel drops "
-        "datagrams from any other source)\n",
-        host, port);
-    transport::UdpTransport transport(udp);
-    return run_loop(transport, device, clock, opt, cfg, host, port);
-  }
-  if (opt.key_path.empty()) {
-    throw endohaptics::Error(
-        "protocol v2 needs --key FILE (the key the sbRIO holds; make one with --generate-key "
-        "FILE), or --protocol 2016 for the unauthenticated 2016 wire");
-  }
-  const protocol::SecureKey key = protocol::load_key_file(opt.key_path);
-  transport::UdpTransport udp_transport(udp);
-  transport::SecureTransport secure(
-      udp_transport, protocol::SecureInitiator<4>(key, protocol::random_session_id(),
-                                                  static_cast<std::uint64_t>(opt.max_answer_lag)));
-  fmt::print("bridge: protocol v2 (authenticated, key {})\n", opt.key_path);
-  return run_loop(secure, device, clock, opt, cfg, host, port);
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"endohaptics bridge: stylus <-> sbRIO teleoperation with sensorless force feedback"};
-  Options opt;
-  app.add_option("--sbrio", opt.sbrio, "sbRIO address HOST:PORT")->capture_default_str();
-  app.add_option("--local", opt.local,
-                 "send from this HOST:PORT (default: any free port; give it when the robot side "
-                 "obeys one console, e.g. the emulator's --peer)");
-  app.add_option("--rate", opt.rate, "loop rate in Hz, or 'max' (as fast as the link allows)")
-      ->check(examples::number_in(min_rate_hz, max_rate_hz, {"max"}))
-      ->capture_default_str();
-  app.add_option("--duration", opt.duration, "seconds to run (0: until SIGINT)")
-      ->check(examples::number_in(0.0, max_duration_s))
-      ->capture_default_str();
+  bridge::Options opt;
+  bridge::add_link_options(app, opt);
   app.add_option("--device", opt.device,
                  "haptic device: sim (scripted operator), arm-model (the table 5.1 arm holding a "
                  "simulated stylus, pressing clamp 1 into the emulator's contact and holding) or "
                  "openhaptics")
       ->check(CLI::IsMember({"sim", "arm-model", "openhaptics"}))
       ->capture_default_str();
-  app.add_option("--passivity", opt.passivity, "time-domain passivity: off or tdpa")
-      ->check(CLI::IsMember({"off", "tdpa"}))
-      ->capture_default_str();
-  app.add_option("--passivity-round-trip", opt.passivity_round_trip,
-                 "ms, the link's round trip, for --passivity tdpa")
-      ->check(examples::number_in(0.0, 1000.0))
-      ->capture_default_str();
-  app.add_option("--config", opt.config_path, "JSON: mapping, safety, estimator, operator, loop")
-      ->check(CLI::ExistingFile);
-  app.add_option("--log", opt.log_path, "per-tick CSV log");
-  app.add_flag("--stats", opt.stats, "print table-3.1 figures every second");
-  app.add_option("--fifo-priority", opt.fifo_priority, "SCHED_FIFO priority 1..99 (0: off)")
-      ->check(examples::number_in(0, 99));
-  app.add_option("--cpu", opt.cpu, "pin the loop thread to this CPU (-1: no pinning)")
-      ->check(examples::number_in(-1, 1023));
-  app.add_option("--busy-wait-us", opt.busy_wait_us,
-                 "spin the last microseconds of each period (lower jitter, one busy core)")
-      ->check(examples::number_in(0.0, 1000.0));
-  app.add_option("--protocol", opt.protocol,
-                 "wire protocol: 2 (authenticated, needs --key) or 2016 (unauthenticated)")
-      ->check(CLI::IsMember({"2", "2016"}))
-      ->capture_default_str();
-  app.add_option("--key", opt.key_path, "protocol v2: the 32-byte key file (mode 0600)");
-  app.add_option("--max-answer-lag", opt.max_answer_lag,
-                 "protocol v2: accept a state answering a setpoint up to N older than the newest "
-                 "(0: only the newest; raise it on a link slower than one period, e.g. the "
-                 "emulator's --delay: N >= the round trip in periods)")
-      ->check(examples::number_in(0, max_answer_lag))
-      ->capture_default_str();
-  app.add_option("--generate-key", opt.generate_key,
-                 "write a new random key file (mode 0600; refuses an existing file) and exit");
   CLI11_PARSE(app, argc, argv);
 
   try {
-    // Options that cannot apply are refused with the reason, never ignored.
-    if (opt.protocol == "2016" && !opt.key_path.empty()) {
-      throw endohaptics::Error("--key applies to protocol v2; --protocol 2016 has no key");
-    }
-    if (opt.protocol == "2016" && app.count("--max-answer-lag") > 0) {
-      throw endohaptics::Error(
-          "--max-answer-lag applies to protocol v2 (its states name the setpoint they answer); "
-          "the 2016 wire cannot tell");
-    }
-    if (opt.passivity != "tdpa" && app.count("--passivity-round-trip") > 0) {
-      throw endohaptics::Error("--passivity-round-trip applies to --passivity tdpa only");
-    }
-    if (!opt.generate_key.empty()) {
-      protocol::generate_key_file(opt.generate_key);
-      fmt::print("bridge: wrote a new key to {} (32 bytes, mode 0600)\n", opt.generate_key);
-      return 0;
-    }
-    std::signal(SIGINT, on_signal);
-    std::signal(SIGTERM, on_signal);
-    const files::BridgeConfig cfg = opt.config_path.empty()
-                                        ? files::BridgeConfig{}
-                                        : files::load_bridge_config(opt.config_path);
+    if (bridge::check_options(app, opt)) return 0;
+    bridge::stop_on_signals();
+    const files::BridgeConfig cfg = bridge::load_config(opt);
     endohaptics::SteadyClock clock;
     if (opt.device == "sim") {
       endohaptics::sim::ScriptedOperator<endohaptics::SteadyClock> device(clock,
                                                                           cfg.operator_script);
-      return run_bridge(device, clock, opt, cfg);
+      return bridge::run_bridge(device, clock, opt, cfg);
     }
     if (opt.device == "arm-model") {
       // From the rest pose straight in along -x (closing the clamps, eq. 5.9) to 25 mm of stylus
@@ -479,11 +49,11 @@ int main(int argc, char** argv) {
       script.start = endohaptics::kinematics::rest_position<double>(m);
       script.travel = Eigen::Vector3d((m.b_clamp - target) / m.a_clamp - script.start.x(), 0, 0);
       endohaptics::sim::HapticDeviceModel<endohaptics::SteadyClock> device(clock, script);
-      return run_bridge(device, clock, opt, cfg);
+      return bridge::run_bridge(device, clock, opt, cfg);
     }
 #ifdef ENDOHAPTICS_HAVE_OPENHAPTICS
     bridge::OpenHapticsDevice device;
-    return run_bridge(device, clock, opt, cfg);
+    return bridge::run_bridge(device, clock, opt, cfg);
 #else
     fmt::print(stderr,
                "error: this bridge was built without the OpenHaptics SDK (--device openhaptics); "

@@ -14,7 +14,10 @@
 #include <endohaptics/core/error.hpp>
 #include <endohaptics/kinematics/denavit_hartenberg.hpp>
 #include <endohaptics/teleop/haptic_device.hpp>
+#include <endohaptics/teleop/latest_value.hpp>
 #include <string>
+
+#include "touch_frame.hpp"
 
 // Frames and units. The HD API reports HD_CURRENT_POSITION (the gimbal centre) in mm and takes
 // HD_CURRENT_FORCE in N, both in the Touch's frame: x to the operator's right, y up, z towards the
@@ -46,62 +49,20 @@
 
 namespace bridge {
 
-//! Where the HD origin lies in the mapping frame (m), assumed: the gimbal centre at the Touch's
-//! zero pose, (a3, 0, d1 - d4) of the default kinematics::TouchGeometry (see the file comment).
-[[nodiscard]] inline Eigen::Vector3d default_hd_origin() noexcept {
-  const endohaptics::kinematics::TouchGeometry<double> g;
-  return {g.a3, 0.0, g.d1 - g.d4};
-}
-
-//! Touch frame (x right, y up, z towards the operator; mm) to the mapping frame (x towards the
-//! operator, y right, z up, origin on the waist axis at the desk; m).
+//! Touch frame position (mm, as the HD API reports it) to the mapping frame (m): touch_frame.hpp.
 [[nodiscard]] inline Eigen::Vector3d touch_to_mapping_position(
     const HDdouble (&p_mm)[3], const Eigen::Vector3d& hd_origin = default_hd_origin()) noexcept {
-  return Eigen::Vector3d(p_mm[2], p_mm[0], p_mm[1]) * 1e-3 + hd_origin;
+  return touch_to_mapping_position(Eigen::Vector3d(p_mm[0], p_mm[1], p_mm[2]) * 1e-3, hd_origin);
 }
 
-//! Mapping-frame force (N) to the Touch frame (N): the inverse rotation of
-//! touch_to_mapping_position (forces are free vectors: no origin).
-[[nodiscard]] inline std::array<HDdouble, 3> mapping_to_touch_force(
+//! Mapping-frame force (N) to the Touch frame, as hdSetDoublev takes it: touch_frame.hpp.
+[[nodiscard]] inline std::array<HDdouble, 3> mapping_to_touch_force_hd(
     const Eigen::Vector3d& f) noexcept {
-  return {f.y(), f.z(), f.x()};
+  const Eigen::Vector3d t = mapping_to_touch_force(f);
+  return {t.x(), t.y(), t.z()};
 }
 
-//! Hands the newest value from one producer thread to one consumer thread (a triple buffer):
-//! wait-free on both sides, no allocation, never torn; values the consumer did not take in time
-//! are overwritten (the newest wins).
-template <typename T>
-class LatestValue {
- public:
-  //! Producer only: makes `value` the newest.
-  void publish(const T& value) noexcept {
-    slots_[back_] = value;
-    back_ = middle_.exchange(back_ | kFresh, std::memory_order_acq_rel) & kIndex;
-  }
-
-  //! Consumer only: copies the newest value published into `out` (again the same one if nothing
-  //! newer came); false, `out` untouched, if nothing was ever published.
-  bool take(T& out) noexcept {
-    if ((middle_.load(std::memory_order_relaxed) & kFresh) != 0u) {
-      front_ = middle_.exchange(front_, std::memory_order_acq_rel) & kIndex;
-      has_value_ = true;
-    }
-    if (!has_value_) return false;
-    out = slots_[front_];
-    return true;
-  }
-
- private:
-  static constexpr unsigned kIndex = 3u;  // slot index bits of middle_
-  static constexpr unsigned kFresh = 4u;  // middle_ holds a value the consumer has not taken
-  static_assert(std::atomic<unsigned>::is_always_lock_free);
-
-  T slots_[3]{};
-  std::atomic<unsigned> middle_{1u};  // the slot between the two sides, and kFresh
-  unsigned back_ = 0u;                // producer's slot
-  unsigned front_ = 2u;               // consumer's slot
-  bool has_value_ = false;            // consumer only
-};
+using endohaptics::teleop::LatestValue;
 
 //! A Geomagic Touch as a teleop::HapticDevice (frames, threads and errors: see the file comment).
 class OpenHapticsDevice {
@@ -164,7 +125,7 @@ class OpenHapticsDevice {
     if (calibration_.load(std::memory_order_acquire) != HD_CALIBRATION_OK) {
       return DeviceStatus::not_ready;
     }
-    return samples_.take(sample) ? DeviceStatus::ok : DeviceStatus::not_ready;
+    return samples_.read(sample) ? DeviceStatus::ok : DeviceStatus::not_ready;
   }
 
   //! Sets the force (mapping frame, N) the servo loop sends from its next frame on; a non-finite
@@ -172,7 +133,8 @@ class OpenHapticsDevice {
   endohaptics::teleop::DeviceStatus command_force(const Eigen::Vector3d& force) noexcept {
     using endohaptics::teleop::DeviceStatus;
     if (failed_.load(std::memory_order_acquire)) return DeviceStatus::error;
-    forces_.publish(force.allFinite() ? mapping_to_touch_force(force) : std::array<HDdouble, 3>{});
+    forces_.publish(force.allFinite() ? mapping_to_touch_force_hd(force)
+                                      : std::array<HDdouble, 3>{});
     return DeviceStatus::ok;
   }
 
@@ -198,7 +160,7 @@ class OpenHapticsDevice {
     const HDenum calibration = hdCheckCalibration();
     std::array<HDdouble, 3> force{0.0, 0.0, 0.0};
     if (calibration == HD_CALIBRATION_OK && !self->stopping_.load(std::memory_order_acquire)) {
-      self->forces_.take(force);  // stays zero until the loop commands one
+      (void)self->forces_.read(force);  // stays zero until the loop commands one
     }
     hdSetDoublev(HD_CURRENT_FORCE, force.data());
     hdEndFrame(self->device_);

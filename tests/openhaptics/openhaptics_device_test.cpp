@@ -172,7 +172,7 @@ TEST_CASE("axes: one proper rotation for position and force, so force times moti
 
   const HDdouble motion_mm[3] = {3.0, -7.0, 11.0};
   const Eigen::Vector3d force_mapping(0.4, -1.5, 2.25);
-  const auto force_touch = bridge::mapping_to_touch_force(force_mapping);
+  const auto force_touch = bridge::mapping_to_touch_force_hd(force_mapping);
   const double work_touch =
       force_touch[0] * motion_mm[0] + force_touch[1] * motion_mm[1] + force_touch[2] * motion_mm[2];
   const double work_mapping =

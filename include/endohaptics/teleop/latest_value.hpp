@@ -13,10 +13,13 @@
 namespace endohaptics::teleop {
 
 //! Newest-value hand-off between exactly one producer thread and one consumer thread. `T` is
-//! copied whole, so it must be trivially copyable (no pointers to owned memory, no allocation).
+//! copied whole by assignment, which must not throw or allocate (fixed-size values: numbers,
+//! fixed-size Eigen vectors, arrays).
 template <typename T>
 class LatestValue {
-  static_assert(std::is_trivially_copyable_v<T>, "LatestValue<T>: T must be trivially copyable");
+  // Eigen's fixed-size types are not noexcept-assignable by declaration, though they never throw.
+  static_assert(std::is_copy_assignable_v<T> && std::is_default_constructible_v<T>,
+                "LatestValue<T>: T must be default-constructible and copy-assignable");
 
  public:
   //! Producer side: makes `value` the newest. Wait-free, noexcept, no allocation.
