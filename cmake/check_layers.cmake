@@ -20,15 +20,20 @@ set(allowed_files core protocol model kinematics estimation transport teleop sim
 set(allowed_workflow core protocol model estimation identification files)
 # Headers held below their area's layer: header -> the only areas it may include (its own area
 # is not implied: another header of the area could reach further).
-# files/model_file.hpp reads and writes model/ types only, so that a program that loads a model
-# (the bridge, through files/bridge_config.hpp) does not compile identification; the conversions
-# from identification results are in files/identified_model_file.hpp. An entry with a slash
-# names one header (files/json_text.hpp: the bounded JSON reading, itself only core).
+# files/model_file.hpp reads and writes model/ and estimation/ types only (a joint model's
+# parameters are the estimation type, written through its field list: files/parameter_json.hpp),
+# so that a program that loads a model (the bridge, through files/bridge_config.hpp) does not
+# compile identification; the conversions from identification results are in
+# files/identified_model_file.hpp. An entry with a slash names one header (files/json_text.hpp:
+# the bounded JSON reading, itself only core; files/parameter_json.hpp, core and json_text).
 # <area>/impl/<name>.ipp (an offline header's function bodies, or the explicit instantiations of
 # the core's numerics: core/separate_compilation.hpp) are checked like headers of the area;
 # model_file's include only model_file.hpp.
-set(restricted_headers "files/model_file.hpp" "files/impl/model_file.ipp")
-set(allowed_header_files/model_file.hpp core model files/json_text.hpp files/impl/model_file.ipp)
+set(restricted_headers "files/model_file.hpp" "files/impl/model_file.ipp"
+  "files/parameter_json.hpp")
+set(allowed_header_files/parameter_json.hpp core files/json_text.hpp)
+set(allowed_header_files/model_file.hpp core model estimation files/json_text.hpp
+  files/parameter_json.hpp files/impl/model_file.ipp)
 set(allowed_header_files/impl/model_file.ipp files/model_file.hpp)
 # The real-time core: never reaches an offline header or library.
 set(realtime_areas core protocol model kinematics estimation transport teleop)

@@ -147,11 +147,13 @@ TEST_CASE("bidirectional observer: parameters out of range are refused, naming t
   p = parameters();
   p.backward_gain = -0.7e-3;  // the current would fall with the load moving back
   CHECK(message_of([&] { Observer bad(p); }) ==
-        "BidirectionalLoadObserverParameters: forward_gain / backward_gain must be in (0, 1e6] "
-        "(the current grows with the load both ways: gains of one sign), got -2");
+        "BidirectionalLoadObserverParameters: backward_gain must be of forward_gain's sign and at "
+        "least 1e-6 times its magnitude (the current grows with the load both ways), got -7e-04");
   p = parameters();
   p.stop_thresholds[3] = p.stop_thresholds[2];
-  CHECK(message_of([&] { Observer bad(p); }).starts_with("StopOperators: threshold 3 must be"));
+  CHECK(message_of([&] { Observer bad(p); }) ==
+        "BidirectionalLoadObserverParameters: stop_thresholds[3] must be above the threshold "
+        "before it, got 0.05");
   p = parameters();
   p.output_shape[2] = 1e300;
   CHECK(message_of([&] { Observer bad(p); }) ==
@@ -167,7 +169,8 @@ TEST_CASE("bidirectional observer: parameters out of range are refused, naming t
   p = parameters();
   p.current_cutoff = 600.0;  // above Nyquist at 1 kHz
   CHECK(message_of([&] { Observer bad(p); }) ==
-        "BidirectionalLoadObserverParameters: current_cutoff must be in (0, Nyquist) Hz, got 600");
+        "BidirectionalLoadObserverParameters: current_cutoff must be in (0, Nyquist = 0.5 / "
+        "sample_time) Hz, got 600");
 }
 
 TEST_CASE("bidirectional observer: float") {

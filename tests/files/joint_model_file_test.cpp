@@ -33,16 +33,17 @@ namespace {
 const std::vector<files::SignalInfo> clamp_inputs{{"current", "A"}, {"velocity", "rad/s"}};
 
 files::ModelFile stall_hold_file() {
-  files::StallHoldSettings p;
+  est::StallHoldParameters<double> p;
   p.gain = -7.5;
-  p.side = "negative";
+  p.side = est::StallHoldSide::negative;
   p.current_deadzone = 0.18;
-  return files::make_stall_hold_file(p, 0.01, clamp_inputs, {{"force", "N"}},
-                                     {.method = "stall_hold", .files = {"a.csv", "b.csv"}});
+  p.sample_time = 0.01;
+  return files::make_joint_model_file(p, clamp_inputs, {{"force", "N"}},
+                                      {.method = "stall_hold", .files = {"a.csv", "b.csv"}});
 }
 
 files::ModelFile observer_file() {
-  files::PushLoadObserverSettings p;
+  est::PushLoadObserverParameters<double> p;
   p.current_per_load = 1.45;
   p.current_offset = 0.07;
   p.initial_load = 0.04;
@@ -53,11 +54,11 @@ files::ModelFile observer_file() {
   p.back_current_offset = -0.1;
   p.back_current_per_velocity = -0.004;
   p.back_variance = 4e-4;
-  return files::make_push_load_observer_file(p, 0.001, clamp_inputs, {{"grip_torque", "N m"}});
+  return files::make_joint_model_file(p, clamp_inputs, {{"grip_torque", "N m"}});
 }
 
 files::ModelFile bidirectional_file() {
-  files::BidirectionalObserverSettings p;
+  est::BidirectionalLoadObserverParameters<double> p;
   p.forward_gain = -1.41e-3;
   p.forward_gain_stroke = -2.3e-4;
   p.forward_offset = 0.066;
@@ -71,9 +72,9 @@ files::ModelFile bidirectional_file() {
   p.initial_load = -65.8;
   p.initial_variance = 1180.0;
   p.output_offset = 0.26;
-  p.output_shape = {0.2, 0.25, -0.38, 1.15, 1.1, 0.66, 0.12, -0.78};
-  p.output_shape_per_load = {0.008, -0.012, 0.003, 0.0, -0.003, 0.0, 0.01, 0.089};
-  return files::make_bidirectional_observer_file(p, 0.001, clamp_inputs, {{"grip_torque", "mN m"}});
+  p.output_shape << 0.2, 0.25, -0.38, 1.15, 1.1, 0.66, 0.12, -0.78;
+  p.output_shape_per_load << 0.008, -0.012, 0.003, 0.0, -0.003, 0.0, 0.01, 0.089;
+  return files::make_joint_model_file(p, clamp_inputs, {{"grip_torque", "mN m"}});
 }
 
 // The message model_from_json gives for `j` (source "m.json").
@@ -92,13 +93,12 @@ TEST_CASE("joint-model files: both kinds round-trip through JSON and disk") {
   CHECK_FALSE(j.contains("A"));
   CHECK_FALSE(j.contains("states"));
   CHECK(j["parameters"]["side"] == "negative");
+  CHECK(j["version"] == 2);
   const files::ModelFile back = files::model_from_json(j);
-  REQUIRE(back.stall_hold.has_value());
-  CHECK(back.stall_hold->gain == -7.5);
-  CHECK(back.stall_hold->current_deadzone == 0.18);
   CHECK(back.state_space.sample_time() == 0.01);
   CHECK(back.provenance.files == std::vector<std::string>{"a.csv", "b.csv"});
-  const auto p = files::stall_hold_parameters<est::StallHoldParameters<double>>(back);
+  const auto p = files::joint_model_parameters<est::StallHoldParameters<double>>(back);
+  CHECK(p.current_deadzone == 0.18);
   CHECK(p.side == est::StallHoldSide::negative);
   CHECK(p.gain == -7.5);
   CHECK(p.sample_time == 0.01);
@@ -108,7 +108,7 @@ TEST_CASE("joint-model files: both kinds round-trip through JSON and disk") {
   const files::ModelFile o = files::load_model(dir.path() / "o.json");
   CHECK(o.kind() == files::ModelKind::push_load_observer);
   CHECK(files::to_json(o) == files::to_json(observer_file()));
-  const auto q = files::push_load_observer_parameters<est::PushLoadObserverParameters<double>>(o);
+  const auto q = files::joint_model_parameters<est::PushLoadObserverParameters<double>>(o);
   CHECK(q.current_per_load == 1.45);
   CHECK(q.initial_load == 0.04);
   CHECK(q.sample_time == 0.001);
@@ -117,26 +117,34 @@ TEST_CASE("joint-model files: both kinds round-trip through JSON and disk") {
   CHECK(q.back_current_per_velocity == -0.004);
   CHECK(q.back_variance == 4e-4);
   CHECK_NOTHROW((void)est::PushLoadObserver<double>{q});
-  // A file written before the back-driven map existed loads without it (c_b = 0: the prior until
-  // the first push); one with only some of the four fields is refused.
+  // A version 1 file written before the back-driven map existed loads without it (c_b = 0: the
+  // prior until the first push); one with only some of the four fields is refused. In version 2
+  // every field is required.
   json old_file = files::to_json(observer_file());
+  old_file["version"] = 1;
   for (const char* key : {"back_current_per_load", "back_current_offset",
-                          "back_current_per_velocity", "back_variance"}) {
+                          "back_current_per_velocity", "back_variance", "load_per_angle"}) {
     old_file["parameters"].erase(key);
   }
-  const auto q_old = files::push_load_observer_parameters<est::PushLoadObserverParameters<double>>(
+  const auto q_old = files::joint_model_parameters<est::PushLoadObserverParameters<double>>(
       files::model_from_json(old_file));
   CHECK(q_old.back_current_per_load == 0.0);
+  CHECK(q_old.load_per_angle == 0.0);
   CHECK(q_old.current_per_load == 1.45);
+  json new_file = old_file;
+  new_file["version"] = 2;
+  CHECK(error_of(new_file) ==
+        "model file m.json: parameters: missing field \"back_current_per_load\"");
   json partial = files::to_json(observer_file());
+  partial["version"] = 1;
   partial["parameters"].erase("back_variance");
   CHECK(error_of(partial) ==
         "model file m.json: parameters: back_current_per_load, back_current_offset, "
         "back_current_per_velocity and back_variance go together (all four or none)");
   // The wrong kind, and the linear loaders, refuse with the kind named.
   CHECK(message_of(
-            [&] { (void)files::stall_hold_parameters<est::StallHoldParameters<double>>(o); }) ==
-        "stall_hold_parameters: the model file is of kind \"push_load_observer\", not "
+            [&] { (void)files::joint_model_parameters<est::StallHoldParameters<double>>(o); }) ==
+        "joint_model_parameters: the model file is of kind \"push_load_observer\", not "
         "\"stall_hold\"");
   CHECK(message_of([&] {
           (void)files::load_hammerstein_wiener<6, 2, 1>(dir.path() / "o.json");
@@ -154,8 +162,7 @@ TEST_CASE(
   const json j = files::to_json(b);
   CHECK(j["parameters"]["stop_thresholds"].size() == 8);
   CHECK_FALSE(j["parameters"].contains("command_gain"));
-  const auto q =
-      files::bidirectional_observer_parameters<est::BidirectionalLoadObserverParameters<double>>(b);
+  const auto q = files::joint_model_parameters<est::BidirectionalLoadObserverParameters<double>>(b);
   CHECK(q.forward_gain == -1.41e-3);
   CHECK(q.backward_offset_stroke == 0.035);
   CHECK(q.output_shape[7] == -0.78);
@@ -163,15 +170,13 @@ TEST_CASE(
   CHECK(q.stop_thresholds[0] == 0.005);
   CHECK(q.sample_time == 0.001);
   CHECK_NOTHROW((void)est::BidirectionalLoadObserver<double>{q});
-  // Back to settings, field for field.
-  CHECK(files::to_json(files::make_bidirectional_observer_file(
-            files::bidirectional_observer_settings(
-                q, std::optional<est::CurrentOffsetReferenceParameters<double>>{}),
-            0.001, clamp_inputs, {{"grip_torque", "mN m"}}, b.provenance)) == j);
+  // The parameters are the file's content: written back, the same file.
+  CHECK(files::to_json(files::make_joint_model_file(q, clamp_inputs, {{"grip_torque", "mN m"}},
+                                                    b.provenance)) == j);
   CHECK(message_of([&] {
-          (void)files::push_load_observer_parameters<est::PushLoadObserverParameters<double>>(b);
+          (void)files::joint_model_parameters<est::PushLoadObserverParameters<double>>(b);
         }) ==
-        "push_load_observer_parameters: the model file is of kind "
+        "joint_model_parameters: the model file is of kind "
         "\"bidirectional_load_observer\", not \"push_load_observer\"");
   // Hostile fields.
   auto with = [&](const char* key, const json& value) {
@@ -180,12 +185,12 @@ TEST_CASE(
     return h;
   };
   CHECK(error_of(with("stop_thresholds", json::array({0.1, 0.2}))) ==
-        "model file m.json: field \"parameters.stop_thresholds\" must be an array of 8 numbers "
-        "(one per stop operator), got [0.1,0.2]");
+        "model file m.json: field \"parameters.stop_thresholds\" must be an array of 8 numbers, "
+        "got [0.1,0.2]");
   json unordered = j;
   unordered["parameters"]["stop_thresholds"][3] = 0.05;
   CHECK(error_of(unordered) ==
-        "model file m.json: field \"parameters.stop_thresholds[3]\" must be > 0 and above the "
+        "model file m.json: field \"parameters.stop_thresholds[3]\" must be above the "
         "threshold before it, got 0.05");
   json null_shape = j;
   null_shape["parameters"]["output_shape"][2] = nullptr;
@@ -217,15 +222,17 @@ TEST_CASE(
         "1e+308");
   CHECK(error_of(with("current_cutoff", 500.0)) ==
         "model file m.json: field \"parameters.current_cutoff\" must be in (0, Nyquist = 0.5 / "
-        "sample_time_s) Hz, got 500");
+        "sample_time) Hz, got 500");
   CHECK(error_of(with("push_sign", 1))
             .starts_with("model file m.json: unknown field \"parameters.push_sign\" for kind "
                          "\"bidirectional_load_observer\""));
   json missing = j;
   missing["parameters"].erase("output_shape");
   CHECK(error_of(missing) == "model file m.json: parameters: missing field \"output_shape\"");
-  // The reference to the command: both fields or none, and then a third input.
+  // The reference to the command: in version 1 both fields inside "parameters" or none, in
+  // version 2 its own object; then a third input.
   json referred = with("command_gain", -2.02);
+  referred["version"] = 1;
   CHECK(error_of(referred) ==
         "model file m.json: parameters: command_gain and reference_offset go together (both or "
         "none)");
@@ -233,12 +240,18 @@ TEST_CASE(
   CHECK(error_of(referred).find("needs 3 inputs") != std::string::npos);
   referred["inputs"].push_back({{"name", "current_command"}, {"unit", "1"}});
   const files::ModelFile with_command = files::model_from_json(referred, "m.json");
-  const auto ref =
-      files::current_offset_reference_parameters<est::CurrentOffsetReferenceParameters<double>>(
-          with_command);
+  const auto& ref = with_command.current_reference;
   REQUIRE(ref.has_value());
   CHECK(ref->command_gain == -2.02);
-  CHECK(files::to_json(with_command) == referred);
+  json referred_v2 = files::to_json(with_command);
+  CHECK(referred_v2["current_reference"] ==
+        json{{"command_gain", -2.02}, {"reference_offset", -0.0175}});
+  CHECK_FALSE(referred_v2["parameters"].contains("command_gain"));
+  referred_v2["version"] = 1;
+  referred_v2.erase("current_reference");
+  referred_v2["parameters"]["command_gain"] = -2.02;
+  referred_v2["parameters"]["reference_offset"] = -0.0175;
+  CHECK(referred_v2 == referred);
   // The bridge has no command: refused there, saying why.
   write_text(dir.path() / "referred.json", referred.dump());
   write_text(dir.path() / "bridge.json", R"({"estimator": {"clamp_model": "referred.json"}})");
@@ -246,15 +259,15 @@ TEST_CASE(
           (void)files::bridge_force_models(files::load_bridge_config(dir.path() / "bridge.json"));
         }).find("the bidirectional_load_observer refers its current to the commanded current") !=
         std::string::npos);
-  // Two joint models in one file.
-  files::ModelFile both = bidirectional_file();
-  both.stall_hold = files::StallHoldSettings{};
-  CHECK(message_of([&] {
-          (void)files::to_json(both);
-        }).starts_with("to_json: a model file holds one joint model"));
+  // A current reference on a kind without one.
+  files::ModelFile stall = stall_hold_file();
+  stall.current_reference = est::CurrentOffsetReferenceParameters<double>{};
+  CHECK(message_of([&] { (void)files::to_json(stall); }) ==
+        "to_json: kind \"stall_hold\" has no current_reference (only the observers refer their "
+        "current to a command)");
 }
 
-// The model-file loader and the estimation types check the same bounds
+// The model-file loader checks the estimation types' own bounds
 // (model/joint_model_bounds.hpp).
 static_assert(files::ModelFile::max_parameter == est::max_joint_model_parameter);
 static_assert(files::ModelFile::min_current_per_load == est::min_current_per_load);
@@ -319,7 +332,7 @@ TEST_CASE("joint-model files: hostile and out-of-range content is refused naming
         "model file m.json: field \"parameters.push_sign\" must be +1 or -1, got 0.5");
   CHECK(error_of(obs_with("current_cutoff", 600.0)) ==
         "model file m.json: field \"parameters.current_cutoff\" must be in (0, Nyquist = 0.5 / "
-        "sample_time_s) Hz, got 600");
+        "sample_time) Hz, got 600");
   CHECK(error_of(obs_with("measurement_variance", 0.0)) ==
         "model file m.json: field \"parameters.measurement_variance\" must be in (0, 1e6], got 0");
   CHECK(error_of(obs_with("current_per_load", 0.0)) ==
@@ -350,19 +363,20 @@ TEST_CASE("joint-model files: hostile and out-of-range content is refused naming
         "-1e+300");
   CHECK(error_of(obs_with("direction_threshold", 1.5)) ==
         "model file m.json: field \"parameters.direction_threshold\" must be in (0, 1], got 1.5");
-  // The library's makers check the same rules.
-  files::StallHoldSettings bad;
+  // The library's maker checks the same rules (the type's own).
+  est::StallHoldParameters<double> bad;
   bad.output_time_constant = std::numeric_limits<double>::infinity();
   CHECK(message_of([&] {
-          (void)files::make_stall_hold_file(bad, 0.01, clamp_inputs, {{"force", "N"}});
+          (void)files::make_joint_model_file(bad, clamp_inputs, {{"force", "N"}});
         }) ==
-        "make_stall_hold_file: field \"parameters.output_time_constant\" must be in [0, 1e6] s, "
+        "make_joint_model_file: field \"parameters.output_time_constant\" must be in [0, 1e6] s, "
         "got inf");
   // The stiffness and the current's offset reference (a third input, the command).
   CHECK(error_of(obs_with("load_per_angle", 1e300)) ==
         "model file m.json: field \"parameters.load_per_angle\" must be in [-1e6, 1e6], got "
         "1e+300");
   json half_reference = obs;
+  half_reference["version"] = 1;
   half_reference["parameters"]["command_gain"] = -2.06;
   CHECK(error_of(half_reference) ==
         "model file m.json: parameters: command_gain and reference_offset go together (both or "
@@ -375,22 +389,22 @@ TEST_CASE("joint-model files: hostile and out-of-range content is refused naming
   json with_command = two_inputs;
   with_command["inputs"].push_back({{"name", "current_command"}, {"unit", "1"}});
   const files::ModelFile referred = files::model_from_json(with_command, "m.json");
-  const auto ref =
-      files::current_offset_reference_parameters<est::CurrentOffsetReferenceParameters<double>>(
-          referred);
+  const auto& ref = referred.current_reference;
   REQUIRE(ref.has_value());
   CHECK(ref->command_gain == -2.06);
   CHECK(ref->reference_offset == -0.005);
-  CHECK(files::to_json(referred) == with_command);
-  CHECK_FALSE(
-      files::current_offset_reference_parameters<est::CurrentOffsetReferenceParameters<double>>(
-          files::model_from_json(obs))
-          .has_value());
-  json zero_gain = with_command;
-  zero_gain["parameters"]["command_gain"] = 1e-12;
+  CHECK(files::model_from_json(files::to_json(referred)).current_reference->command_gain == -2.06);
+  CHECK_FALSE(files::model_from_json(obs).current_reference.has_value());
+  json zero_gain = files::to_json(referred);
+  zero_gain["current_reference"]["command_gain"] = 1e-12;
   CHECK(error_of(zero_gain) ==
-        "model file m.json: field \"parameters.command_gain\" must be 0 or of magnitude in [1e-9, "
-        "1e6], got 1e-12");
+        "model file m.json: field \"current_reference.command_gain\" must be of magnitude in "
+        "[1e-9, 1e6], got 1e-12");
+  json stray = files::to_json(referred);
+  stray["current_reference"]["gain"] = 1.0;
+  CHECK(error_of(stray) ==
+        "model file m.json: unknown field \"current_reference.gain\" (known: command_gain, "
+        "reference_offset)");
   // The bridge has no command: such a model is refused there, saying why.
   TempDir dir("joint_reference");
   write_text(dir.path() / "referred.json", with_command.dump());
@@ -400,12 +414,27 @@ TEST_CASE("joint-model files: hostile and out-of-range content is refused naming
         })
             .find("refers its current to the commanded current (a third input), which the sbRIO "
                   "protocol does not carry") != std::string::npos);
-  // Both joint models in one file is not a kind.
-  files::ModelFile both = stall_hold_file();
-  both.push_load_observer = files::PushLoadObserverSettings{};
-  CHECK(message_of([&] {
-          (void)files::to_json(both);
-        }).starts_with("to_json: a model file holds one joint model"));
+}
+
+TEST_CASE("model files: the version 1 files in the repository load, and write back as version 2") {
+  // The seeds of the model-file fuzz target: one file of each kind, written as version 1.
+  const std::filesystem::path corpus =
+      std::filesystem::path(__FILE__).parent_path().parent_path() / "fuzz" / "corpus";
+  int loaded = 0;
+  for (const char* kind : {"state_space", "hammerstein_wiener", "stall_hold", "push_load_observer",
+                           "bidirectional_load_observer"}) {
+    for (const auto& entry :
+         std::filesystem::directory_iterator(corpus / ("model_file_" + std::string(kind)))) {
+      CAPTURE(entry.path());
+      const files::ModelFile m = files::load_model(entry.path());
+      CHECK(files::to_string(m.kind()) == kind);
+      const json written = files::to_json(m);
+      CHECK(written["version"] == 2);
+      CHECK(files::to_json(files::model_from_json(written)) == written);
+      ++loaded;
+    }
+  }
+  CHECK(loaded >= 5);
 }
 
 TEST_CASE("bridge: a model file of each kind configures the clamps and runs in the tick") {

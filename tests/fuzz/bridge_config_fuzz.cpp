@@ -33,12 +33,13 @@ void write_models() {
   files::save_model(g_dir / "clamp.json",
                     files::make_model_file(endohaptics::model::yaw_force_2016_hw(0.3), clamp_inputs,
                                            {{"force", "N"}}));
-  files::StallHoldSettings stall;
+  endohaptics::estimation::StallHoldParameters<double> stall;
   stall.gain = -7.5;
-  stall.side = "negative";
+  stall.side = endohaptics::estimation::StallHoldSide::negative;
+  stall.sample_time = 0.01;
   files::save_model(g_dir / "stall.json",
-                    files::make_stall_hold_file(stall, 0.01, clamp_inputs, {{"force", "N"}}));
-  files::BidirectionalObserverSettings b;
+                    files::make_joint_model_file(stall, clamp_inputs, {{"force", "N"}}));
+  endohaptics::estimation::BidirectionalLoadObserverParameters<double> b;
   b.forward_gain = -1.41e-3;
   b.forward_gain_stroke = -2.3e-4;
   b.forward_offset = 0.066;
@@ -52,11 +53,10 @@ void write_models() {
   b.initial_load = -65.8;
   b.initial_variance = 1180.0;
   b.output_offset = 0.26;
-  b.output_shape = {0.2, 0.25, -0.38, 1.15, 1.1, 0.66, 0.12, -0.78};
-  b.output_shape_per_load = {0.008, -0.012, 0.003, 0.0, -0.003, 0.0, 0.01, 0.089};
-  files::save_model(
-      g_dir / "bidirectional.json",
-      files::make_bidirectional_observer_file(b, 0.001, clamp_inputs, {{"grip_torque", "mN m"}}));
+  b.output_shape << 0.2, 0.25, -0.38, 1.15, 1.1, 0.66, 0.12, -0.78;
+  b.output_shape_per_load << 0.008, -0.012, 0.003, 0.0, -0.003, 0.0, 0.01, 0.089;
+  files::save_model(g_dir / "bidirectional.json",
+                    files::make_joint_model_file(b, clamp_inputs, {{"grip_torque", "mN m"}}));
 }
 
 }  // namespace

@@ -46,10 +46,7 @@ wf::PreparedLog hits_log(double gain, int hits, double first_depth, const std::s
   truth.sample_time = 0.01;
   truth.side = est::StallHoldSide::negative;
   truth.gain = gain;
-  const files::ModelFile model = files::make_stall_hold_file(
-      {truth.current_deadzone, truth.velocity_threshold, truth.velocity_time_constant,
-       truth.output_time_constant, gain, "negative"},
-      0.01, inputs, outputs);
+  const files::ModelFile model = files::make_joint_model_file(truth, inputs, outputs);
   wf::PreparedLog log;
   log.source = name;
   log.sample_time = 0.01;
@@ -65,9 +62,7 @@ wf::PreparedLog hits_log(double gain, int hits, double first_depth, const std::s
 template <typename Observer>
 double by_hand(const files::ModelFile& file, Observer observer, const Eigen::MatrixXd& u,
                const Eigen::VectorXd& y) {
-  est::CurrentOffsetReference<double> reference(
-      *files::current_offset_reference_parameters<est::CurrentOffsetReferenceParameters<double>>(
-          file));
+  est::CurrentOffsetReference<double> reference(*file.current_reference);
   double position = 0.0, largest = 0.0;
   for (Eigen::Index k = 0; k < u.rows(); ++k) {
     position += u(k, 1) * 0.001;
@@ -93,8 +88,9 @@ TEST_CASE("joint models: a stall-hold file simulates as the estimation type, sco
   CHECK(direct.isApprox(log.segments[0].y.col(0)));
   CHECK(direct.maxCoeff() > 3.0);  // the hits carry force
 
-  const files::ModelFile model =
-      files::make_stall_hold_file({0.2, 0.05, 0.03, 0.3, -7.5, "negative"}, 0.01, inputs, outputs);
+  est::StallHoldParameters<double> clamp{0.2, 0.05, 0.03, 0.3, -7.5, est::StallHoldSide::negative,
+                                         0.01};
+  const files::ModelFile model = files::make_joint_model_file(clamp, inputs, outputs);
   const wf::FileComparison c = wf::compare_log(model, log);
   CHECK(c.fit[0] == doctest::Approx(100.0));
   CHECK(c.rmse[0] == doctest::Approx(0.0).epsilon(1e-9));
@@ -115,9 +111,10 @@ TEST_CASE("joint models: fit_joint_model recovers the stall-hold gain and side f
   const std::vector<wf::PreparedLog> logs{hits_log(-7.5, 3, 0.5, "a"), hits_log(-7.5, 2, 0.7, "b")};
   const wf::JointModelFit fit =
       wf::fit_joint_model(files::ModelKind::stall_hold, logs, inputs, outputs, 0.5);
-  REQUIRE(fit.model.stall_hold.has_value());
-  CHECK(fit.model.stall_hold->gain == doctest::Approx(-7.5));
-  CHECK(fit.model.stall_hold->side == "negative");
+  REQUIRE(fit.model.kind() == files::ModelKind::stall_hold);
+  const auto& fitted = files::joint_model_parameters<est::StallHoldParameters<double>>(fit.model);
+  CHECK(fitted.gain == doctest::Approx(-7.5));
+  CHECK(fitted.side == est::StallHoldSide::negative);
   CHECK(fit.model.provenance.files == std::vector<std::string>{"a", "b"});
   CHECK(fit.summary.find("loaded side negative") != std::string::npos);
   CHECK(message_of([&] {
@@ -153,8 +150,9 @@ TEST_CASE("joint models: the family is chosen by inner cross-validation on the t
   CHECK(choice.families[1].mean_fit == doctest::Approx(100.0));
   CHECK(choice.families[1].fold_fit.size() == 4);
   CHECK(choice.families[0].mean_fit < choice.families[1].mean_fit);
-  REQUIRE(choice.model.stall_hold.has_value());
-  CHECK(choice.model.stall_hold->gain == doctest::Approx(-7.5));
+  REQUIRE(choice.model.kind() == files::ModelKind::stall_hold);
+  CHECK(files::joint_model_parameters<est::StallHoldParameters<double>>(choice.model).gain ==
+        doctest::Approx(-7.5));
   CHECK(choice.files.size() == 4);
   CHECK_FALSE(choice.joint_summary.empty());
   // One family: no cross-validation, that family.
@@ -196,17 +194,20 @@ TEST_CASE("joint models: an observer with the current command third, and hostile
   const std::vector<wf::PreparedLog> logs{log_of(0.04, "a", false), log_of(0.06, "b", false)};
   const wf::JointModelFit fit =
       wf::fit_joint_model(files::ModelKind::push_load_observer, logs, three, load, 0.5);
-  REQUIRE(fit.model.push_load_observer.has_value());
+  CHECK(fit.model.kind() == files::ModelKind::push_load_observer);
   CHECK(fit.model.inputs.size() == 3);
-  CHECK(fit.model.push_load_observer->command_gain == doctest::Approx(-2.06).epsilon(0.01));
-  CHECK(fit.model.push_load_observer->reference_offset == doctest::Approx(0.01).epsilon(0.01));
+  REQUIRE(fit.model.current_reference.has_value());
+  CHECK(fit.model.current_reference->command_gain == doctest::Approx(-2.06).epsilon(0.01));
+  CHECK(fit.model.current_reference->reference_offset == doctest::Approx(0.01).epsilon(0.01));
   CHECK(fit.summary.find("current referred to the command") != std::string::npos);
   // Replayed through the file: the same as the estimation types composed by hand.
   const Eigen::MatrixXd& u = logs[1].segments[0].u;
   const Eigen::VectorXd y = wf::simulate_joint_model(fit.model, u);
-  CHECK(by_hand(fit.model,
-                est::PushLoadObserver<double>(wf::push_load_observer_parameters(fit.model)), u,
-                y) == 0.0);
+  CHECK(by_hand(
+            fit.model,
+            est::PushLoadObserver<double>(
+                files::joint_model_parameters<est::PushLoadObserverParameters<double>>(fit.model)),
+            u, y) == 0.0);
   CHECK(message_of([&] { (void)wf::simulate_joint_model(fit.model, u.leftCols(2)); }) ==
         "simulate_joint_model: 2 input columns, the model takes 3 (current, velocity, current "
         "command)");
@@ -229,16 +230,12 @@ TEST_CASE("joint models: an observer with the current command third, and hostile
         }) ==
         "fit_joint_model: a: a segment of 3 input and 1 output columns, for 2 inputs and 1 "
         "output");
-  // A file with a third input but no reference, or an offset without a gain, is refused.
-  files::PushLoadObserverSettings plain = *fit.model.push_load_observer;
-  plain.command_gain = 0.0;
+  // A file with a third input but no reference is refused.
+  const auto& plain =
+      files::joint_model_parameters<est::PushLoadObserverParameters<double>>(fit.model);
   CHECK(message_of([&] {
-          (void)files::make_push_load_observer_file(plain, 0.001, three, load);
+          (void)files::make_joint_model_file(plain, three, load);
         }).find("needs 2 inputs (current, velocity) and 1 output, got 3") != std::string::npos);
-  CHECK(message_of([&] {
-          (void)files::make_push_load_observer_file(plain, 0.001, {three[0], three[1]}, load);
-        }).find("\"parameters.reference_offset\" must be 0 when command_gain is 0") !=
-        std::string::npos);
 }
 
 TEST_CASE("joint models: the bidirectional observer through the workflow, with the command") {
@@ -270,11 +267,10 @@ TEST_CASE("joint models: the bidirectional observer through the workflow, with t
   const std::vector<wf::PreparedLog> logs{log_of(20.0, "a"), log_of(50.0, "b"), log_of(80.0, "c")};
   const wf::JointModelFit fit =
       wf::fit_joint_model(files::ModelKind::bidirectional_load_observer, logs, three, load, 0.5);
-  REQUIRE(fit.model.bidirectional_load_observer.has_value());
   CHECK(fit.model.kind() == files::ModelKind::bidirectional_load_observer);
   CHECK(fit.model.inputs.size() == 3);
-  CHECK(fit.model.bidirectional_load_observer->command_gain ==
-        doctest::Approx(-2.06).epsilon(0.01));
+  REQUIRE(fit.model.current_reference.has_value());
+  CHECK(fit.model.current_reference->command_gain == doctest::Approx(-2.06).epsilon(0.01));
   CHECK(fit.summary.starts_with("bidirectional_load_observer: forward "));
   CHECK(fit.training_fit.size() == 3);
   // Replayed through the file: the same as the estimation types composed by hand.
@@ -282,7 +278,8 @@ TEST_CASE("joint models: the bidirectional observer through the workflow, with t
   const Eigen::VectorXd y = wf::simulate_joint_model(fit.model, u);
   CHECK(by_hand(fit.model,
                 est::BidirectionalLoadObserver<double>(
-                    wf::bidirectional_observer_parameters(fit.model)),
+                    files::joint_model_parameters<est::BidirectionalLoadObserverParameters<double>>(
+                        fit.model)),
                 u, y) == 0.0);
   // The truth is the level +-3 mN m by direction: after the first cycle the estimate follows it.
   const auto& truth = logs[1].segments[0].y;

@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/core/parameter.hpp"
 #include "endohaptics/estimation/joint_force_model.hpp"
 #include "endohaptics/model/butterworth_biquad.hpp"
 #include "endohaptics/model/state_space.hpp"
@@ -68,68 +69,65 @@ struct BidirectionalLoadObserverParameters {
   //! the inversion (i - offset) / gain stays bounded.
   static constexpr Scalar max_stroke_ratio = Scalar(0.9);
 
-  //! Throws Error naming the field, its value and the rule.
+  //! Every parameter but the sample time, by its file name, with its bound: `v(name, field,
+  //! Bound)` for each (core/parameter.hpp). The one list validate() and the model files use;
+  //! validate() adds the rules that relate two fields.
+  template <typename Self, typename Visitor>
+  static void for_each_field(Self& p, Visitor&& v) {
+    constexpr double max = max_joint_model_parameter;
+    const Bound cutoff = cutoff_bound(static_cast<double>(p.sample_time));
+    const Bound any = Bound::in(-max, max);
+    const Bound gain = Bound::magnitude(min_current_per_load, max);
+    const Bound variance = Bound::in(0, max);
+    v("current_cutoff", p.current_cutoff, cutoff);
+    v("velocity_cutoff", p.velocity_cutoff, cutoff);
+    v("direction_scale", p.direction_scale, Bound::above(0, max, "rad"));
+    v("velocity_threshold", p.velocity_threshold, Bound::in(0, max, "rad/s"));
+    v("direction_threshold", p.direction_threshold, Bound::above(0, 1));
+    v("stop_thresholds", p.stop_thresholds, Bound::above(0, max, "rad"));
+    v("start_travel", p.start_travel, Bound::in(0, max, "rad"));
+    v("forward_gain", p.forward_gain, gain);
+    v("forward_gain_stroke", p.forward_gain_stroke, any);
+    v("forward_offset", p.forward_offset, any);
+    v("forward_offset_stroke", p.forward_offset_stroke, any);
+    v("backward_gain", p.backward_gain, gain);
+    v("backward_gain_stroke", p.backward_gain_stroke, any);
+    v("backward_offset", p.backward_offset, any);
+    v("backward_offset_stroke", p.backward_offset_stroke, any);
+    v("forward_variance", p.forward_variance, Bound::in(min_variance, max));
+    v("backward_variance", p.backward_variance, Bound::in(min_variance, max));
+    v("load_process_variance", p.load_process_variance, variance);
+    v("friction_variance", p.friction_variance, variance);
+    v("friction_process_variance", p.friction_process_variance, variance);
+    v("initial_load", p.initial_load, any);
+    v("initial_variance", p.initial_variance, variance);
+    v("output_offset", p.output_offset, any);
+    v("output_shape", p.output_shape, any);
+    v("output_shape_per_load", p.output_shape_per_load, any);
+  }
+
+  //! Throws ParameterError naming the field, its value and the rule.
   void validate() const {
-    auto require = [](bool ok, const std::string& field, Scalar value, const char* rule) {
-      if (!ok) {
-        ENDOHAPTICS_THROW(Error("BidirectionalLoadObserverParameters: " + field + " must be " +
-                                rule + ", got " + endohaptics::detail::format_number(value)));
-      }
-    };
-    const Scalar nyquist = Scalar(0.5) / sample_time;
-    const auto max = static_cast<Scalar>(max_joint_model_parameter);  // comparisons fail for NaN
-    require(std::isfinite(sample_time) && sample_time > 0, "sample_time", sample_time,
-            "finite and > 0 s");
-    require(current_cutoff > 0 && current_cutoff < nyquist, "current_cutoff", current_cutoff,
-            "in (0, Nyquist) Hz");
-    require(velocity_cutoff > 0 && velocity_cutoff < nyquist, "velocity_cutoff", velocity_cutoff,
-            "in (0, Nyquist) Hz");
-    require(direction_scale > 0 && direction_scale <= max, "direction_scale", direction_scale,
-            "in (0, 1e6] rad");
-    require(velocity_threshold >= 0 && velocity_threshold <= max, "velocity_threshold",
-            velocity_threshold, "in [0, 1e6] rad/s");
-    require(direction_threshold > 0 && direction_threshold <= 1, "direction_threshold",
-            direction_threshold, "in (0, 1]");
-    for (int j = 0; j < N; ++j) {
-      require(stop_thresholds[j] <= max, "stop_thresholds[" + std::to_string(j) + "]",
-              stop_thresholds[j], "at most 1e6 rad");
+    const ParameterChecker check{"BidirectionalLoadObserverParameters"};
+    check("sample_time", sample_time, sample_time_bound);
+    for_each_field(*this, check);
+    for (int j = 1; j < N; ++j) {
+      check.require(stop_thresholds[j] > stop_thresholds[j - 1],
+                    "stop_thresholds[" + std::to_string(j) + "]", stop_thresholds[j],
+                    "above the threshold before it");
     }
-    require(start_travel <= max, "start_travel", start_travel, "at most 1e6 rad");
-    Stops::validate(stop_thresholds, start_travel);
-    const auto map = [&](const char* gain_name, Scalar g, Scalar stroke, const char* stroke_name) {
-      require(std::fabs(g) >= static_cast<Scalar>(min_current_per_load) && std::fabs(g) <= max,
-              gain_name, g, "of magnitude in [1e-9, 1e6]");
-      require(std::fabs(stroke) <= max_stroke_ratio * std::fabs(g), stroke_name, stroke,
-              "at most 0.9 times the gain's magnitude (the gain keeps its sign and a tenth of its "
-              "size along the stroke)");
-    };
-    map("forward_gain", forward_gain, forward_gain_stroke, "forward_gain_stroke");
-    map("backward_gain", backward_gain, backward_gain_stroke, "backward_gain_stroke");
-    require(forward_gain / backward_gain > 0 && forward_gain / backward_gain <= max,
-            "forward_gain / backward_gain", forward_gain / backward_gain,
-            "in (0, 1e6] (the current grows with the load both ways: gains of one sign)");
-    const std::pair<const char*, Scalar> bounded[] = {
-        {"forward_offset", forward_offset},   {"forward_offset_stroke", forward_offset_stroke},
-        {"backward_offset", backward_offset}, {"backward_offset_stroke", backward_offset_stroke},
-        {"initial_load", initial_load},       {"output_offset", output_offset}};
-    for (const auto& [name, v] : bounded) require(std::fabs(v) <= max, name, v, "in [-1e6, 1e6]");
-    for (int j = 0; j < N; ++j) {
-      require(std::fabs(output_shape[j]) <= max, "output_shape[" + std::to_string(j) + "]",
-              output_shape[j], "in [-1e6, 1e6]");
-      require(std::fabs(output_shape_per_load[j]) <= max,
-              "output_shape_per_load[" + std::to_string(j) + "]", output_shape_per_load[j],
-              "in [-1e6, 1e6]");
-    }
-    require(forward_variance >= min_variance && forward_variance <= max, "forward_variance",
-            forward_variance, "in [1e-12, 1e6]");
-    require(backward_variance >= min_variance && backward_variance <= max, "backward_variance",
-            backward_variance, "in [1e-12, 1e6]");
-    const std::pair<const char*, Scalar> variances[] = {
-        {"load_process_variance", load_process_variance},
-        {"friction_variance", friction_variance},
-        {"friction_process_variance", friction_process_variance},
-        {"initial_variance", initial_variance}};
-    for (const auto& [name, v] : variances) require(v >= 0 && v <= max, name, v, "in [0, 1e6]");
+    const char* stroke_rule =
+        "at most 0.9 times the gain's magnitude (the gain keeps its sign and a tenth of its size "
+        "along the stroke)";
+    check.require(std::fabs(forward_gain_stroke) <= max_stroke_ratio * std::fabs(forward_gain),
+                  "forward_gain_stroke", forward_gain_stroke, stroke_rule);
+    check.require(std::fabs(backward_gain_stroke) <= max_stroke_ratio * std::fabs(backward_gain),
+                  "backward_gain_stroke", backward_gain_stroke, stroke_rule);
+    const Scalar ratio = forward_gain / backward_gain;
+    check.require(ratio > 0 && ratio <= static_cast<Scalar>(max_joint_model_parameter),
+                  "backward_gain", backward_gain,
+                  "of forward_gain's sign and at least 1e-6 times its magnitude (the current "
+                  "grows with the load both ways)");
   }
 };
 

@@ -14,6 +14,7 @@
 #include <string>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/core/parameter.hpp"
 #include "endohaptics/model/joint_model_bounds.hpp"
 #include "endohaptics/model/state_space.hpp"
 
@@ -26,21 +27,17 @@ struct CurrentOffsetReferenceParameters {
   Scalar command_gain = Scalar(1);      //!< G, A per command unit, non-zero
   Scalar reference_offset = Scalar(0);  //!< b_ref, A: the training runs' mean of i - G u
 
-  //! Throws Error naming the field, its value and the rule.
+  //! Both parameters by their file names, with their bounds (core/parameter.hpp).
+  template <typename Self, typename Visitor>
+  static void for_each_field(Self& p, Visitor&& v) {
+    constexpr double max = model::max_joint_model_parameter;
+    v("command_gain", p.command_gain, Bound::magnitude(model::min_current_per_load, max));
+    v("reference_offset", p.reference_offset, Bound::in(-max, max));
+  }
+
+  //! Throws ParameterError naming the field, its value and the rule.
   void validate() const {
-    const auto max = static_cast<Scalar>(model::max_joint_model_parameter);
-    if (!(std::fabs(command_gain) >= static_cast<Scalar>(model::min_current_per_load) &&
-          std::fabs(command_gain) <= max)) {
-      ENDOHAPTICS_THROW(Error(
-          "CurrentOffsetReferenceParameters: command_gain must be of magnitude in [1e-9, 1e6], "
-          "got " +
-          endohaptics::detail::format_number(command_gain)));
-    }
-    if (!(std::fabs(reference_offset) <= max)) {
-      ENDOHAPTICS_THROW(
-          Error("CurrentOffsetReferenceParameters: reference_offset must be in [-1e6, 1e6], got " +
-                endohaptics::detail::format_number(reference_offset)));
-    }
+    for_each_field(*this, ParameterChecker{"CurrentOffsetReferenceParameters"});
   }
 };
 

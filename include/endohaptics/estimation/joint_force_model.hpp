@@ -5,8 +5,10 @@
 #pragma once
 
 #include <concepts>
+#include <limits>
 #include <type_traits>
 
+#include "endohaptics/core/parameter.hpp"
 #include "endohaptics/model/joint_model_bounds.hpp"
 #include "endohaptics/model/state_space.hpp"
 
@@ -16,6 +18,16 @@ namespace endohaptics::estimation {
 // estimation types use.
 using model::max_joint_model_parameter;
 using model::min_current_per_load;
+
+//! The sample time of a joint model: finite and > 0 s.
+inline constexpr Bound sample_time_bound =
+    Bound::above(0, std::numeric_limits<double>::infinity(), "s");
+
+//! A low-pass cut-off of a joint model sampled every `sample_time` s: in (0, Nyquist) Hz.
+[[nodiscard]] constexpr Bound cutoff_bound(double sample_time) {
+  return Bound::between(0, 0.5 / sample_time, "Hz")
+      .described("in (0, Nyquist = 0.5 / sample_time) Hz");
+}
 
 //! The signals of one joint (one motor) for one tick.
 template <typename Scalar = double>

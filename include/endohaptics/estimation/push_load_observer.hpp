@@ -20,6 +20,7 @@
 #include <string>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/core/parameter.hpp"
 #include "endohaptics/estimation/joint_force_model.hpp"
 #include "endohaptics/model/butterworth_biquad.hpp"
 #include "endohaptics/model/state_space.hpp"
@@ -56,51 +57,40 @@ struct PushLoadObserverParameters {
   Scalar load_per_angle = Scalar(0);
   Scalar sample_time = Scalar(0.001);  //!< s, one advance()
 
-  //! Throws Error naming the field, its value and the rule.
+  //! Every parameter but the sample time, by its file name, with its bound: `v(name, field,
+  //! Bound)` for each (core/parameter.hpp). The one list validate() and the model files use.
+  template <typename Self, typename Visitor>
+  static void for_each_field(Self& p, Visitor&& v) {
+    constexpr double max = max_joint_model_parameter;
+    const Bound cutoff = cutoff_bound(static_cast<double>(p.sample_time));
+    v("current_cutoff", p.current_cutoff, cutoff);
+    v("velocity_cutoff", p.velocity_cutoff, cutoff);
+    v("direction_scale", p.direction_scale, Bound::above(0, max, "rad"));
+    v("velocity_threshold", p.velocity_threshold, Bound::in(0, max, "rad/s"));
+    v("direction_threshold", p.direction_threshold, Bound::above(0, 1));
+    v("push_sign", p.push_sign, Bound::unit_sign());
+    v("current_per_load", p.current_per_load, Bound::magnitude(min_current_per_load, max));
+    v("current_offset", p.current_offset, Bound::in(-max, max));
+    v("current_per_velocity", p.current_per_velocity, Bound::in(-max, max));
+    v("measurement_variance", p.measurement_variance, Bound::above(0, max));
+    v("process_variance", p.process_variance, Bound::in(0, max));
+    v("initial_load", p.initial_load, Bound::in(-max, max));
+    v("initial_variance", p.initial_variance, Bound::in(0, max));
+    v("output_offset", p.output_offset, Bound::in(-max, max));
+    v("output_slope", p.output_slope, Bound::in(-max, max));
+    v("back_current_per_load", p.back_current_per_load,
+      Bound::zero_or_magnitude(min_current_per_load, max));
+    v("back_current_offset", p.back_current_offset, Bound::in(-max, max));
+    v("back_current_per_velocity", p.back_current_per_velocity, Bound::in(-max, max));
+    v("back_variance", p.back_variance, Bound::above(0, max));
+    v("load_per_angle", p.load_per_angle, Bound::in(-max, max));
+  }
+
+  //! Throws ParameterError naming the field, its value and the rule.
   void validate() const {
-    auto require = [](bool ok, const char* field, Scalar value, const char* rule) {
-      if (!ok) {
-        ENDOHAPTICS_THROW(Error(std::string("PushLoadObserverParameters: ") + field + " must be " +
-                                rule + ", got " + endohaptics::detail::format_number(value)));
-      }
-    };
-    const Scalar nyquist = Scalar(0.5) / sample_time;
-    require(std::isfinite(sample_time) && sample_time > 0, "sample_time", sample_time,
-            "finite and > 0 s");
-    require(current_cutoff > 0 && current_cutoff < nyquist, "current_cutoff", current_cutoff,
-            "in (0, Nyquist) Hz");
-    require(velocity_cutoff > 0 && velocity_cutoff < nyquist, "velocity_cutoff", velocity_cutoff,
-            "in (0, Nyquist) Hz");
-    const auto bound = static_cast<Scalar>(max_joint_model_parameter);  // false for NaN below
-    require(direction_scale > 0 && direction_scale <= bound, "direction_scale", direction_scale,
-            "in (0, 1e6] rad");
-    require(velocity_threshold >= 0 && velocity_threshold <= bound, "velocity_threshold",
-            velocity_threshold, "in [0, 1e6] rad/s");
-    require(direction_threshold > 0 && direction_threshold <= 1, "direction_threshold",
-            direction_threshold, "in (0, 1]");
-    require(push_sign == 1 || push_sign == -1, "push_sign", push_sign, "+1 or -1");
-    const auto max = static_cast<Scalar>(max_joint_model_parameter);  // comparisons fail for NaN
-    require(std::fabs(current_per_load) >= static_cast<Scalar>(min_current_per_load) &&
-                std::fabs(current_per_load) <= max,
-            "current_per_load", current_per_load, "of magnitude in [1e-9, 1e6]");
-    require(back_current_per_load == 0 ||
-                (std::fabs(back_current_per_load) >= static_cast<Scalar>(min_current_per_load) &&
-                 std::fabs(back_current_per_load) <= max),
-            "back_current_per_load", back_current_per_load, "0 or of magnitude in [1e-9, 1e6]");
-    for (const Scalar v :
-         {current_offset, current_per_velocity, initial_load, output_offset, output_slope,
-          back_current_offset, back_current_per_velocity, load_per_angle}) {
-      require(std::fabs(v) <= max, "an offset, slope, stiffness or initial load", v,
-              "in [-1e6, 1e6]");
-    }
-    require(measurement_variance > 0 && measurement_variance <= max, "measurement_variance",
-            measurement_variance, "in (0, 1e6]");
-    require(process_variance >= 0 && process_variance <= max, "process_variance", process_variance,
-            "in [0, 1e6]");
-    require(initial_variance >= 0 && initial_variance <= max, "initial_variance", initial_variance,
-            "in [0, 1e6]");
-    require(back_variance > 0 && back_variance <= max, "back_variance", back_variance,
-            "in (0, 1e6]");
+    const ParameterChecker check{"PushLoadObserverParameters"};
+    check("sample_time", sample_time, sample_time_bound);
+    for_each_field(*this, check);
   }
 };
 

@@ -11,11 +11,15 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <string_view>
+#include <utility>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/core/parameter.hpp"
 #include "endohaptics/estimation/joint_force_model.hpp"
 #include "endohaptics/model/state_space.hpp"
 
@@ -28,6 +32,14 @@ enum class StallHoldSide : std::uint8_t {
   negative,  //!< min(0, i + c): a load met only with negative current (the 2016 clamps)
 };
 
+//! The names of StallHoldSide ("both", "positive", "negative"), for files and messages.
+[[nodiscard]] constexpr std::array<std::pair<std::string_view, StallHoldSide>, 3> enumerators(
+    StallHoldSide) noexcept {
+  return {{{"both", StallHoldSide::both},
+           {"positive", StallHoldSide::positive},
+           {"negative", StallHoldSide::negative}}};
+}
+
 //! Parameters of StallHold. Defaults: the 2016 clamp (docs/research_force_models.md).
 template <typename Scalar = double>
 struct StallHoldParameters {
@@ -39,26 +51,24 @@ struct StallHoldParameters {
   StallHoldSide side = StallHoldSide::both;      //!< which current sign carries the load
   Scalar sample_time = Scalar(0.001);            //!< s, one advance()
 
-  //! Throws Error naming the field, its value and the rule.
+  //! Every parameter but the sample time, by its file name, with its bound: `v(name, field,
+  //! Bound)` for each (core/parameter.hpp). The one list validate() and the model files use.
+  template <typename Self, typename Visitor>
+  static void for_each_field(Self& p, Visitor&& v) {
+    constexpr double max = max_joint_model_parameter;
+    v("current_deadzone", p.current_deadzone, Bound::in(0, max, "A"));
+    v("velocity_threshold", p.velocity_threshold, Bound::in(0, max, "rad/s"));
+    v("velocity_time_constant", p.velocity_time_constant, Bound::in(0, max, "s"));
+    v("output_time_constant", p.output_time_constant, Bound::in(0, max, "s"));
+    v("gain", p.gain, Bound::in(-max, max));
+    v("side", p.side, Bound{});
+  }
+
+  //! Throws ParameterError naming the field, its value and the rule.
   void validate() const {
-    auto require = [](bool ok, const char* field, Scalar value, const char* rule) {
-      if (!ok) {
-        ENDOHAPTICS_THROW(Error(std::string("StallHoldParameters: ") + field + " must be " + rule +
-                                ", got " + endohaptics::detail::format_number(value)));
-      }
-    };
-    const auto max = static_cast<Scalar>(max_joint_model_parameter);  // comparisons fail for NaN
-    require(current_deadzone >= 0 && current_deadzone <= max, "current_deadzone", current_deadzone,
-            "in [0, 1e6] A");
-    require(velocity_threshold >= 0 && velocity_threshold <= max, "velocity_threshold",
-            velocity_threshold, "in [0, 1e6] rad/s");
-    require(velocity_time_constant >= 0 && velocity_time_constant <= max, "velocity_time_constant",
-            velocity_time_constant, "in [0, 1e6] s");
-    require(output_time_constant >= 0 && output_time_constant <= max, "output_time_constant",
-            output_time_constant, "in [0, 1e6] s");
-    require(std::fabs(gain) <= max, "gain", gain, "in [-1e6, 1e6]");
-    require(std::isfinite(sample_time) && sample_time > 0, "sample_time", sample_time,
-            "finite and > 0 s");
+    const ParameterChecker check{"StallHoldParameters"};
+    check("sample_time", sample_time, sample_time_bound);
+    for_each_field(*this, check);
   }
 };
 

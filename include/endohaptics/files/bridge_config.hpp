@@ -657,25 +657,29 @@ inline constexpr int bridge_clamp_states = 6;
     const ModelFile file = load_model(config.clamp_model);
     const std::string where = "model file " + config.clamp_model.string();
     const auto joint_model = [&] {
-      if (file.kind() == ModelKind::stall_hold) {
-        using P = estimation::StallHoldParameters<double>;
-        return ClampForceModel(estimation::StallHold<double>(stall_hold_parameters<P>(file)));
-      }
-      if (file.command_reference().first != 0) {
+      if (file.current_reference) {
         ENDOHAPTICS_THROW(Error(  // with_context below adds the file's name
             "the " + std::string(to_string(file.kind())) +
             " refers its current to the commanded current (a third input), which the sbRIO "
             "protocol does not carry: identify the bridge's model from the current and the "
             "velocity only"));
       }
-      if (file.kind() == ModelKind::bidirectional_load_observer) {
-        using P = estimation::BidirectionalLoadObserverParameters<double>;
-        return ClampForceModel(estimation::BidirectionalLoadObserver<double>(
-            bidirectional_observer_parameters<P>(file)));
-      }
-      using P = estimation::PushLoadObserverParameters<double>;
-      return ClampForceModel(
-          estimation::PushLoadObserver<double>(push_load_observer_parameters<P>(file)));
+      return std::visit(
+          [](const auto& p) {
+            using P = std::decay_t<decltype(p)>;
+            if constexpr (std::is_same_v<P, estimation::StallHoldParameters<double>>) {
+              return ClampForceModel(estimation::StallHold<double>(p));
+            } else if constexpr (std::is_same_v<P,
+                                                estimation::PushLoadObserverParameters<double>>) {
+              return ClampForceModel(estimation::PushLoadObserver<double>(p));
+            } else if constexpr (std::is_same_v<
+                                     P, estimation::BidirectionalLoadObserverParameters<double>>) {
+              return ClampForceModel(estimation::BidirectionalLoadObserver<double>(p));
+            } else {
+              return ClampForceModel(estimation::models_2016<double>().clamp1);  // not reached
+            }
+          },
+          file.parameters);
     };
     // The clamp type holds 6 states (the 2016 yaw model's): a linear block of lower order runs
     // in it embedded exactly (model::embed_states: the added states are decoupled and zero).

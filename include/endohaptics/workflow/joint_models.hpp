@@ -38,18 +38,6 @@ namespace endohaptics::workflow {
 [[nodiscard]] ENDOHAPTICS_DECL std::optional<files::ModelKind> joint_model_kind(
     std::string_view method);
 
-//! The model file's StallHold parameters in the estimation type (sample time included).
-[[nodiscard]] ENDOHAPTICS_DECL estimation::StallHoldParameters<double> stall_hold_parameters(
-    const files::ModelFile& f);
-
-//! The model file's PushLoadObserver parameters in the estimation type (sample time included).
-[[nodiscard]] ENDOHAPTICS_DECL estimation::PushLoadObserverParameters<double>
-push_load_observer_parameters(const files::ModelFile& f);
-
-//! The model file's BidirectionalLoadObserver parameters in the estimation type.
-[[nodiscard]] ENDOHAPTICS_DECL estimation::BidirectionalLoadObserverParameters<double>
-bidirectional_observer_parameters(const files::ModelFile& f);
-
 //! A joint-model file (kind stall_hold or an observer) run causally on one segment from
 //! its start state: `u` is N x 2 (current A, velocity rad/s), or N x 3 with the current command
 //! for an observer that refers its current to it; one output value per row. Throws Error on

@@ -8,187 +8,9 @@
 namespace endohaptics::files {
 namespace detail::model_file {
 
-ENDOHAPTICS_DECL void require_parameter(bool ok, const std::string& where, const char* name,
-                                        double value, const char* rule) {
-  if (!ok) {
-    fail(where + ": field \"parameters." + name + "\" must be " + rule + ", got " +
-         format_number(value));
-  }
-}
-
-constexpr double max_parameter = ModelFile::max_parameter;
-
-ENDOHAPTICS_DECL void validate_settings(const StallHoldSettings& p, const std::string& where) {
-  const auto non_negative = [&](const char* name, double v, const char* rule) {
-    require_parameter(v >= 0.0 && v <= max_parameter, where, name, v, rule);  // false for NaN
-  };
-  non_negative("current_deadzone", p.current_deadzone, "in [0, 1e6] A");
-  non_negative("velocity_threshold", p.velocity_threshold, "in [0, 1e6] rad/s");
-  non_negative("velocity_time_constant", p.velocity_time_constant, "in [0, 1e6] s");
-  non_negative("output_time_constant", p.output_time_constant, "in [0, 1e6] s");
-  require_parameter(std::fabs(p.gain) <= max_parameter, where, "gain", p.gain, "in [-1e6, 1e6]");
-  if (p.side != "both" && p.side != "positive" && p.side != "negative") {
-    fail(where + ": field \"parameters.side\" is \"" + p.side +
-         "\", expected \"both\", \"positive\" or \"negative\"");
-  }
-}
-
-ENDOHAPTICS_DECL void validate_settings(const PushLoadObserverSettings& p, double sample_time,
-                                        const std::string& where) {
-  const double nyquist = 0.5 / sample_time;
-  require_parameter(p.current_cutoff > 0 && p.current_cutoff < nyquist, where, "current_cutoff",
-                    p.current_cutoff, "in (0, Nyquist = 0.5 / sample_time_s) Hz");
-  require_parameter(p.velocity_cutoff > 0 && p.velocity_cutoff < nyquist, where, "velocity_cutoff",
-                    p.velocity_cutoff, "in (0, Nyquist = 0.5 / sample_time_s) Hz");
-  require_parameter(p.direction_scale > 0 && p.direction_scale <= max_parameter, where,
-                    "direction_scale", p.direction_scale, "in (0, 1e6] rad");
-  require_parameter(p.velocity_threshold >= 0 && p.velocity_threshold <= max_parameter, where,
-                    "velocity_threshold", p.velocity_threshold, "in [0, 1e6] rad/s");
-  require_parameter(p.direction_threshold > 0 && p.direction_threshold <= 1, where,
-                    "direction_threshold", p.direction_threshold, "in (0, 1]");
-  require_parameter(p.push_sign == 1 || p.push_sign == -1, where, "push_sign", p.push_sign,
-                    "+1 or -1");
-  require_parameter(std::fabs(p.current_per_load) >= ModelFile::min_current_per_load &&
-                        std::fabs(p.current_per_load) <= max_parameter,
-                    where, "current_per_load", p.current_per_load, "of magnitude in [1e-9, 1e6]");
-  const std::pair<const char*, double> finite[] = {
-      {"current_offset", p.current_offset},
-      {"current_per_velocity", p.current_per_velocity},
-      {"initial_load", p.initial_load},
-      {"output_offset", p.output_offset},
-      {"output_slope", p.output_slope},
-      {"back_current_offset", p.back_current_offset},
-      {"back_current_per_velocity", p.back_current_per_velocity},
-      {"load_per_angle", p.load_per_angle},
-      {"reference_offset", p.reference_offset}};
-  for (const auto& [name, v] : finite)
-    require_parameter(std::fabs(v) <= max_parameter, where, name, v, "in [-1e6, 1e6]");
-  require_parameter(p.measurement_variance > 0 && p.measurement_variance <= max_parameter, where,
-                    "measurement_variance", p.measurement_variance, "in (0, 1e6]");
-  require_parameter(p.process_variance >= 0 && p.process_variance <= max_parameter, where,
-                    "process_variance", p.process_variance, "in [0, 1e6]");
-  require_parameter(p.initial_variance >= 0 && p.initial_variance <= max_parameter, where,
-                    "initial_variance", p.initial_variance, "in [0, 1e6]");
-  require_parameter(p.back_current_per_load == 0 ||
-                        (std::fabs(p.back_current_per_load) >= ModelFile::min_current_per_load &&
-                         std::fabs(p.back_current_per_load) <= max_parameter),
-                    where, "back_current_per_load", p.back_current_per_load,
-                    "0 or of magnitude in [1e-9, 1e6]");
-  require_parameter(p.back_variance > 0 && p.back_variance <= max_parameter, where, "back_variance",
-                    p.back_variance, "in (0, 1e6]");
-  require_parameter(
-      p.command_gain == 0 || (std::fabs(p.command_gain) >= ModelFile::min_current_per_load &&
-                              std::fabs(p.command_gain) <= max_parameter),
-      where, "command_gain", p.command_gain, "0 or of magnitude in [1e-9, 1e6]");
-  // Without a reference its offset has no meaning (and to_json would drop it): 0.
-  require_parameter(p.command_gain != 0 || p.reference_offset == 0, where, "reference_offset",
-                    p.reference_offset, "0 when command_gain is 0");
-}
-
-// The scalar fields of BidirectionalObserverSettings by their file names (one list for reading,
-// writing and checking), the reference pair apart (optional, both or none).
-using BidirectionalScalar = double BidirectionalObserverSettings::*;
-inline constexpr std::pair<const char*, BidirectionalScalar> bidirectional_scalars[] = {
-    {"current_cutoff", &BidirectionalObserverSettings::current_cutoff},
-    {"velocity_cutoff", &BidirectionalObserverSettings::velocity_cutoff},
-    {"direction_scale", &BidirectionalObserverSettings::direction_scale},
-    {"velocity_threshold", &BidirectionalObserverSettings::velocity_threshold},
-    {"direction_threshold", &BidirectionalObserverSettings::direction_threshold},
-    {"start_travel", &BidirectionalObserverSettings::start_travel},
-    {"forward_gain", &BidirectionalObserverSettings::forward_gain},
-    {"forward_gain_stroke", &BidirectionalObserverSettings::forward_gain_stroke},
-    {"forward_offset", &BidirectionalObserverSettings::forward_offset},
-    {"forward_offset_stroke", &BidirectionalObserverSettings::forward_offset_stroke},
-    {"backward_gain", &BidirectionalObserverSettings::backward_gain},
-    {"backward_gain_stroke", &BidirectionalObserverSettings::backward_gain_stroke},
-    {"backward_offset", &BidirectionalObserverSettings::backward_offset},
-    {"backward_offset_stroke", &BidirectionalObserverSettings::backward_offset_stroke},
-    {"forward_variance", &BidirectionalObserverSettings::forward_variance},
-    {"backward_variance", &BidirectionalObserverSettings::backward_variance},
-    {"load_process_variance", &BidirectionalObserverSettings::load_process_variance},
-    {"friction_variance", &BidirectionalObserverSettings::friction_variance},
-    {"friction_process_variance", &BidirectionalObserverSettings::friction_process_variance},
-    {"initial_load", &BidirectionalObserverSettings::initial_load},
-    {"initial_variance", &BidirectionalObserverSettings::initial_variance},
-    {"output_offset", &BidirectionalObserverSettings::output_offset}};
-using BidirectionalArray = BidirectionalObserverSettings::Stops BidirectionalObserverSettings::*;
-inline constexpr std::pair<const char*, BidirectionalArray> bidirectional_arrays[] = {
-    {"stop_thresholds", &BidirectionalObserverSettings::stop_thresholds},
-    {"output_shape", &BidirectionalObserverSettings::output_shape},
-    {"output_shape_per_load", &BidirectionalObserverSettings::output_shape_per_load}};
-
-ENDOHAPTICS_DECL void validate_settings(const BidirectionalObserverSettings& p, double sample_time,
-                                        const std::string& where) {
-  const double nyquist = 0.5 / sample_time;
-  const double max = max_parameter;
-  // Every number within the joint-model bound first (comparisons fail for NaN).
-  for (const auto& [name, member] : bidirectional_scalars) {
-    require_parameter(std::fabs(p.*member) <= max, where, name, p.*member, "in [-1e6, 1e6]");
-  }
-  for (const auto& [name, member] : bidirectional_arrays) {
-    for (std::size_t j = 0; j < (p.*member).size(); ++j) {
-      const std::string field = std::string(name) + "[" + std::to_string(j) + "]";
-      require_parameter(std::fabs((p.*member)[j]) <= max, where, field.c_str(), (p.*member)[j],
-                        "in [-1e6, 1e6]");
-    }
-  }
-  require_parameter(p.current_cutoff > 0 && p.current_cutoff < nyquist, where, "current_cutoff",
-                    p.current_cutoff, "in (0, Nyquist = 0.5 / sample_time_s) Hz");
-  require_parameter(p.velocity_cutoff > 0 && p.velocity_cutoff < nyquist, where, "velocity_cutoff",
-                    p.velocity_cutoff, "in (0, Nyquist = 0.5 / sample_time_s) Hz");
-  require_parameter(p.direction_scale > 0, where, "direction_scale", p.direction_scale, "> 0 rad");
-  require_parameter(p.velocity_threshold >= 0, where, "velocity_threshold", p.velocity_threshold,
-                    ">= 0 rad/s");
-  require_parameter(p.direction_threshold > 0 && p.direction_threshold <= 1, where,
-                    "direction_threshold", p.direction_threshold, "in (0, 1]");
-  for (std::size_t j = 0; j < p.stop_thresholds.size(); ++j) {
-    const std::string field = "stop_thresholds[" + std::to_string(j) + "]";
-    require_parameter(
-        p.stop_thresholds[j] > 0 && (j == 0 || p.stop_thresholds[j] > p.stop_thresholds[j - 1]),
-        where, field.c_str(), p.stop_thresholds[j], "> 0 and above the threshold before it");
-  }
-  require_parameter(p.start_travel >= 0, where, "start_travel", p.start_travel, ">= 0 rad");
-  // The rules of estimation::BidirectionalLoadObserverParameters::validate().
-  const auto map = [&](const char* gain_name, double g, double stroke, const char* stroke_name) {
-    require_parameter(std::fabs(g) >= ModelFile::min_current_per_load, where, gain_name, g,
-                      "of magnitude in [1e-9, 1e6]");
-    require_parameter(std::fabs(stroke) <= 0.9 * std::fabs(g), where, stroke_name, stroke,
-                      "at most 0.9 times the gain's magnitude (the gain keeps its sign and a "
-                      "tenth of its size along the stroke)");
-  };
-  map("forward_gain", p.forward_gain, p.forward_gain_stroke, "forward_gain_stroke");
-  map("backward_gain", p.backward_gain, p.backward_gain_stroke, "backward_gain_stroke");
-  require_parameter(p.forward_gain / p.backward_gain > 0 && p.forward_gain / p.backward_gain <= max,
-                    where, "backward_gain", p.backward_gain,
-                    "of forward_gain's sign and at least 1e-6 times its magnitude (the current "
-                    "grows with the load both ways)");
-  require_parameter(p.forward_variance >= 1e-12, where, "forward_variance", p.forward_variance,
-                    "in [1e-12, 1e6]");
-  require_parameter(p.backward_variance >= 1e-12, where, "backward_variance", p.backward_variance,
-                    "in [1e-12, 1e6]");
-  const std::pair<const char*, double> non_negative[] = {
-      {"load_process_variance", p.load_process_variance},
-      {"friction_variance", p.friction_variance},
-      {"friction_process_variance", p.friction_process_variance},
-      {"initial_variance", p.initial_variance}};
-  for (const auto& [name, v] : non_negative) {
-    require_parameter(v >= 0, where, name, v, "in [0, 1e6]");
-  }
-  require_parameter(
-      p.command_gain == 0 || (std::fabs(p.command_gain) >= ModelFile::min_current_per_load &&
-                              std::fabs(p.command_gain) <= max),
-      where, "command_gain", p.command_gain, "0 or of magnitude in [1e-9, 1e6]");
-  require_parameter(std::fabs(p.reference_offset) <= max, where, "reference_offset",
-                    p.reference_offset, "in [-1e6, 1e6]");
-  require_parameter(p.command_gain != 0 || p.reference_offset == 0, where, "reference_offset",
-                    p.reference_offset, "0 when command_gain is 0");
-}
-
 // The inputs a joint model takes: (current, velocity), and for an observer that refers its
 // current to the command, that command third.
-inline std::size_t joint_model_inputs(const ModelFile& m) {
-  return m.command_reference().first != 0 ? 3 : 2;
-}
+inline std::size_t joint_model_inputs(const ModelFile& m) { return m.current_reference ? 3 : 2; }
 
 ENDOHAPTICS_DECL model::DynamicStateSpace<> joint_model_placeholder(Eigen::Index nu,
                                                                     double sample_time) {
@@ -214,12 +36,10 @@ ENDOHAPTICS_DECL void require_kind(const ModelFile& f, ModelKind kind, const std
 
 ENDOHAPTICS_DECL void validate(const ModelFile& m, const std::string& where) {
   const model::DynamicStateSpace<>& ss = m.state_space;
-  if (int(m.stall_hold.has_value()) + int(m.push_load_observer.has_value()) +
-          int(m.bidirectional_load_observer.has_value()) >
-      1) {
-    fail(where +
-         ": a model file holds one joint model, not the parameters of several (stall_hold, "
-         "push_load_observer, bidirectional_load_observer)");
+  if (m.current_reference && m.kind() != ModelKind::push_load_observer &&
+      m.kind() != ModelKind::bidirectional_load_observer) {
+    fail(where + ": kind \"" + std::string(to_string(m.kind())) +
+         "\" has no current_reference (only the observers refer their current to a command)");
   }
   if (m.is_joint_model()) {
     const std::string kind(to_string(m.kind()));
@@ -241,10 +61,19 @@ ENDOHAPTICS_DECL void validate(const ModelFile& m, const std::string& where) {
            "\": the linear block must be the placeholder (1 state, one column per input, 1 "
            "output, all zero)");
     }
-    if (m.stall_hold) validate_settings(*m.stall_hold, where);
-    if (m.push_load_observer) validate_settings(*m.push_load_observer, ss.sample_time(), where);
-    if (m.bidirectional_load_observer) {
-      validate_settings(*m.bidirectional_load_observer, ss.sample_time(), where);
+    std::visit(
+        [&](const auto& p) {
+          if constexpr (!std::is_same_v<std::decay_t<decltype(p)>, std::monostate>) {
+            if (p.sample_time != ss.sample_time()) {
+              fail(where + ": the parameters' sample_time " + format_number(p.sample_time) +
+                   " s is not the file's " + format_number(ss.sample_time()) + " s");
+            }
+            validate_parameters(p, where, "parameters");
+          }
+        },
+        m.parameters);
+    if (m.current_reference) {
+      validate_parameters(*m.current_reference, where, "current_reference");
     }
   }
 
@@ -447,7 +276,7 @@ ENDOHAPTICS_DECL ModelFile joint_model_from_json(const json& j, const std::strin
     }
   }
   // 3 inputs only for an observer that refers its current to the command (validate() checks that
-  // against its parameters below).
+  // against its current_reference below).
   const std::size_t most = kind == "stall_hold" ? 2 : 3;
   if (inputs.size() < 2 || inputs.size() > most || outputs.size() != 1) {
     fail(where + ": kind \"" + kind + "\" needs 2 inputs (current, velocity" +
@@ -455,14 +284,6 @@ ENDOHAPTICS_DECL ModelFile joint_model_from_json(const json& j, const std::strin
          ") and 1 output, got " + std::to_string(inputs.size()) + " and " +
          std::to_string(outputs.size()));
   }
-  const json& params = field(j, "parameters", where);
-  if (!params.is_object()) fail(where + ": field \"parameters\" is not an object");
-  std::vector<std::string> known;
-  const auto get = [&](const char* name, double& out) {
-    known.emplace_back(name);
-    out = number(field(params, name, where + ": parameters"), where,
-                 std::string("parameters.") + name);
-  };
   ModelFile m{.state_space = with_context(where,
                                           [&] {
                                             return joint_model_placeholder(
@@ -471,108 +292,82 @@ ENDOHAPTICS_DECL ModelFile joint_model_from_json(const json& j, const std::strin
                                           }),
               .inputs = std::move(inputs),
               .outputs = std::move(outputs)};
-  if (kind == "stall_hold") {
-    StallHoldSettings p;
-    get("current_deadzone", p.current_deadzone);
-    get("velocity_threshold", p.velocity_threshold);
-    get("velocity_time_constant", p.velocity_time_constant);
-    get("output_time_constant", p.output_time_constant);
-    get("gain", p.gain);
-    known.emplace_back("side");
-    p.side = text(field(params, "side", where + ": parameters"), where, "parameters.side");
-    m.stall_hold = p;
-  } else if (kind == "bidirectional_load_observer") {
-    BidirectionalObserverSettings p;
-    for (const auto& [name, member] : bidirectional_scalars) get(name, p.*member);
-    for (const auto& [name, member] : bidirectional_arrays) {
-      known.emplace_back(name);
-      const json& array = field(params, name, where + ": parameters");
-      if (!array.is_array() || array.size() != (p.*member).size()) {
-        fail(where + ": field \"parameters." + name + "\" must be an array of " +
-             std::to_string((p.*member).size()) + " numbers (one per stop operator), got " +
-             detail::json_text::show(array));
-      }
-      for (std::size_t i = 0; i < array.size(); ++i) {
-        (p.*member)[i] = number(array[i], where,
-                                std::string("parameters.") + name + "[" + std::to_string(i) + "]");
-      }
-    }
-    if (params.contains("command_gain") != params.contains("reference_offset")) {
-      fail(where + ": parameters: command_gain and reference_offset go together (both or none)");
-    }
-    if (params.contains("command_gain")) {
-      get("command_gain", p.command_gain);
-      get("reference_offset", p.reference_offset);
-    } else {
-      known.emplace_back("command_gain");
-      known.emplace_back("reference_offset");
-    }
-    m.bidirectional_load_observer = p;
-  } else {
-    PushLoadObserverSettings p;
-    get("current_cutoff", p.current_cutoff);
-    get("velocity_cutoff", p.velocity_cutoff);
-    get("direction_scale", p.direction_scale);
-    get("velocity_threshold", p.velocity_threshold);
-    get("direction_threshold", p.direction_threshold);
-    get("push_sign", p.push_sign);
-    get("current_per_load", p.current_per_load);
-    get("current_offset", p.current_offset);
-    get("current_per_velocity", p.current_per_velocity);
-    get("measurement_variance", p.measurement_variance);
-    get("process_variance", p.process_variance);
-    get("initial_load", p.initial_load);
-    get("initial_variance", p.initial_variance);
-    get("output_offset", p.output_offset);
-    get("output_slope", p.output_slope);
-    // The back-driven map came later: a file without it has none (c_b = 0), all four or none.
-    const char* back[] = {"back_current_per_load", "back_current_offset",
-                          "back_current_per_velocity", "back_variance"};
-    std::size_t present = 0;
-    for (const char* name : back) present += params.contains(name) ? 1U : 0U;
-    if (present != 0 && present != std::size(back)) {
-      fail(where +
-           ": parameters: back_current_per_load, back_current_offset, "
-           "back_current_per_velocity and back_variance go together (all four or none)");
-    }
-    if (present != 0) {
-      get("back_current_per_load", p.back_current_per_load);
-      get("back_current_offset", p.back_current_offset);
-      get("back_current_per_velocity", p.back_current_per_velocity);
-      get("back_variance", p.back_variance);
-    } else {
-      for (const char* name : back) known.emplace_back(name);
-    }
-    // Later still, each optional (absent: 0, none): the stiffness, and the current's offset
-    // reference to the command (both of its fields or none).
-    if (params.contains("load_per_angle")) {
-      get("load_per_angle", p.load_per_angle);
-    } else {
-      known.emplace_back("load_per_angle");
-    }
-    if (params.contains("command_gain") != params.contains("reference_offset")) {
-      fail(where + ": parameters: command_gain and reference_offset go together (both or none)");
-    }
-    if (params.contains("command_gain")) {
-      get("command_gain", p.command_gain);
-      get("reference_offset", p.reference_offset);
-    } else {
-      known.emplace_back("command_gain");
-      known.emplace_back("reference_offset");
-    }
-    m.push_load_observer = p;
+  const json& params = field(j, "parameters", where);
+  const std::string what = "for kind \"" + kind + "\"";
+  // The alternative whose kind is named: its type's field list reads the object.
+  [&]<std::size_t... I>(std::index_sequence<I...>) {
+    (
+        [&] {
+          using P = std::variant_alternative_t<I + 1, JointModelParameters>;
+          if (kind == to_string(joint_model_kind<P>())) {
+            P p;
+            p.sample_time = sample_time;
+            parameters_from_json(params, p, where, "parameters", what);
+            m.parameters = p;
+          }
+        }(),
+        ...);
   }
-  for (const auto& [key, value] : params.items()) {
-    if (std::find(known.begin(), known.end(), key) == known.end()) {
-      std::string all;
-      for (const auto& k : known) all += (all.empty() ? "" : ", ") + k;
-      fail(where + ": unknown field \"parameters." + key + "\" for kind \"" + kind +
-           "\" (known: " + all + ")");
-    }
+  (std::make_index_sequence<std::variant_size_v<JointModelParameters> - 1>{});
+  if (const auto it = j.find("current_reference"); it != j.end()) {
+    CurrentReference r;
+    parameters_from_json(*it, r, where, "current_reference");
+    m.current_reference = r;
   }
   m.provenance = provenance_from_json(j, where);
   validate(m, where);
   return m;
+}
+
+ENDOHAPTICS_DECL void migrate(json& j, const std::string& where) {
+  const auto kind = j.find("kind");
+  const auto params = j.find("parameters");
+  const bool observer = kind != j.end() && kind->is_string() &&
+                        (*kind == "push_load_observer" || *kind == "bidirectional_load_observer");
+  if (observer && params != j.end() && params->is_object()) {
+    json& p = *params;
+    if (*kind == "push_load_observer") {
+      // The back-driven map came later: a file without it has none (c_b = 0), all four or none.
+      const char* back[] = {"back_current_per_load", "back_current_offset",
+                            "back_current_per_velocity", "back_variance"};
+      std::size_t present = 0;
+      for (const char* name : back) present += p.contains(name) ? 1U : 0U;
+      if (present != 0 && present != std::size(back)) {
+        fail(where +
+             ": parameters: back_current_per_load, back_current_offset, "
+             "back_current_per_velocity and back_variance go together (all four or none)");
+      }
+      if (present == 0) {
+        const estimation::PushLoadObserverParameters<double> none;
+        p["back_current_per_load"] = 0.0;
+        p["back_current_offset"] = none.back_current_offset;
+        p["back_current_per_velocity"] = none.back_current_per_velocity;
+        p["back_variance"] = none.back_variance;
+      }
+      if (!p.contains("load_per_angle")) p["load_per_angle"] = 0.0;
+    }
+    if (p.contains("command_gain") != p.contains("reference_offset")) {
+      fail(where + ": parameters: command_gain and reference_offset go together (both or none)");
+    }
+    if (p.contains("command_gain")) {
+      const double gain = number(p["command_gain"], where, "parameters.command_gain");
+      const double offset = number(p["reference_offset"], where, "parameters.reference_offset");
+      // Without a reference its offset has no meaning: 0.
+      if (gain == 0 && offset != 0) {
+        fail(where +
+             ": field \"parameters.reference_offset\" must be 0 when command_gain is 0, "
+             "got " +
+             format_number(offset));
+      }
+      if (gain != 0) {
+        j["current_reference"] = {{"command_gain", p["command_gain"]},
+                                  {"reference_offset", p["reference_offset"]}};
+      }
+      p.erase("command_gain");
+      p.erase("reference_offset");
+    }
+  }
+  j["version"] = 2;
 }
 
 ENDOHAPTICS_DECL json map_to_json(const StaticMap& m) {
@@ -638,52 +433,14 @@ ENDOHAPTICS_DECL nlohmann::json to_json(const ModelFile& m) {
     }
     j[key] = std::move(signals);
   }
-  if (m.stall_hold) {
-    const StallHoldSettings& p = *m.stall_hold;
-    j["parameters"] = {{"current_deadzone", p.current_deadzone},
-                       {"velocity_threshold", p.velocity_threshold},
-                       {"velocity_time_constant", p.velocity_time_constant},
-                       {"output_time_constant", p.output_time_constant},
-                       {"gain", p.gain},
-                       {"side", p.side}};
-  }
-  if (m.push_load_observer) {
-    const PushLoadObserverSettings& p = *m.push_load_observer;
-    j["parameters"] = {{"current_cutoff", p.current_cutoff},
-                       {"velocity_cutoff", p.velocity_cutoff},
-                       {"direction_scale", p.direction_scale},
-                       {"velocity_threshold", p.velocity_threshold},
-                       {"direction_threshold", p.direction_threshold},
-                       {"push_sign", p.push_sign},
-                       {"current_per_load", p.current_per_load},
-                       {"current_offset", p.current_offset},
-                       {"current_per_velocity", p.current_per_velocity},
-                       {"measurement_variance", p.measurement_variance},
-                       {"process_variance", p.process_variance},
-                       {"initial_load", p.initial_load},
-                       {"initial_variance", p.initial_variance},
-                       {"output_offset", p.output_offset},
-                       {"output_slope", p.output_slope},
-                       {"back_current_per_load", p.back_current_per_load},
-                       {"back_current_offset", p.back_current_offset},
-                       {"back_current_per_velocity", p.back_current_per_velocity},
-                       {"back_variance", p.back_variance},
-                       {"load_per_angle", p.load_per_angle}};
-    if (p.command_gain != 0) {
-      j["parameters"]["command_gain"] = p.command_gain;
-      j["parameters"]["reference_offset"] = p.reference_offset;
-    }
-  }
-  if (m.bidirectional_load_observer) {
-    const BidirectionalObserverSettings& p = *m.bidirectional_load_observer;
-    nlohmann::json& params = j["parameters"] = nlohmann::json::object();
-    for (const auto& [name, member] : mf::bidirectional_scalars) params[name] = p.*member;
-    for (const auto& [name, member] : mf::bidirectional_arrays) params[name] = p.*member;
-    if (p.command_gain != 0) {
-      params["command_gain"] = p.command_gain;
-      params["reference_offset"] = p.reference_offset;
-    }
-  }
+  std::visit(
+      [&](const auto& p) {
+        if constexpr (!std::is_same_v<std::decay_t<decltype(p)>, std::monostate>) {
+          j["parameters"] = parameters_to_json(p);
+        }
+      },
+      m.parameters);
+  if (m.current_reference) j["current_reference"] = parameters_to_json(*m.current_reference);
   if (!m.is_joint_model()) mf::add_linear_block(j, m);
   const ModelProvenance& p = m.provenance;
   j["provenance"] = {{"method", p.method},
@@ -696,19 +453,27 @@ ENDOHAPTICS_DECL nlohmann::json to_json(const ModelFile& m) {
   return j;
 }
 
-ENDOHAPTICS_DECL ModelFile model_from_json(const nlohmann::json& j, const std::string& source) {
+ENDOHAPTICS_DECL ModelFile model_from_json(const nlohmann::json& file, const std::string& source) {
   namespace mf = detail::model_file;
   const std::string where = "model file " + source;
-  if (!j.is_object()) mf::fail(where + ": not a JSON object");
-  const std::string format = mf::text(mf::field(j, "format", where), where, "format");
+  if (!file.is_object()) mf::fail(where + ": not a JSON object");
+  const std::string format = mf::text(mf::field(file, "format", where), where, "format");
   if (format != "endohaptics-model") {
     mf::fail(where + ": field \"format\" is \"" + format + "\", expected \"endohaptics-model\"");
   }
-  const int version = mf::integer(mf::field(j, "version", where), where, "version");
-  if (version != ModelFile::format_version) {
-    mf::fail(where + ": field \"version\" is " + std::to_string(version) + ", expected " +
+  const int version = mf::integer(mf::field(file, "version", where), where, "version");
+  if (version != 1 && version != ModelFile::format_version) {
+    mf::fail(where + ": field \"version\" is " + std::to_string(version) + ", expected 1 or " +
              std::to_string(ModelFile::format_version));
   }
+  // An older version is read as the current one after its migration (a copy: `file` is the
+  // caller's).
+  nlohmann::json migrated;
+  if (version != ModelFile::format_version) {
+    migrated = file;
+    mf::migrate(migrated, where);
+  }
+  const nlohmann::json& j = version != ModelFile::format_version ? migrated : file;
   const std::string kind = mf::text(mf::field(j, "kind", where), where, "kind");
   const bool joint =
       kind == "stall_hold" || kind == "push_load_observer" || kind == "bidirectional_load_observer";
@@ -767,30 +532,24 @@ ENDOHAPTICS_DECL ModelFile model_from_json(const nlohmann::json& j, const std::s
   return m;
 }
 
-ENDOHAPTICS_DECL ModelFile make_stall_hold_file(const StallHoldSettings& settings,
-                                                double sample_time, std::vector<SignalInfo> inputs,
-                                                std::vector<SignalInfo> outputs,
-                                                ModelProvenance provenance) {
+ENDOHAPTICS_DECL ModelFile make_joint_model_file(JointModelParameters parameters,
+                                                 std::vector<SignalInfo> inputs,
+                                                 std::vector<SignalInfo> outputs,
+                                                 ModelProvenance provenance,
+                                                 std::optional<CurrentReference> reference) {
   namespace mf = detail::model_file;
-  ModelFile f{
-      .state_space = mf::with_context("make_stall_hold_file",
-                                      [&] { return mf::joint_model_placeholder(2, sample_time); }),
-      .inputs = std::move(inputs),
-      .outputs = std::move(outputs),
-      .provenance = std::move(provenance),
-      .stall_hold = settings};
-  if (f.provenance.date.empty()) f.provenance.date = utc_date_today();
-  mf::validate(f, "make_stall_hold_file");
-  return f;
-}
-
-ENDOHAPTICS_DECL ModelFile make_push_load_observer_file(const PushLoadObserverSettings& settings,
-                                                        double sample_time,
-                                                        std::vector<SignalInfo> inputs,
-                                                        std::vector<SignalInfo> outputs,
-                                                        ModelProvenance provenance) {
-  namespace mf = detail::model_file;
-  ModelFile f{.state_space = mf::with_context("make_push_load_observer_file",
+  const char* where = "make_joint_model_file";
+  if (parameters.index() == 0) mf::fail(std::string(where) + ": no joint model's parameters");
+  const double sample_time = std::visit(
+      [](const auto& p) -> double {
+        if constexpr (std::is_same_v<std::decay_t<decltype(p)>, std::monostate>) {
+          return 0.0;
+        } else {
+          return p.sample_time;
+        }
+      },
+      parameters);
+  ModelFile f{.state_space = mf::with_context(where,
                                               [&] {
                                                 return mf::joint_model_placeholder(
                                                     static_cast<Eigen::Index>(inputs.size()),
@@ -799,28 +558,10 @@ ENDOHAPTICS_DECL ModelFile make_push_load_observer_file(const PushLoadObserverSe
               .inputs = std::move(inputs),
               .outputs = std::move(outputs),
               .provenance = std::move(provenance),
-              .push_load_observer = settings};
+              .parameters = std::move(parameters),
+              .current_reference = std::move(reference)};
   if (f.provenance.date.empty()) f.provenance.date = utc_date_today();
-  mf::validate(f, "make_push_load_observer_file");
-  return f;
-}
-
-ENDOHAPTICS_DECL ModelFile make_bidirectional_observer_file(
-    const BidirectionalObserverSettings& settings, double sample_time,
-    std::vector<SignalInfo> inputs, std::vector<SignalInfo> outputs, ModelProvenance provenance) {
-  namespace mf = detail::model_file;
-  ModelFile f{.state_space = mf::with_context("make_bidirectional_observer_file",
-                                              [&] {
-                                                return mf::joint_model_placeholder(
-                                                    static_cast<Eigen::Index>(inputs.size()),
-                                                    sample_time);
-                                              }),
-              .inputs = std::move(inputs),
-              .outputs = std::move(outputs),
-              .provenance = std::move(provenance),
-              .bidirectional_load_observer = settings};
-  if (f.provenance.date.empty()) f.provenance.date = utc_date_today();
-  mf::validate(f, "make_bidirectional_observer_file");
+  mf::validate(f, where);
   return f;
 }
 

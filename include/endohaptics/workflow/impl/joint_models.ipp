@@ -16,22 +16,6 @@ ENDOHAPTICS_DECL std::optional<files::ModelKind> joint_model_kind(std::string_vi
   return std::nullopt;
 }
 
-ENDOHAPTICS_DECL estimation::StallHoldParameters<double> stall_hold_parameters(
-    const files::ModelFile& f) {
-  return files::stall_hold_parameters<estimation::StallHoldParameters<double>>(f);
-}
-
-ENDOHAPTICS_DECL estimation::PushLoadObserverParameters<double> push_load_observer_parameters(
-    const files::ModelFile& f) {
-  return files::push_load_observer_parameters<estimation::PushLoadObserverParameters<double>>(f);
-}
-
-ENDOHAPTICS_DECL estimation::BidirectionalLoadObserverParameters<double>
-bidirectional_observer_parameters(const files::ModelFile& f) {
-  return files::bidirectional_observer_parameters<
-      estimation::BidirectionalLoadObserverParameters<double>>(f);
-}
-
 namespace detail {
 
 // A segment as the observers see it: the current, the encoder angle as the running sum
@@ -56,16 +40,15 @@ ENDOHAPTICS_DECL Eigen::VectorXd simulate_joint_model(const files::ModelFile& mo
     detail::fail("simulate_joint_model: the model file is of kind \"" +
                  std::string(files::to_string(model.kind())) + "\", not a joint model");
   }
-  const auto reference = files::current_offset_reference_parameters<
-      estimation::CurrentOffsetReferenceParameters<double>>(model);
+  const std::optional<files::CurrentReference>& reference = model.current_reference;
   if (u.cols() != (reference ? 3 : 2)) {
     detail::fail("simulate_joint_model: " + std::to_string(u.cols()) +
                  " input columns, the model " +
                  (reference ? "takes 3 (current, velocity, current command)"
                             : "takes 2 (current, velocity)"));
   }
-  if (model.stall_hold) {
-    estimation::StallHold<double> m(stall_hold_parameters(model));
+  if (const auto* p = std::get_if<estimation::StallHoldParameters<double>>(&model.parameters)) {
+    estimation::StallHold<double> m(*p);
     Eigen::VectorXd y(u.rows());
     for (Eigen::Index k = 0; k < u.rows(); ++k) {
       const estimation::JointSignals<double> s{0.0, u(k, 1), u(k, 0), 0.0};
@@ -79,13 +62,15 @@ ENDOHAPTICS_DECL Eigen::VectorXd simulate_joint_model(const files::ModelFile& mo
   }
   const LoadObserverData data =
       detail::load_observer_data(u, Eigen::VectorXd(), model.state_space.sample_time());
-  if (model.bidirectional_load_observer) {
-    return simulate_bidirectional_observer(
-        estimation::BidirectionalLoadObserver<double>(bidirectional_observer_parameters(model)),
-        data, reference);
+  if (const auto* p =
+          std::get_if<estimation::BidirectionalLoadObserverParameters<double>>(&model.parameters)) {
+    return simulate_bidirectional_observer(estimation::BidirectionalLoadObserver<double>(*p), data,
+                                           reference);
   }
   return simulate_load_observer(
-      estimation::PushLoadObserver<double>(push_load_observer_parameters(model)), data, reference);
+      estimation::PushLoadObserver<double>(
+          files::joint_model_parameters<estimation::PushLoadObserverParameters<double>>(model)),
+      data, reference);
 }
 
 namespace detail {
@@ -133,9 +118,8 @@ inline JointModelFit fit_bidirectional(const std::vector<LoadObserverData>& data
   const auto& p = fit.parameters;
   const auto& reference = fit.reference;
   require_reference("bidirectional_load_observer", inputs, reference.has_value());
-  JointModelFit out{
-      .model = files::make_bidirectional_observer_file(
-          files::bidirectional_observer_settings(p, reference), ts, inputs, outputs, provenance)};
+  JointModelFit out{.model =
+                        files::make_joint_model_file(p, inputs, outputs, provenance, reference)};
   const estimation::BidirectionalLoadObserver<double> fitted(p);
   score_training(out, data, static_cast<Eigen::Index>(std::ceil(warmup / ts)),
                  [&](const LoadObserverData& d) {
@@ -232,14 +216,9 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
     prior.sample_time = ts;
     const StallHoldFit fit = fit_stall_hold(data, prior, warmup);
     const auto& p = fit.parameters;
-    const char* side = p.side == estimation::StallHoldSide::positive   ? "positive"
-                       : p.side == estimation::StallHoldSide::negative ? "negative"
-                                                                       : "both";
+    const std::string side(enumerator_name(p.side));
     provenance.fit_percent = {fit.mean_fit_percent};
-    JointModelFit out{.model = files::make_stall_hold_file(
-                          {p.current_deadzone, p.velocity_threshold, p.velocity_time_constant,
-                           p.output_time_constant, p.gain, side},
-                          ts, inputs, outputs, provenance),
+    JointModelFit out{.model = files::make_joint_model_file(p, inputs, outputs, provenance),
                       .training_fit = fit.fit_percent};
     out.summary = "stall_hold: dead zone " + detail::format_number(p.current_deadzone) +
                   " A, held at |v| <= " + detail::format_number(p.velocity_threshold) +
@@ -312,9 +291,8 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
   const auto& p = best->parameters;
   const auto& reference = best->reference;
   detail::require_reference("push_load_observer", inputs, reference.has_value());
-  JointModelFit out{
-      .model = files::make_push_load_observer_file(files::push_load_observer_settings(p, reference),
-                                                   ts, inputs, outputs, provenance)};
+  JointModelFit out{.model =
+                        files::make_joint_model_file(p, inputs, outputs, provenance, reference)};
   const estimation::PushLoadObserver<double> fitted(p);
   detail::score_training(out, data, skip, [&](const LoadObserverData& d) {
     return simulate_load_observer(fitted, d, reference);
