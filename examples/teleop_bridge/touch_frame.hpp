@@ -32,4 +32,17 @@ namespace bridge {
   return {f.y(), f.z(), f.x()};
 }
 
+//! Mapping-frame position (m) to the Touch frame (m): the inverse of touch_to_mapping_position
+//! (for stand-ins and tests that play the Touch).
+[[nodiscard]] inline Eigen::Vector3d mapping_to_touch_position(
+    const Eigen::Vector3d& p, const Eigen::Vector3d& hd_origin = default_hd_origin()) noexcept {
+  const Eigen::Vector3d d = p - hd_origin;
+  return {d.y(), d.z(), d.x()};
+}
+
+//! Touch-frame force (N) to the mapping frame: the inverse of mapping_to_touch_force.
+[[nodiscard]] inline Eigen::Vector3d touch_to_mapping_force(const Eigen::Vector3d& f) noexcept {
+  return {f.z(), f.x(), f.y()};
+}
+
 }  // namespace bridge

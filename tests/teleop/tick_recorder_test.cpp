@@ -58,6 +58,49 @@ TEST_CASE("records cross to a writer thread as CSV rows, in order, none lost") {
   CHECK(last.substr(last.size() - 8) == ",-1.25,0");
 }
 
+TEST_CASE("TickRecord::values is the CSV row, column by column") {
+  tp::TickResult r;
+  r.status = tp::TickStatus::degraded;
+  r.link = tp::LinkState::recovering;
+  r.enable_mask = 0x0B;
+  r.measured.active_mask = 0x03;
+  r.round_trip = 250us;
+  r.force_scale = 0.5;
+  for (int j = 0; j < 4; ++j) {
+    r.setpoint[j] = 0.1 + j;
+    r.measured.position[j] = 0.2 + j;
+    r.measured.velocity[j] = 0.3 + j;
+    r.measured.current[j] = 0.4 + j;
+    r.motor_force[j] = 0.5 + j;
+  }
+  r.passivity.energy = 1.5;
+  r.passivity.damping = 2.5;
+  r.passivity.force_gain = 0.75;
+  r.passivity.drift = 0.125;
+  r.stylus_force = Eigen::Vector3d(-1.0, 2.0, -3.0);
+  const tp::TickRecord record = tp::TickRecord::from(r, 1500ms);
+  tp::TickRecorder recorder(4);
+  REQUIRE(recorder.push(record));
+  std::FILE* out = std::tmpfile();
+  REQUIRE(out != nullptr);
+  recorder.drain(out);
+  std::rewind(out);
+  char line[1024] = {};
+  REQUIRE(std::fgets(line, sizeof line, out) != nullptr);
+  std::fclose(out);
+  const auto values = record.values();
+  std::istringstream row(line);
+  std::string field;
+  std::size_t c = 0;
+  while (std::getline(row, field, ',')) {
+    REQUIRE(c < values.size());
+    CAPTURE(tp::tick_log_columns[c]);
+    CHECK(std::stod(field) == doctest::Approx(values[c]).epsilon(1e-6));
+    ++c;
+  }
+  CHECK(c == tp::tick_log_columns.size());
+}
+
 TEST_CASE("a full ring drops and counts instead of blocking, and push allocates nothing") {
   tp::TickRecorder recorder(8);
   tp::TickResult r;

@@ -83,6 +83,27 @@ struct TickRecord {
     rec.stylus_force = r.stylus_force;
     return rec;
   }
+
+  //! The row as numbers, in the order of `tick_log_columns` (what `TickRecorder::drain` prints;
+  //! status, link and state_fault as their numeric values): for other outputs of the same log,
+  //! such as the ROS bridge's tick-log topic.
+  [[nodiscard]] std::array<double, tick_log_columns.size()> values() const noexcept {
+    std::array<double, tick_log_columns.size()> v{};
+    std::size_t i = 0;
+    for (const double x : {time, static_cast<double>(status), static_cast<double>(link),
+                           static_cast<double>(state_fault), static_cast<double>(enable_mask),
+                           static_cast<double>(active_mask), round_trip, force_scale}) {
+      v[i++] = x;
+    }
+    for (const MotorVector* m : {&setpoint, &position, &velocity, &current, &motor_force}) {
+      for (int j = 0; j < loop_motors; ++j) v[i++] = (*m)[j];
+    }
+    for (const double x : {passivity_energy, passivity_damping, passivity_force_gain,
+                           passivity_drift, stylus_force.x(), stylus_force.y(), stylus_force.z()}) {
+      v[i++] = x;
+    }
+    return v;
+  }
 };
 
 //! The ring between the loop thread (push) and a writer thread (drain). `capacity` records are

@@ -1,0 +1,103 @@
+// endohaptics-ros-bridge: endohaptics-bridge's loop (the same link options, bridge_app.hpp) with
+// the operator and the observers on ROS 1: the stylus from a CRTK device (<touch>/measured_cp) or
+// the 2016 phantom_omni driver (TF base -> tip), the EndoWrist's joint states, setpoints,
+// estimated forces, operating state and loop figures published, the stylus force on
+// <touch>/servo_cf (and omni1_force_feedback for the 2016 driver). docs/ros.md.
+#include <endohaptics/core/error.hpp>
+
+#include "../teleop_bridge/bridge_app.hpp"
+#include "ros1_node.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "endohaptics ROS bridge: a ROS stylus <-> sbRIO teleoperation with sensorless force "
+      "feedback; joint states, setpoints, forces and loop figures on ROS topics"};
+  bridge::Options opt;
+  bridge::add_link_options(app, opt);
+  std::string input = "crtk";
+  double input_timeout_ms = 100.0;
+  ros_bridge::StylusConfig stylus_config;
+  app.add_option("--input", input,
+                 "stylus: crtk (<touch>/measured_cp, geometry_msgs/PoseStamped, Touch frame) or "
+                 "phantom-omni (the 2016 driver: TF base -> tip, /omni1_joint_states)")
+      ->check(CLI::IsMember({"crtk", "phantom-omni"}))
+      ->capture_default_str();
+  app.add_option("--input-timeout", input_timeout_ms,
+                 "ms: a stylus older than this is a lost operator (the setpoint is held, the "
+                 "motors released per safety.policy)")
+      ->check(examples::number_in(1.0, 500.0))
+      ->capture_default_str();
+  app.add_option("--input-frame", stylus_config.frame,
+                 "crtk: the frame_id measured_cp must carry (default: any)");
+  app.add_option("--touch-namespace", stylus_config.topics.touch, "the CRTK stylus's namespace")
+      ->capture_default_str();
+  app.add_option("--robot-namespace", stylus_config.topics.robot,
+                 "the namespace of the EndoWrist's topics")
+      ->capture_default_str();
+  // ROS remappings (name:=other) and __ns/__name/__ip/__master are ROS's, not ours.
+  std::vector<std::string> args;
+  int ros_argc = argc;
+  ros::removeROSArgs(argc, argv, args);
+  std::vector<char*> cli;
+  for (auto& a : args) cli.push_back(a.data());
+  CLI11_PARSE(app, static_cast<int>(cli.size()), cli.data());
+
+  try {
+    if (bridge::check_options(app, opt)) return 0;
+    stylus_config.kind =
+        input == "crtk" ? ros_bridge::InputKind::crtk : ros_bridge::InputKind::phantom_omni;
+    stylus_config.timeout = std::chrono::duration_cast<std::chrono::nanoseconds>(
+        std::chrono::duration<double, std::milli>(input_timeout_ms));
+    opt.device = "ros " + input;
+    const endohaptics::files::BridgeConfig cfg = bridge::load_config(opt);
+
+    ros::init(ros_argc, argv, "endohaptics_bridge",
+              ros::init_options::NoSigintHandler | ros::init_options::NoRosout);
+    if (!ros::master::check()) {
+      throw endohaptics::Error("no ROS master at " + ros::master::getURI() +
+                               " (start roscore there, or set ROS_MASTER_URI)");
+    }
+    bridge::stop_on_signals();  // after ros::init: ours, not roscpp's
+    ros::NodeHandle nh;
+    ros_bridge::RosStylus stylus(nh, stylus_config);
+    ros_bridge::RosPublisher publisher(nh, stylus_config.topics,
+                                       stylus_config.kind == ros_bridge::InputKind::phantom_omni,
+                                       stylus_config.omni);
+    // Both threads start before the loop thread turns real-time (bridge_app.hpp): they stay
+    // SCHED_OTHER on every CPU.
+    ros::AsyncSpinner spinner(1);
+    spinner.start();
+    publisher.start();
+    fmt::print("ros-bridge: ROS master {}, this node {} ({}), input {}, input timeout {} ms\n",
+               ros::master::getURI(), ros::this_node::getName(), ros::network::getHost(), input,
+               input_timeout_ms);
+    fmt::print("ros-bridge: {} is phantom_omni/OmniFeedback md5 {}\n",
+               stylus_config.omni.force_feedback,
+               ros::message_traits::MD5Sum<phantom_omni::OmniFeedback>::value());
+    std::fflush(stdout);
+    endohaptics::SteadyClock clock;
+    const int status = bridge::run_bridge(stylus, clock, opt, cfg,
+                                          ros_bridge::RosTickObserver{&publisher, &stylus});
+    publisher.stop();
+    spinner.stop();
+    const auto& c = stylus.counters();
+    fmt::print(
+        "ros-bridge: input: used {} messages, refused non-finite {}, wrong frame {}, invalid "
+        "(stamp 0) {}, out of order {}, TF chain incomplete {}; joint states {}; lost {} times "
+        "({} ticks stale)\n",
+        c.used.load(), c.non_finite.load(), c.wrong_frame.load(), c.invalid.load(),
+        c.out_of_order.load(), c.no_chain.load(), c.joint_states.load(), c.losses.load(),
+        c.stale_ticks.load());
+    const auto p = publisher.counters();
+    fmt::print(
+        "ros-bridge: published {} ticks, {} dropped (ring full); stylus message -> setpoint on "
+        "the wire: {} samples, mean {:.3f} ms, p99 {:.2f} ms, max {:.3f} ms\n",
+        p.ticks, p.dropped, p.round_trips, p.round_trip_mean_ms, p.round_trip_p99_ms,
+        p.round_trip_max_ms);
+    ros::shutdown();
+    return status;
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "error: {}\n", e.what());
+    return 1;
+  }
+}
