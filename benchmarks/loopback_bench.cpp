@@ -59,6 +59,18 @@ protocol::SecureKey bench_key() {
   return protocol::SecureKey(k);
 }
 
+// The bench's v2 session settings (the rig name both sides use).
+protocol::InitiatorConfig console_config() {
+  protocol::InitiatorConfig c;
+  c.rig = protocol::make_rig_id("bench");
+  return c;
+}
+protocol::ResponderConfig robot_config() {
+  protocol::ResponderConfig c;
+  c.rig = protocol::make_rig_id("bench");
+  return c;
+}
+
 // The emulated sbRIO in its own thread, on 127.0.0.1, any free port; over protocol v2 when
 // `V2`.
 template <bool V2>
@@ -85,8 +97,7 @@ class EmulatorThread {
  private:
   Link* make_link() {
     if constexpr (V2) {
-      return &v2_.emplace(server_,
-                          protocol::SecureResponder<4>(bench_key(), protocol::random_session_id()));
+      return &v2_.emplace(server_, protocol::SecureResponder<4>(bench_key(), robot_config()));
     } else {
       return &server_;
     }
@@ -124,7 +135,7 @@ void run_loop(benchmark::State& st, nanoseconds period, nanoseconds busy_tail, b
                                  .remote_port = emulator->port()});
     std::optional<ClientV2> v2;
     if constexpr (V2) {
-      v2.emplace(udp, protocol::SecureInitiator<4>(bench_key(), protocol::random_session_id()));
+      v2.emplace(udp, protocol::SecureInitiator<4>(bench_key(), console_config()));
     }
     auto& transport = [&]() -> auto& {
       if constexpr (V2) {
@@ -185,6 +196,37 @@ void BM_Loopback_1kHz_v2(benchmark::State& st) {
   run_loop<true>(st, std::chrono::milliseconds(1), nanoseconds(0));
 }
 
+// The v2 handshake on loopback: from a new console's first send (its HELLO) to the first state
+// of the session, against the emulator thread: HELLO, WELCOME, the first setpoint, its state.
+void BM_Loopback_v2_handshake(benchmark::State& st) {
+  auto emulator = std::make_unique<EmulatorThread<true>>();
+  const auto setpoint = [] {
+    protocol::PacketCodec<4>::SetpointBytes b{};
+    (void)protocol::PacketCodec<4>::encode_setpoint({}, b);
+    return b;
+  }();
+  std::uint64_t sends = 0;
+  for (auto _ : st) {
+    st.PauseTiming();
+    transport::UdpTransport udp({.local_address = "127.0.0.1",
+                                 .remote_address = "127.0.0.1",
+                                 .remote_port = emulator->port()});
+    ClientV2 client(udp, protocol::SecureInitiator<4>(bench_key(), console_config()));
+    std::array<std::byte, 64> state{};
+    st.ResumeTiming();
+    for (;;) {
+      (void)client.send(setpoint);
+      ++sends;
+      if (client.receive(state, std::chrono::milliseconds(20)).status ==
+          transport::TransportStatus::ok) {
+        break;
+      }
+    }
+  }
+  st.counters["sends_per_handshake"] =
+      static_cast<double>(sends) / static_cast<double>(st.iterations());
+}
+
 // The floor: a bare absolute-deadline clock_nanosleep loop at 1 kHz on the same machine, its
 // period error measured the same way (LoopStats).
 void BM_Baseline_clock_nanosleep_1kHz(benchmark::State& st) {
@@ -231,6 +273,7 @@ BENCHMARK(BM_Loopback_1kHz_v2)
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+BENCHMARK(BM_Loopback_v2_handshake)->Unit(benchmark::kMicrosecond)->UseRealTime();
 BENCHMARK(BM_Loopback_max_rate)
     ->Arg(run_ticks(60000))
     ->Iterations(1)

@@ -1,13 +1,18 @@
 // PacketCodec (binary float32 big-endian, worksheet 3.2.2) against the 2016 JSON message it
 // replaced (listing 3.1), on the same 4-motor state, in the same run; and protocol v2
-// (SecureCodec: header + 2016 packet + keyed BLAKE2b-128 tag, issue 16) against the 2016 decode.
+// (SecureCodec: header + 2016 packet + keyed BLAKE2b-128 tag) against the 2016 decode, and the v2
+// session layer (handshake, per-packet exchange) against the bare codec.
 #include <benchmark/benchmark.h>
 
 #include <array>
+#include <chrono>
 #include <cstdint>
+#include <cstring>
 #include <endohaptics/protocol/packet_codec.hpp>
 #include <endohaptics/protocol/replay_window.hpp>
 #include <endohaptics/protocol/secure_codec.hpp>
+#include <endohaptics/protocol/secure_session.hpp>
+#include <stdexcept>
 #include <string>
 
 #include "legacy_json_codec.hpp"
@@ -210,6 +215,104 @@ void BM_SecureCodec_reject_forged_state(benchmark::State& st) {
   }
 }
 BENCHMARK(BM_SecureCodec_reject_forged_state);
+
+// ---- protocol v2 sessions: per packet and per handshake ----
+using endohaptics::protocol::HandshakeCodec;
+using Initiator = endohaptics::protocol::SecureInitiator<4>;
+using Responder = endohaptics::protocol::SecureResponder<4>;
+
+endohaptics::protocol::InitiatorConfig console_config() {
+  endohaptics::protocol::InitiatorConfig c;
+  c.rig = endohaptics::protocol::make_rig_id("bench");
+  return c;
+}
+endohaptics::protocol::ResponderConfig robot_config() {
+  endohaptics::protocol::ResponderConfig c;
+  c.rig = endohaptics::protocol::make_rig_id("bench");
+  return c;
+}
+
+// HELLO, WELCOME and both sides' key derivations at `now`: the console is then established.
+void handshake(Initiator& pc, Responder& robot, std::chrono::nanoseconds now) {
+  HandshakeCodec::Bytes hello{};
+  std::array<std::byte, Initiator::send_payload_size> got{};
+  std::array<std::byte, Initiator::receive_payload_size> state{};
+  if (!pc.hello_due(now, hello) || robot.open(hello, got, now) != SecureStatus::hello ||
+      pc.open(robot.take_reply(), state, now) != SecureStatus::welcome) {
+    throw std::runtime_error("handshake failed");
+  }
+}
+
+// One exchange of the session layer, per packet both ways: the console seals a setpoint, the
+// robot side verifies it (tag, session, window, order, freshness) and seals its state, the console
+// verifies that. Against the baseline below: the same four codec calls and two replay windows,
+// the per-packet work of the session layer before the handshake (its tags under the long-term
+// key, no freshness lookup).
+void BM_V2Session_exchange(benchmark::State& st) {
+  Initiator pc(bench_key(), console_config());
+  Responder robot(bench_key(), robot_config());
+  handshake(pc, robot, std::chrono::nanoseconds(0));
+  std::array<std::byte, Initiator::send_payload_size> setpoint{};
+  std::array<std::byte, Responder::send_payload_size> state{};
+  std::array<std::byte, Initiator::send_packet_size> sp{};
+  std::array<std::byte, Responder::send_packet_size> sp_state{};
+  std::int64_t t = 0;
+  for (auto _ : st) {
+    const std::chrono::nanoseconds now(t += 1000);
+    if (pc.seal(setpoint, sp) != SecureStatus::ok ||
+        robot.open(sp, setpoint, now) != SecureStatus::ok ||
+        robot.seal(state, sp_state) != SecureStatus::ok ||
+        pc.open(sp_state, state, now) != SecureStatus::ok) {
+      st.SkipWithError("exchange refused");
+      break;
+    }
+  }
+  st.SetItemsProcessed(st.iterations() * 2);
+}
+BENCHMARK(BM_V2Session_exchange);
+
+void BM_V2Codec_exchange_baseline(benchmark::State& st) {
+  const SecureKey key = bench_key();
+  std::array<std::byte, Secure::Legacy::setpoint_packet_size> setpoint{};
+  std::array<std::byte, Secure::Legacy::state_packet_size> state{};
+  std::array<std::byte, Secure::setpoint_packet_size> sp{};
+  std::array<std::byte, Secure::state_packet_size> sp_state{};
+  endohaptics::protocol::ReplayWindow robot_window, pc_window;
+  std::uint64_t sequence = 0;
+  for (auto _ : st) {
+    ++sequence;
+    SecureHeader h;
+    std::span<const std::byte> payload;
+    if (Secure::seal(key, {PacketType::setpoint, 1, sequence, 2, sequence - 1}, setpoint, sp) !=
+            SecureStatus::ok ||
+        Secure::open(key, PacketType::setpoint, sp, h, payload) != SecureStatus::ok ||
+        robot_window.check_and_accept(h.sequence) != endohaptics::protocol::WindowStatus::ok ||
+        Secure::seal(key, {PacketType::state, 2, sequence, 1, sequence}, state, sp_state) !=
+            SecureStatus::ok ||
+        Secure::open(key, PacketType::state, sp_state, h, payload) != SecureStatus::ok ||
+        pc_window.check_and_accept(h.sequence) != endohaptics::protocol::WindowStatus::ok) {
+      st.SkipWithError("exchange refused");
+      break;
+    }
+    std::memcpy(setpoint.data(), payload.data(), 1);
+  }
+  st.SetItemsProcessed(st.iterations() * 2);
+}
+BENCHMARK(BM_V2Codec_exchange_baseline);
+
+// The handshake's CPU cost: HELLO sealed, verified, WELCOME sealed, verified, four session keys
+// derived (the sessions are built outside the timing: their locked key slots are configuration).
+void BM_V2Handshake_cpu(benchmark::State& st) {
+  std::int64_t t = 0;
+  for (auto _ : st) {
+    st.PauseTiming();
+    Initiator pc(bench_key(), console_config());
+    Responder robot(bench_key(), robot_config());
+    st.ResumeTiming();
+    handshake(pc, robot, std::chrono::nanoseconds(t += 1'000'000));
+  }
+}
+BENCHMARK(BM_V2Handshake_cpu);
 
 void BM_ReplayWindow_check_accept(benchmark::State& st) {
   endohaptics::protocol::ReplayWindow window;

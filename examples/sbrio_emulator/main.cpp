@@ -23,6 +23,7 @@
 #include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "../cli_numbers.hpp"
 
@@ -174,10 +175,10 @@ int run(Transport& transport, Delayed& delayed, transport::UdpServerTransport& u
     }
   }
   const auto& c = emulator.counters();
-  std::uint64_t unbound = 0;
+  std::uint64_t sessions = 0;
   if constexpr (requires { transport.counters(); }) {
-    unbound = transport.counters().unbound;
-    fmt::print("sbrio-emulator: protocol v2 setpoints: {}\n",
+    sessions = transport.session().sessions();
+    fmt::print("sbrio-emulator: protocol v2 datagrams: {}\n",
                protocol::describe(transport.counters()));
   } else {
     fmt::print(
@@ -188,11 +189,10 @@ int run(Transport& transport, Delayed& delayed, transport::UdpServerTransport& u
   }
   // One count of refusals: the v2 layer's (never reached the emulator) and the 2016 payload's.
   fmt::print(
-      "sbrio-emulator: done after {:.1f} s: {} setpoint packets obeyed or answered, {} answered "
-      "with every motor disabled (unbound), {} rejected (protocol v2 {}; 2016 payload: wrong size "
-      "{}, non-finite {}, bad mask {}), {} stale dropped, {} transport errors, {} watchdog "
-      "trips\n",
-      std::chrono::duration<double>(clock.now() - start).count(), c.received, unbound,
+      "sbrio-emulator: done after {:.1f} s: {} setpoint packets obeyed, {} v2 sessions, {} "
+      "rejected (protocol v2 {}; 2016 payload: wrong size {}, non-finite {}, bad mask {}), {} "
+      "stale dropped, {} transport errors, {} watchdog trips\n",
+      std::chrono::duration<double>(clock.now() - start).count(), c.received, sessions,
       c.rejected + refused(transport), refused(transport), c.rejected_size, c.rejected_non_finite,
       c.rejected_mask, c.stale_dropped, c.transport_errors, c.watchdog_trips);
   if (delay_ms > 0 || jitter_ms > 0 || loss > 0) {
@@ -222,8 +222,9 @@ int main(int argc, char** argv) {
   double watchdog_ms = 100.0;
   bool quiet = false;
   double delay_ms = 0.0, jitter_ms = 0.0, loss = 0.0;
-  std::string wire = "2";  // --protocol: "2" (v2, authenticated) or "2016" (legacy)
-  std::string key_path;
+  std::string wire = "2";              // --protocol: "2" (v2, authenticated) or "2016" (legacy)
+  std::vector<std::string> key_paths;  // v2: the key in use, and its successor during a change
+  std::string rig_name = std::string(protocol::default_rig_name);
   std::string generate_key;
   std::string peer;              // --peer: 2016 mode, the only console obeyed
   double max_round_trip_ms = 0;  // --max-round-trip: v2 binding (0: derived)
@@ -269,13 +270,20 @@ int main(int argc, char** argv) {
                  "first peer's address and port are pinned)")
       ->check(CLI::IsMember({"2", "2016"}))
       ->capture_default_str();
-  app.add_option("--key", key_path, "protocol v2: the 32-byte key file (mode 0600)");
+  app.add_option("--key", key_paths,
+                 "protocol v2: the 32-byte key file (mode 0600); give it twice while a key is "
+                 "changed over (the key in use and its successor)");
+  app.add_option("--rig", rig_name,
+                 "protocol v2: this robot side's name (1-16 printable characters), bound into "
+                 "every session key: a console for another rig is refused")
+      ->capture_default_str();
   app.add_option("--peer", peer,
                  "protocol 2016: obey only the console at HOST:PORT (default: the first one "
                  "heard, released after --watchdog-ms of its silence)");
   app.add_option("--max-round-trip", max_round_trip_ms,
-                 "protocol v2: ms a binding setpoint may take to acknowledge a state (0: the "
-                 "watchdog + --delay + --jitter)")
+                 "protocol v2: the longest round trip granted, ms: a setpoint is obeyed only "
+                 "if the state it acknowledges answered a setpoint received at most this long "
+                 "ago (0: the watchdog + --delay + --jitter)")
       ->check(examples::number_in(0.0, 10000.0))
       ->capture_default_str();
   app.add_option("--generate-key", generate_key,
@@ -288,14 +296,21 @@ int main(int argc, char** argv) {
       fmt::print("sbrio-emulator: wrote a new key to {} (32 bytes, mode 0600)\n", generate_key);
       return 0;
     }
-    if (wire != "2016" && key_path.empty()) {
+    if (wire != "2016" && key_paths.empty()) {
       throw endohaptics::Error(
           "protocol v2 needs --key FILE (the key the bridge holds; make one with --generate-key "
           "FILE), or --protocol 2016 for the unauthenticated 2016 wire");
     }
     // Options that cannot apply are refused, never ignored.
-    if (wire == "2016" && !key_path.empty()) {
+    if (wire == "2016" && !key_paths.empty()) {
       throw endohaptics::Error("--key applies to protocol v2; --protocol 2016 has no key");
+    }
+    if (wire == "2016" && app.count("--rig") > 0) {
+      throw endohaptics::Error("--rig applies to protocol v2; --protocol 2016 has no session");
+    }
+    if (key_paths.size() > protocol::KeyRing::max_keys) {
+      throw endohaptics::Error("--key: at most 2 keys (the key in use and its successor), got " +
+                               std::to_string(key_paths.size()));
     }
     if (wire == "2016" && max_round_trip_ms > 0) {
       throw endohaptics::Error(
@@ -336,18 +351,26 @@ int main(int argc, char** argv) {
                                      watchdog_ms)
                        : "only " + udp_transport.peer_name() + " (--peer)");
     } else {
-      // A binding setpoint acknowledges a state answered at most this long ago: the watchdog,
-      // plus the delay this emulator adds to its answers (else no session binds beyond it).
-      const auto round_trip = max_round_trip_ms > 0
-                                  ? ms(max_round_trip_ms)
-                                  : config.watchdog_timeout + ms(delay_ms) + ms(jitter_ms);
-      secure.emplace(delayed, protocol::SecureResponder<4>(protocol::load_key_file(key_path),
-                                                           protocol::random_session_id(),
-                                                           config.watchdog_timeout, round_trip));
+      // The round trip granted: the watchdog plus the delay this emulator adds to its answers
+      // (else no setpoint would be fresh beyond it), or --max-round-trip.
+      protocol::ResponderConfig session;
+      session.rig = protocol::make_rig_id(rig_name);
+      session.max_round_trip = max_round_trip_ms > 0
+                                   ? ms(max_round_trip_ms)
+                                   : config.watchdog_timeout + ms(delay_ms) + ms(jitter_ms);
+      session.expiry = config.watchdog_timeout;  // a silent console's session ends with the motors
+      protocol::KeyRing keys;
+      std::string ids;
+      for (const auto& path : key_paths) {
+        const protocol::SecureKey key = protocol::load_key_file(path);
+        keys.add(key);
+        ids += (ids.empty() ? "" : ", ") + path + " (id " + protocol::to_hex(key.id()) + ")";
+      }
+      secure.emplace(delayed, protocol::SecureResponder<4>(keys, session));
       fmt::print(
-          "sbrio-emulator: protocol v2: obeys the console holding the key; binding "
-          "accepts round trips up to {:.0f} ms\n",
-          std::chrono::duration<double, std::milli>(round_trip).count());
+          "sbrio-emulator: protocol v2: rig '{}', keys {}; answers only a fresh handshake; round "
+          "trips up to {:.0f} ms\n",
+          rig_name, ids, std::chrono::duration<double, std::milli>(session.max_round_trip).count());
     }
     const RunOptions opts{truth_path,  truth_period_ms, duration, watchdog_ms, motors,
                           environment, quiet,           delay_ms, jitter_ms,   loss};

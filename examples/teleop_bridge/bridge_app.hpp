@@ -70,8 +70,9 @@ struct Options {
   double busy_wait_us = 0.0;
   std::string protocol = "2";  // "2": v2 (authenticated, docs/protocol.md); "2016": legacy
   std::string key_path;        // v2: the pre-shared key file
-  std::string generate_key;    // write a new key file and exit
-  int max_answer_lag = 0;      // v2: a state may answer a setpoint this many older than the newest
+  std::string rig = std::string(protocol::default_rig_name);  // v2: the robot side's name
+  std::string generate_key;                                   // write a new key file and exit
+  int max_answer_lag = 0;  // v2: a state may answer a setpoint this many older than the newest
 };
 
 // The end of one second of the loop: a ~100-byte copy made on the loop thread (no allocation,
@@ -97,6 +98,7 @@ inline tp::LinkEvidence evidence(bool v2, const protocol::SecureCounters& c, std
           .wrong_size = c.wrong_size,
           .wrong_session = c.wrong_session,
           .late = c.stale_answer,
+          .sessions = c.handshakes,
           .enable_mask = enabled,
           .last_active = active};
 }
@@ -105,8 +107,16 @@ inline tp::LinkEvidence evidence(bool v2, const protocol::SecureCounters& c, std
 constexpr double min_rate_hz = 1.0;
 constexpr double max_rate_hz = 100000.0;
 constexpr double max_duration_s = 1e7;  // ~116 days; 0 runs until SIGINT
-// Setpoints a v2 answer may lag: 10 s at 1 kHz, within SecureTransport's round-trip history.
-constexpr int max_answer_lag = 10000;
+// Setpoints a v2 answer may lag: what the session layer can look back over (16 s at 1 kHz).
+constexpr int max_answer_lag = static_cast<int>(protocol::packet_history) - 1;
+
+// The longest an answer may take on this link: --max-answer-lag + 1 periods, plus the activation
+// allowance. It bounds the wait for a motor to report active, and it is the round trip a v2
+// console asks the robot side to grant (a setpoint older than that is never obeyed).
+inline double answer_allowance_s(const Options& opt, double tick_s) {
+  return static_cast<double>(opt.max_answer_lag + 1) * tick_s +
+         tp::SafetyConfig{}.activation_timeout;
+}
 
 inline std::pair<std::string, std::uint16_t> parse_endpoint(const std::string& s,
                                                             const std::string& option = "--sbrio") {
@@ -174,9 +184,7 @@ int run_loop(Transport& transport, Device& device, endohaptics::SteadyClock& clo
           .count();
   loop_config.safety.activation_timeout =
       std::min(tp::SafetyBounds::max_activation_timeout,
-               std::max(loop_config.safety.activation_timeout,
-                        static_cast<double>(opt.max_answer_lag + 1) * tick_s +
-                            tp::SafetyConfig{}.activation_timeout));
+               std::max(loop_config.safety.activation_timeout, answer_allowance_s(opt, tick_s)));
   if (opt.passivity == "tdpa") {  // the robot port is booked one round trip late, in ticks
     loop_config.passivity.mode = tp::PassivityMode::tdpa;
     const double period_ms =
@@ -381,11 +389,21 @@ int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& o
         "FILE), or --protocol 2016 for the unauthenticated 2016 wire");
   }
   const protocol::SecureKey key = protocol::load_key_file(opt.key_path);
+  protocol::InitiatorConfig session;
+  session.rig = protocol::make_rig_id(opt.rig);
+  session.max_answer_lag = static_cast<std::uint64_t>(opt.max_answer_lag);
+  const double tick_s = opt.rate == "max" ? 1e-3 : 1.0 / std::stod(opt.rate);
+  session.max_round_trip =
+      std::min<nanoseconds>(protocol::max_configurable_round_trip,
+                            std::chrono::duration_cast<nanoseconds>(
+                                std::chrono::duration<double>(answer_allowance_s(opt, tick_s))));
   transport::UdpTransport udp_transport(udp);
-  transport::SecureTransport secure(
-      udp_transport, protocol::SecureInitiator<4>(key, protocol::random_session_id(),
-                                                  static_cast<std::uint64_t>(opt.max_answer_lag)));
-  fmt::print("bridge: protocol v2 (authenticated, key {})\n", opt.key_path);
+  transport::SecureTransport secure(udp_transport, protocol::SecureInitiator<4>(key, session));
+  fmt::print(
+      "bridge: protocol v2 (authenticated, key {} id {}, rig '{}'; asks for round trips up to "
+      "{:.0f} ms)\n",
+      opt.key_path, protocol::to_hex(key.id()), opt.rig,
+      std::chrono::duration<double, std::milli>(session.max_round_trip).count());
   return run_loop(secure, device, clock, opt, cfg, host, port, observer);
 }
 
@@ -424,6 +442,9 @@ inline void add_link_options(CLI::App& app, Options& opt) {
       ->check(CLI::IsMember({"2", "2016"}))
       ->capture_default_str();
   app.add_option("--key", opt.key_path, "protocol v2: the 32-byte key file (mode 0600)");
+  app.add_option("--rig", opt.rig,
+                 "protocol v2: the robot side's name (its --rig), bound into every session key")
+      ->capture_default_str();
   app.add_option("--max-answer-lag", opt.max_answer_lag,
                  "protocol v2: accept a state answering a setpoint up to N older than the newest "
                  "(0: only the newest; raise it on a link slower than one period, e.g. the "
@@ -445,6 +466,11 @@ inline bool check_options(const CLI::App& app, const Options& opt) {
     throw endohaptics::Error(
         "--max-answer-lag applies to protocol v2 (its states name the setpoint they answer); "
         "the 2016 wire cannot tell");
+  }
+  if (opt.protocol == "2016" && app.count("--rig") > 0) {
+    throw endohaptics::Error(
+        "--rig applies to protocol v2 (the session keys bind the robot side's name); the 2016 "
+        "wire has no session");
   }
   if (opt.passivity != "tdpa" && app.count("--passivity-round-trip") > 0) {
     throw endohaptics::Error("--passivity-round-trip applies to --passivity tdpa only");

@@ -1,12 +1,19 @@
-// Fuzz target for protocol v2 (SecureCodec, SecureInitiator, SecureResponder, ReplayWindow).
-// Byte 0 of the input selects how the rest is used:
-//   even: the rest is a datagram as received, checked as a setpoint and as a state by the codec
-//         and by both session sides (almost always `forged`: the tag guards everything);
-//   odd:  the rest is re-tagged with the fuzz key first, so the fuzzer reaches what lies behind
-//         the tag: version, type, sessions, the replay window and the 2016 payload checks.
+// Fuzz target for protocol v2 (SecureCodec, HandshakeCodec, SecureInitiator, SecureResponder,
+// ReplayWindow). Byte 0 of the input selects how the rest is used:
+//   0 mod 3: the rest is a datagram as received: checked as a setpoint, a state, a HELLO and a
+//            WELCOME by the codecs, and by fresh and connected session sides (almost always
+//            `forged`: the tag guards everything);
+//   1 mod 3: the rest is re-tagged with the long-term key first, so the fuzzer reaches what lies
+//            behind it: version, type, the handshake's fields (key id, rig, timestamp, padding),
+//            the sessions' checks and the 2016 payload checks;
+//   2 mod 3: the rest is a script of operations on a console and a robot side over a link the
+//            fuzzer controls (seal, deliver, reorder, replay, drop, delay, rekey, restart): it
+//            reaches behind the session keys the way an attacker on the path would.
 // Invariants (abort on violation): anything that opens re-seals to the same bytes; a refused
-// datagram changes no output and no session state; an unbound setpoint is delivered with every
-// motor disabled.
+// datagram changes no output; the robot side never obeys a setpoint older than one it obeyed in
+// the same session, nor anything outside a live session but the first setpoint of a new one, nor
+// anything before a handshake; a WELCOME is never larger than its HELLO, and nothing but a HELLO
+// is ever answered by one.
 #include <endohaptics/protocol/secure_session.hpp>
 
 #include <algorithm>
@@ -15,12 +22,16 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <span>
+#include <vector>
 
 namespace {
 
 namespace protocol = endohaptics::protocol;
 using Codec = protocol::SecureCodec<4>;
+using Handshake = protocol::HandshakeCodec;
+using namespace std::chrono_literals;
 
 const protocol::SecureKey& fuzz_key() {
   static const protocol::SecureKey key = [] {
@@ -35,28 +46,31 @@ void require(bool ok) {
   if (!ok) std::abort();
 }
 
+protocol::InitiatorConfig console_config() {
+  protocol::InitiatorConfig c;
+  c.rig = protocol::make_rig_id("fuzz");
+  return c;
+}
+
+protocol::ResponderConfig robot_config() {
+  protocol::ResponderConfig c;
+  c.rig = protocol::make_rig_id("fuzz");
+  c.max_round_trip = 50ms;
+  return c;
+}
+
 template <typename Session>
-void check_session(Session& session, std::span<const std::byte> bytes, std::uint64_t now_ns) {
-  const auto window = session.window();
-  const auto own = session.session();
+protocol::SecureStatus check_session(Session& session, std::span<const std::byte> bytes,
+                                     std::chrono::nanoseconds now) {
   std::array<std::byte, Session::receive_payload_size> payload{};
   payload.fill(std::byte{0xA5});
   const auto before = payload;
-  protocol::SecureStatus s;
-  if constexpr (requires { session.open(bytes, payload, std::chrono::nanoseconds(0)); }) {
-    s = session.open(bytes, payload, std::chrono::nanoseconds(now_ns));
-  } else {
-    s = session.open(bytes, payload);
-  }
-  if (s != protocol::SecureStatus::ok && s != protocol::SecureStatus::unbound) {
-    require(payload == before);
-    require(session.window() == window);
-    require(session.session() == own);
-  }
-  if (s == protocol::SecureStatus::unbound) require(payload.back() == std::byte{0});
+  const protocol::SecureStatus s = session.open(bytes, payload, now);
+  if (s != protocol::SecureStatus::ok) require(payload == before);
+  return s;
 }
 
-void check_codec(std::span<const std::byte> bytes) {
+void check_codecs(std::span<const std::byte> bytes) {
   for (const auto type : {protocol::PacketType::setpoint, protocol::PacketType::state}) {
     protocol::SecureHeader header{};
     header.session = 0x5A5A;
@@ -72,60 +86,149 @@ void check_codec(std::span<const std::byte> bytes) {
     require(Codec::seal(fuzz_key(), header, payload, out) == protocol::SecureStatus::ok);
     require(std::memcmp(out.data(), bytes.data(), out.size()) == 0);
   }
+  protocol::Hello hello{};
+  if (Handshake::decode(fuzz_key(), bytes, hello) == protocol::SecureStatus::ok) {
+    Handshake::Bytes again{};
+    Handshake::encode(fuzz_key(), hello, again);
+    require(std::memcmp(again.data(), bytes.data(), again.size()) == 0);
+  }
+  protocol::Welcome welcome{};
+  if (Handshake::decode(fuzz_key(), bytes, welcome) == protocol::SecureStatus::ok) {
+    Handshake::Bytes again{};
+    Handshake::encode(fuzz_key(), welcome, again);
+    require(std::memcmp(again.data(), bytes.data(), again.size()) == 0);
+  }
 }
 
-struct Sessions {
-  protocol::SecureInitiator<4> pc;
-  protocol::SecureResponder<4> sbrio;
+// A console and a robot side, connected at time 0 (one setpoint obeyed, its state taken) or not.
+struct Pair {
+  protocol::SecureInitiator<4> pc{fuzz_key(), console_config()};
+  protocol::SecureResponder<4> robot{fuzz_key(), robot_config()};
+
+  void connect(std::chrono::nanoseconds now) {
+    Handshake::Bytes hello{};
+    require(pc.hello_due(now, hello));
+    std::array<std::byte, Codec::Legacy::setpoint_packet_size> got{};
+    require(robot.open(hello, got, now) == protocol::SecureStatus::hello);
+    const auto welcome = robot.take_reply();
+    require(welcome.size() == hello.size());
+    std::array<std::byte, Codec::Legacy::state_packet_size> state{};
+    require(pc.open(welcome, state, now) == protocol::SecureStatus::welcome);
+  }
 };
 
-// Three exchanges of all-zero 2016 packets (valid: positions 0, every motor disabled): the first
-// is answered unbound, the second binds, the third is obeyed.
-Sessions bound_sessions() {
-  Sessions s{protocol::SecureInitiator<4>(fuzz_key(), 0x11),
-             protocol::SecureResponder<4>(fuzz_key(), 0x22)};
+// The script mode: the robot side's obedience is checked against what the console sent.
+void run_script(std::span<const std::byte> script) {
+  Pair p;
+  std::vector<std::vector<std::byte>> to_robot, to_console, recorded;
+  std::chrono::nanoseconds now{0};
+  // Per robot session: the highest setpoint sequence obeyed.
+  std::uint64_t robot_sessions = 0, highest = 0;
   const std::array<std::byte, Codec::Legacy::setpoint_packet_size> setpoint{};
   const std::array<std::byte, Codec::Legacy::state_packet_size> state{};
-  std::array<std::byte, Codec::setpoint_packet_size> to_sbrio{};
-  std::array<std::byte, Codec::state_packet_size> to_pc{};
-  std::array<std::byte, Codec::Legacy::setpoint_packet_size> got_setpoint{};
-  std::array<std::byte, Codec::Legacy::state_packet_size> got_state{};
-  for (int i = 0; i < 3; ++i) {
-    require(s.pc.seal(setpoint, to_sbrio) == protocol::SecureStatus::ok);
-    const auto heard = s.sbrio.open(to_sbrio, got_setpoint, std::chrono::nanoseconds(0));
-    require(heard == (i == 0 ? protocol::SecureStatus::unbound : protocol::SecureStatus::ok));
-    require(s.sbrio.seal(state, to_pc) == protocol::SecureStatus::ok);
-    require(s.pc.open(to_pc, got_state) == protocol::SecureStatus::ok);
+  auto deliver_to_robot = [&](const std::vector<std::byte>& d) {
+    const bool was_live = p.robot.live_at(now);
+    const auto s = check_session(p.robot, d, now);
+    if (s == protocol::SecureStatus::ok) {
+      // Obeyed only in a live session, or as the first setpoint of a new one.
+      require(was_live || p.robot.sessions() != robot_sessions);
+      if (p.robot.sessions() != robot_sessions) {
+        robot_sessions = p.robot.sessions();
+        highest = 0;
+      }
+      const auto top = p.robot.window().top();
+      require(top > highest);  // strictly newer than every setpoint obeyed in this session
+      highest = top;
+    }
+    if (s == protocol::SecureStatus::hello) {
+      const auto reply = p.robot.take_reply();
+      require(reply.empty() || reply.size() == d.size());
+      if (!reply.empty()) to_console.emplace_back(reply.begin(), reply.end());
+    } else {
+      require(p.robot.take_reply().empty());
+    }
+  };
+  for (const std::byte b : script) {
+    const unsigned op = std::to_integer<unsigned>(b);
+    switch (op % 9) {
+      case 0: {  // the console's tick: a HELLO when due, then a setpoint
+        Handshake::Bytes hello{};
+        if (p.pc.hello_due(now, hello)) to_robot.emplace_back(hello.begin(), hello.end());
+        std::array<std::byte, Codec::setpoint_packet_size> out{};
+        if (p.pc.seal(setpoint, out) == protocol::SecureStatus::ok) {
+          to_robot.emplace_back(out.begin(), out.end());
+        }
+        break;
+      }
+      case 1:  // deliver the oldest datagram to the robot side (recorded by the attacker)
+      case 2:  // deliver one out of order
+        if (!to_robot.empty()) {
+          const std::size_t i = op % 9 == 1 ? 0 : (op / 9) % to_robot.size();
+          recorded.push_back(to_robot[i]);
+          deliver_to_robot(to_robot[i]);
+          to_robot.erase(to_robot.begin() + static_cast<std::ptrdiff_t>(i));
+        }
+        break;
+      case 3:  // replay a recorded datagram
+        if (!recorded.empty()) deliver_to_robot(recorded[(op / 9) % recorded.size()]);
+        break;
+      case 4:  // time passes: 1..28 ms
+        now += std::chrono::milliseconds(1 + op / 9);
+        break;
+      case 5: {  // the robot answers the setpoint it obeyed last
+        std::array<std::byte, Codec::state_packet_size> out{};
+        if (p.robot.seal(state, out) == protocol::SecureStatus::ok) {
+          to_console.emplace_back(out.begin(), out.end());
+        }
+        break;
+      }
+      case 6:  // deliver to the console, oldest first
+        if (!to_console.empty()) {
+          (void)check_session(p.pc, to_console.front(), now);
+          to_console.erase(to_console.begin());
+        }
+        break;
+      case 7:  // drop what is in flight
+        (op / 9) % 2 == 0 ? to_robot.clear() : to_console.clear();
+        break;
+      case 8:  // the robot side restarts: it keeps nothing
+        if (op / 9 == 0) {
+          p.robot = protocol::SecureResponder<4>(fuzz_key(), robot_config());
+          robot_sessions = 0;
+          highest = 0;
+        }
+        break;
+    }
   }
-  require(s.sbrio.bound() && s.sbrio.peer_session() == 0x11 && s.pc.peer_session() == 0x22);
-  return s;
 }
 
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size == 0) return 0;
-  const bool retag = (data[0] & 1u) != 0;
-  std::array<std::byte, 256> buffer{};
+  const unsigned mode = data[0] % 3u;
+  std::array<std::byte, 512> buffer{};
   const std::size_t n = std::min(size - 1, buffer.size());
   std::memcpy(buffer.data(), data + 1, n);
   auto bytes = std::span<std::byte>(buffer.data(), n);
-  if (retag && n > Codec::tag_size) {
+  if (mode == 2) {
+    run_script(bytes);
+    return 0;
+  }
+  if (mode == 1 && n > Codec::tag_size) {
     fuzz_key().tag(bytes.first(n - Codec::tag_size),
                    bytes.subspan(n - Codec::tag_size).first<Codec::tag_size>());
   }
-  check_codec(bytes);
-  // Sessions in a known state (a PC that has sent three setpoints and bound sbRIO session 0x22,
-  // an sbRIO bound to PC session 0x11 at time 0, sequence up to 3) and fresh ones; the sbRIO
-  // side sees the datagram at a time taken from byte 0, sometimes past its 100 ms expiry.
-  static const Sessions bound = bound_sessions();
-  static const Sessions fresh{protocol::SecureInitiator<4>(fuzz_key(), 0x11),
-                              protocol::SecureResponder<4>(fuzz_key(), 0x22)};
-  const std::uint64_t now = static_cast<std::uint64_t>(data[0] >> 1) * 2'000'000;  // 0..254 ms
-  for (const Sessions* start : {&bound, &fresh}) {
-    Sessions s = *start;
-    check_session(s.pc, bytes, 0);
-    check_session(s.sbrio, bytes, now);
-  }
+  check_codecs(bytes);
+  // Fresh and connected sides; the datagram arrives at a time from byte 0 (0..170 ms), sometimes
+  // past the robot side's 100 ms expiry.
+  const auto now = std::chrono::milliseconds(data[0] / 3u * 2u);
+  Pair fresh;
+  (void)check_session(fresh.pc, bytes, now);
+  require(check_session(fresh.robot, bytes, now) != protocol::SecureStatus::ok);
+  Pair connected;
+  connected.connect(0ms);
+  (void)check_session(connected.pc, bytes, now);
+  (void)check_session(connected.robot, bytes, now);
   return 0;
 }

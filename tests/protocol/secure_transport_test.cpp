@@ -50,10 +50,37 @@ Legacy::StateBytes state_bytes() {
   return b;
 }
 
+protocol::InitiatorConfig console_config() {
+  protocol::InitiatorConfig c;
+  c.rig = protocol::make_rig_id("bench");
+  return c;
+}
+
+protocol::ResponderConfig robot_config() {
+  protocol::ResponderConfig c;
+  c.rig = protocol::make_rig_id("bench");
+  c.expiry = std::chrono::seconds(60);
+  return c;
+}
+
 struct Pair {
   Link link;
-  PcSide pc{link.a(), protocol::SecureInitiator<4>(key(), 0xAAAA)};
-  SbrioSide sbrio{link.b(), protocol::SecureResponder<4>(key(), 0xBBBB, std::chrono::hours(1))};
+  PcSide pc{link.a(), protocol::SecureInitiator<4>(key(), console_config())};
+  SbrioSide sbrio{link.b(), protocol::SecureResponder<4>(key(), robot_config())};
+
+  // The handshake through the transports: the first send carries the HELLO only, the robot's
+  // receive answers it (silence to its caller), the console's receive takes the WELCOME.
+  void connect() {
+    REQUIRE(pc.send(setpoint_bytes(0x0F)) == transport::TransportStatus::ok);
+    REQUIRE(link.a_to_b().size() == 1);  // the HELLO, no setpoint
+    CHECK(pc.held_before_session() == 1);
+    std::array<std::byte, Legacy::setpoint_packet_size + 1> in{};
+    REQUIRE(sbrio.receive(in, 0ns).status == transport::TransportStatus::timeout);
+    REQUIRE(link.b_to_a().size() == 1);  // the WELCOME
+    std::array<std::byte, Legacy::state_packet_size + 1> back{};
+    REQUIRE(pc.receive(back, 0ns).status == transport::TransportStatus::timeout);
+    REQUIRE(pc.session().established());
+  }
 
   // One exchange; returns the mask the sbRIO side delivered.
   std::uint8_t exchange(std::uint8_t mask) {
@@ -73,20 +100,62 @@ struct Pair {
 
 }  // namespace
 
-TEST_CASE("SecureTransport: carries 2016 packets, the first setpoint arrives with motors off") {
+TEST_CASE("SecureTransport: shakes hands, then carries 2016 packets, each obeyed") {
   Pair p;
-  CHECK(p.exchange(0x0F) == 0);     // unbound: answered, not obeyed
-  CHECK(p.exchange(0x0F) == 0x0F);  // bound
+  p.connect();
+  CHECK(p.exchange(0x0F) == 0x0F);
   CHECK(p.exchange(0x05) == 0x05);
   CHECK(p.sbrio.counters().accepted == 2);
-  CHECK(p.sbrio.counters().unbound == 1);
-  CHECK(p.pc.counters().accepted == 3);
+  CHECK(p.sbrio.counters().handshakes == 1);
+  CHECK(p.pc.counters().handshakes == 1);
+  CHECK(p.pc.counters().accepted == 2);
   CHECK(p.pc.counters().rejected() == 0);
+  CHECK(p.sbrio.counters().rejected() == 0);
+}
+
+TEST_CASE("SecureTransport: the robot side answers nothing but a fresh HELLO") {
+  Pair p;
+  p.connect();
+  (void)p.exchange(0x0F);
+  // Record the HELLO and a setpoint; a new robot side (restarted) meets them with a new console
+  // silent: the setpoint is not answered, the HELLO's WELCOME opens keys the recording lacks.
+  Link other;
+  PcSide pc2{other.a(), protocol::SecureInitiator<4>(key(), console_config())};
+  REQUIRE(pc2.send(setpoint_bytes(0x0F)) == transport::TransportStatus::ok);
+  std::array<std::byte, 128> hello{};
+  std::size_t size = 0;
+  bool truncated = false;
+  REQUIRE(other.a_to_b().pop(hello, size, truncated));
+  REQUIRE(size == protocol::HandshakeCodec::packet_size);
+  REQUIRE(p.pc.send(setpoint_bytes(0x0F)) == transport::TransportStatus::ok);
+  std::array<std::byte, 128> setpoint{};
+  std::size_t setpoint_size = 0;
+  REQUIRE(p.link.a_to_b().pop(setpoint, setpoint_size, truncated));
+  SbrioSide fresh{other.b(), protocol::SecureResponder<4>(key(), robot_config())};
+  std::array<std::byte, 32> in{};
+  other.a_to_b().push(std::span<const std::byte>(setpoint.data(), setpoint_size));
+  CHECK(fresh.receive(in, 0ns).status == transport::TransportStatus::timeout);
+  CHECK(fresh.counters().no_session == 1);
+  CHECK(other.b_to_a().size() == 0);  // nothing answered, nothing reflected
+  other.a_to_b().push(std::span<const std::byte>(hello.data(), size));
+  CHECK(fresh.receive(in, 0ns).status == transport::TransportStatus::timeout);
+  REQUIRE(other.b_to_a().size() == 1);
+  std::array<std::byte, 128> welcome{};
+  std::size_t welcome_size = 0;
+  REQUIRE(other.b_to_a().pop(welcome, welcome_size, truncated));
+  CHECK(welcome_size == size);  // no larger than the request
+  // The same HELLO again, and again: no second WELCOME within min_welcome_gap.
+  for (int i = 0; i < 10; ++i) other.a_to_b().push(std::span<const std::byte>(hello.data(), size));
+  CHECK(fresh.receive(in, 0ns).status == transport::TransportStatus::timeout);
+  CHECK(other.b_to_a().size() <= 1);
+  other.a_to_b().push(std::span<const std::byte>(setpoint.data(), setpoint_size));
+  CHECK(fresh.receive(in, 0ns).status == transport::TransportStatus::timeout);
+  CHECK(fresh.counters().accepted == 0);
 }
 
 TEST_CASE("SecureTransport: forgeries and replays never reach the filter, all-forged is silence") {
   Pair p;
-  (void)p.exchange(0);
+  p.connect();
   (void)p.exchange(0x0F);
   // Capture a valid setpoint on the wire, deliver it, then replay it and flip bits in copies.
   REQUIRE(p.pc.send(setpoint_bytes(0x0F)) == transport::TransportStatus::ok);
@@ -127,7 +196,7 @@ TEST_CASE("SecureTransport: forgeries and replays never reach the filter, all-fo
 
 TEST_CASE("SecureTransport: a valid packet behind forged ones still gets through") {
   Pair p;
-  (void)p.exchange(0);
+  p.connect();
   (void)p.exchange(0x0F);
   REQUIRE(p.pc.send(setpoint_bytes(0x03)) == transport::TransportStatus::ok);
   std::array<std::byte, 67> junk{};
@@ -141,6 +210,7 @@ TEST_CASE("SecureTransport: a valid packet behind forged ones still gets through
 
 TEST_CASE("SecureTransport: a wrong-size 2016 payload is not sent, a short buffer is refused") {
   Pair p;
+  p.connect();
   std::array<std::byte, 16> short_payload{};
   CHECK(p.pc.send(short_payload) == transport::TransportStatus::error);
   CHECK(p.link.a_to_b().size() == 0);
@@ -151,7 +221,7 @@ TEST_CASE("SecureTransport: a wrong-size 2016 payload is not sent, a short buffe
 
 TEST_CASE("SecureTransport: exchanges allocate nothing") {
   Pair p;
-  (void)p.exchange(0);
+  p.connect();
   const auto sp = setpoint_bytes(0x0F);
   const auto st = state_bytes();
   const long allocations = endohaptics::test::allocations_during([&] {

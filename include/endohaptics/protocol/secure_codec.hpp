@@ -13,16 +13,19 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <memory>
 #include <span>
 #include <string_view>
+#include <utility>
 
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/protocol/packet_codec.hpp"
+#include "endohaptics/protocol/secure_memory.hpp"
 
 namespace endohaptics::protocol {
 
-//! Outcome of a v2 seal, open or session check. On anything but `ok` (and `unbound`, which
-//! delivers a setpoint with every motor disabled) the caller's outputs are left untouched.
+//! Outcome of a v2 seal, open or session check. On anything but `ok` (and the handshake's
+//! `hello` / `welcome`) the caller's outputs are left untouched.
 enum class SecureStatus : std::uint8_t {
   ok = 0,         //!< authentic, fresh, in session: use it
   wrong_size,     //!< datagram length differs from the v2 packet size of the expected type
@@ -32,10 +35,16 @@ enum class SecureStatus : std::uint8_t {
   wrong_session,  //!< authentic, but for another or an earlier session (or another peer's run)
   replayed,       //!< authentic, in the replay window and already accepted (duplicate, replay)
   too_old,        //!< authentic, below the replay window (or sequence number 0)
-  stale_answer,   //!< authentic state answering an older setpoint than the newest sent
-  unbound,        //!< sbRIO side: authentic setpoint of a session not yet bound: motors disabled
-  bad_payload,    //!< authentic, but the 2016 payload does not decode (NaN, mask bits)
-  exhausted,      //!< send: the session's 2^64 - 1 sequence numbers are used up
+  //! authentic, but answers too old: a state answering an older setpoint than the newest sent
+  //! (allowed lag exceeded), or a setpoint acknowledging a state older than the round trip bound
+  stale_answer,
+  bad_payload,  //!< authentic, but the 2016 payload does not decode (NaN, mask bits)
+  exhausted,    //!< send: the session's 2^64 - 1 sequence numbers are used up
+  hello,        //!< robot side: an authentic, fresh handshake request: answer with a welcome
+  welcome,      //!< console side: the robot's welcome to this attempt: a new session's keys
+  no_session,   //!< a data packet while no session (nor a handshake) holds keys to check it
+  wrong_key,    //!< a handshake naming a key id this side does not hold (or revoked)
+  wrong_rig,    //!< an authentic handshake for another rig (robot) identity
 };
 
 //! Human-readable name of a status, for logs and counters.
@@ -59,12 +68,20 @@ enum class SecureStatus : std::uint8_t {
       return "older than the replay window";
     case SecureStatus::stale_answer:
       return "answers an older setpoint";
-    case SecureStatus::unbound:
-      return "session not bound: motors disabled";
     case SecureStatus::bad_payload:
       return "bad 2016 payload";
     case SecureStatus::exhausted:
       return "sequence numbers exhausted";
+    case SecureStatus::hello:
+      return "handshake request";
+    case SecureStatus::welcome:
+      return "handshake answer";
+    case SecureStatus::no_session:
+      return "no session";
+    case SecureStatus::wrong_key:
+      return "unknown key id";
+    case SecureStatus::wrong_rig:
+      return "another rig";
   }
   return "unknown status";
 }
@@ -74,6 +91,8 @@ enum class SecureStatus : std::uint8_t {
 enum class PacketType : std::uint8_t {
   setpoint = 1,  //!< PC -> sbRIO
   state = 2,     //!< sbRIO -> PC
+  hello = 3,     //!< PC -> sbRIO: handshake request (protocol/handshake.hpp)
+  welcome = 4,   //!< sbRIO -> PC: handshake answer (protocol/handshake.hpp)
 };
 
 //! The v2 header fields (bytes 0..33 of every packet).
@@ -90,8 +109,14 @@ struct SecureHeader {
   friend bool operator==(const SecureHeader&, const SecureHeader&) = default;
 };
 
-//! A 32-byte pre-shared key, held as libsodium's keyed BLAKE2b state (so a packet costs the
-//! compression of its own bytes only). Wiped on destruction. Never printed.
+//! Bytes of a key id: the first 8 bytes of the key's keyed BLAKE2b of "endohaptics v2 key id".
+inline constexpr std::size_t key_id_size = 8;
+//! A key id (not secret: it names a key without revealing it; docs/protocol.md, "Key ids").
+using KeyId = std::array<std::byte, key_id_size>;
+
+//! A 32-byte key, held as libsodium's keyed BLAKE2b states (so a packet costs the compression of
+//! its own bytes only) in one LockedBox: locked in RAM, out of core dumps, wiped when the last
+//! handle goes. Copies share that one box (one copy of the secret in memory). Never printed.
 class SecureKey {
  public:
   static constexpr std::size_t size = 32;      //!< bytes of key (crypto_generichash_KEYBYTES)
@@ -99,19 +124,48 @@ class SecureKey {
   static_assert(size >= crypto_generichash_KEYBYTES_MIN && size <= crypto_generichash_KEYBYTES_MAX);
   static_assert(tag_size >= crypto_generichash_BYTES_MIN);
 
-  //! Configuration time: initialises libsodium and keys the hash. Throws Error if libsodium
-  //! cannot be initialised.
-  explicit SecureKey(std::span<const std::byte, size> bytes) {
-    if (sodium_init() < 0) ENDOHAPTICS_THROW(Error("SecureKey: libsodium failed to initialise"));
-    crypto_generichash_init(&keyed_, as_uchar(bytes.data()), size, tag_size);
+  //! Configuration time: initialises libsodium, allocates the locked box and keys the hash.
+  //! Throws Error if libsodium cannot be initialised or locked memory cannot be had.
+  explicit SecureKey(std::span<const std::byte, size> bytes)
+      : states_(std::make_shared<LockedBox<States>>()) {
+    rekey(bytes);
   }
-  SecureKey(const SecureKey&) = default;             //!< copies the keyed state
-  SecureKey& operator=(const SecureKey&) = default;  //!< copies the keyed state
-  ~SecureKey() { sodium_memzero(&keyed_, sizeof(keyed_)); }
+  SecureKey(const SecureKey&) = default;                 //!< shares the one locked copy
+  SecureKey& operator=(const SecureKey&) = default;      //!< shares the one locked copy
+  SecureKey(SecureKey&&) noexcept = default;             //!< takes the handle
+  SecureKey& operator=(SecureKey&&) noexcept = default;  //!< takes the handle
+  ~SecureKey() = default;                                //!< the last handle frees the box
+
+  //! Re-keys this key's box in place with `bytes` (a session key slot: allocation-free, so a
+  //! handshake in the tick allocates nothing). Every copy sharing the box sees the new key.
+  void rekey(std::span<const std::byte, size> bytes) noexcept {
+    States& s = **states_;
+    crypto_generichash_init(&s.tag, as_uchar(bytes.data()), size, tag_size);
+    crypto_generichash_init(&s.kdf, as_uchar(bytes.data()), size, size);
+    std::array<std::byte, size> id{};
+    derive(std::as_bytes(std::span(key_id_label)), id);
+    std::memcpy(id_.data(), id.data(), id_.size());
+    sodium_memzero(id.data(), id.size());
+  }
+
+  //! Swaps the two keys' boxes and ids (no copy of the secrets, no allocation).
+  friend void swap(SecureKey& a, SecureKey& b) noexcept {
+    a.states_.swap(b.states_);
+    std::swap(a.id_, b.id_);
+  }
+
+  //! Forgets the key (zeros the box: every tag then fails to verify against a real key's).
+  void wipe() noexcept {
+    states_->wipe();
+    id_ = {};
+  }
+
+  //! This key's id (docs/protocol.md, "Key ids").
+  [[nodiscard]] const KeyId& id() const noexcept { return id_; }
 
   //! Writes the tag of `message` into `tag`.
   void tag(std::span<const std::byte> message, std::span<std::byte, tag_size> tag) const noexcept {
-    crypto_generichash_state state = keyed_;
+    crypto_generichash_state state = (**states_).tag;
     crypto_generichash_update(&state, as_uchar(message.data()), message.size());
     crypto_generichash_final(&state, as_uchar(tag.data()), tag_size);
     sodium_memzero(&state, sizeof(state));
@@ -125,14 +179,29 @@ class SecureKey {
     return crypto_verify_16(as_uchar(expected.data()), as_uchar(tag.data())) == 0;
   }
 
+  //! Key derivation: the 32-byte keyed BLAKE2b of `context` (a PRF of the key) into `out`.
+  void derive(std::span<const std::byte> context, std::span<std::byte, size> out) const noexcept {
+    crypto_generichash_state state = (**states_).kdf;
+    crypto_generichash_update(&state, as_uchar(context.data()), context.size());
+    crypto_generichash_final(&state, as_uchar(out.data()), size);
+    sodium_memzero(&state, sizeof(state));
+  }
+
  private:
+  static constexpr char key_id_label[21] = {'e', 'n', 'd', 'o', 'h', 'a', 'p', 't', 'i', 'c', 's',
+                                            ' ', 'v', '2', ' ', 'k', 'e', 'y', ' ', 'i', 'd'};
+  struct States {
+    crypto_generichash_state tag;  // keyed, 16-byte output: packet tags
+    crypto_generichash_state kdf;  // keyed, 32-byte output: key ids and session keys
+  };
   static const unsigned char* as_uchar(const std::byte* p) noexcept {
     return reinterpret_cast<const unsigned char*>(p);
   }
   static unsigned char* as_uchar(std::byte* p) noexcept {
     return reinterpret_cast<unsigned char*>(p);
   }
-  crypto_generichash_state keyed_{};
+  std::shared_ptr<LockedBox<States>> states_;
+  KeyId id_{};
 };
 
 //! Bit-exact encoder/decoder of v2 packets for `NumMotors` motors: header, the 2016 packet of
@@ -167,6 +236,9 @@ class SecureCodec {
   [[nodiscard]] static SecureStatus seal(const SecureKey& key, const SecureHeader& header,
                                          std::span<const std::byte> payload,
                                          std::span<std::byte> out) noexcept {
+    if (header.type != PacketType::setpoint && header.type != PacketType::state) {
+      return SecureStatus::wrong_type;  // handshakes: HandshakeCodec (protocol/handshake.hpp)
+    }
     if (payload.size() != payload_size(header.type) || out.size() != packet_size(header.type)) {
       return SecureStatus::wrong_size;
     }
@@ -183,6 +255,9 @@ class SecureCodec {
   [[nodiscard]] static SecureStatus open(const SecureKey& key, PacketType expected,
                                          std::span<const std::byte> bytes, SecureHeader& header,
                                          std::span<const std::byte>& payload) noexcept {
+    if (expected != PacketType::setpoint && expected != PacketType::state) {
+      return SecureStatus::wrong_type;  // handshakes: HandshakeCodec (protocol/handshake.hpp)
+    }
     if (bytes.size() != packet_size(expected)) return SecureStatus::wrong_size;
     const std::size_t body = bytes.size() - tag_size;
     if (!key.verify(bytes.first(body), bytes.subspan(body).template first<tag_size>())) {

@@ -58,6 +58,7 @@ struct LinkEvidence {
   std::uint64_t wrong_size = 0;     //!< v2: datagrams of another length
   std::uint64_t wrong_session = 0;  //!< v2: authentic, another session
   std::uint64_t late = 0;           //!< v2: authentic, answering a setpoint older than the lag
+  std::uint64_t sessions = 0;       //!< v2: handshakes completed (the robot side answered one)
   std::uint8_t enable_mask = 0;     //!< the motors the loop enabled
   std::uint8_t last_active = 0;     //!< the active mask of the newest state received
 };
@@ -90,11 +91,7 @@ struct LinkDiagnosis {
     d.message = "the robot at " + at + " answers (" + n(stats.not_obeyed) +
                 " states) but does not obey: motors " + hex(evidence.enable_mask) +
                 " enabled, reported active " + hex(evidence.last_active) +
-                (evidence.authenticated
-                     ? " (the v2 session did not bind: a round trip longer than the robot "
-                       "side's --max-round-trip, or the robot side refuses this console)"
-                     : " (the robot side does not enable them: a fault or a safety stop on "
-                       "its side)");
+                " (the robot side does not enable them: a fault or a safety stop on its side)";
     return d;
   }
   if (evidence.authenticated && evidence.forged > 0 && evidence.wrong_session == 0 &&
@@ -140,13 +137,21 @@ struct LinkDiagnosis {
                 " did not decode (wrong size, NaN/Inf or mask bits)";
     return d;
   }
+  if (evidence.authenticated && evidence.sessions > 0) {
+    d.problem = LinkProblem::late_answers;
+    d.message = "the robot side at " + at + " answered the handshake (" + n(evidence.sessions) +
+                " sessions) but no state came back: its setpoints arrived later than the round "
+                "trip it grants (raise the robot side's --max-round-trip), or the states are lost";
+    return d;
+  }
   d.problem = LinkProblem::no_answer;
   d.message =
       "no answer from " + at +
       (evidence.authenticated
            ? ": the robot side (sbRIO gateway or emulator) is not running there, holds another "
-             "key, speaks the 2016 wire, or the round trip is longer than the run so far (a v2 "
-             "robot side answers nothing it cannot authenticate)"
+             "key, has another --rig name, speaks the 2016 wire, or the round trip is longer "
+             "than the run so far (a v2 robot side answers nothing but a handshake under its "
+             "key for its rig)"
            : ": the robot side is not running there, speaks protocol v2, obeys another console "
              "(a 2016 robot side pins one console), or the round trip is longer than the run so "
              "far");
