@@ -6,7 +6,9 @@
 //  - Eigen's own heap use (malloc, not operator new) is counted through EIGEN_RUNTIME_NO_MALLOC:
 //    inside allocations_during, a failed eigen_assert (Eigen's "malloc is forbidden") is counted
 //    instead of aborting; everywhere else eigen_assert aborts with its message, as Eigen's does.
-// allocations_during(f) returns both counts made while running f.
+// allocations_during(f) returns both counts made while running f, by any thread;
+// allocations_on_this_thread_during(f) the operator new calls of the calling thread only (for a
+// loop thread while other threads, e.g. ROS's, allocate as they like) plus Eigen's mallocs.
 #pragma once
 
 #include <atomic>
@@ -19,6 +21,8 @@ namespace endohaptics::test {
 inline std::atomic<long> new_calls{0};
 inline std::atomic<long> eigen_mallocs{0};
 inline std::atomic<bool> counting{false};
+inline thread_local bool counting_this_thread = false;  // constant-initialised: safe in new
+inline std::atomic<long> this_thread_new_calls{0};
 
 [[gnu::noinline]] inline void eigen_assert_failed(const char* condition, const char* file,
                                                   int line) noexcept {
@@ -49,12 +53,18 @@ inline std::atomic<bool> counting{false};
 // from `operator new` and reports -Wmismatched-new-delete, though both sides are ours and match.
 [[gnu::noinline]] void* operator new(std::size_t size) {
   endohaptics::test::new_calls.fetch_add(1, std::memory_order_relaxed);
+  if (endohaptics::test::counting_this_thread) {
+    endohaptics::test::this_thread_new_calls.fetch_add(1, std::memory_order_relaxed);
+  }
   if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
   throw std::bad_alloc();
 }
 [[gnu::noinline]] void* operator new[](std::size_t size) { return operator new(size); }
 [[gnu::noinline]] void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
   endohaptics::test::new_calls.fetch_add(1, std::memory_order_relaxed);
+  if (endohaptics::test::counting_this_thread) {
+    endohaptics::test::this_thread_new_calls.fetch_add(1, std::memory_order_relaxed);
+  }
   return std::malloc(size == 0 ? 1 : size);
 }
 [[gnu::noinline]] void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept {
@@ -62,6 +72,9 @@ inline std::atomic<bool> counting{false};
 }
 [[gnu::noinline]] void* operator new(std::size_t size, std::align_val_t align) {
   endohaptics::test::new_calls.fetch_add(1, std::memory_order_relaxed);
+  if (endohaptics::test::counting_this_thread) {
+    endohaptics::test::this_thread_new_calls.fetch_add(1, std::memory_order_relaxed);
+  }
   const auto a = static_cast<std::size_t>(align);
   if (void* p = std::aligned_alloc(a, (size + a - 1) / a * a)) return p;
   throw std::bad_alloc();
@@ -95,6 +108,22 @@ long allocations_during(F&& f) {
   Eigen::internal::set_is_malloc_allowed(true);
   counting.store(false);
   return (new_calls.load() - before_new) + (eigen_mallocs.load() - before_eigen);
+}
+
+//! Heap allocations made while running `f` by the calling thread (operator new calls; other
+//! threads' are not counted) plus Eigen's mallocs (Eigen's switch is process-wide).
+template <typename F>
+long allocations_on_this_thread_during(F&& f) {
+  const long before_new = this_thread_new_calls.load();
+  const long before_eigen = eigen_mallocs.load();
+  counting_this_thread = true;
+  counting.store(true);
+  Eigen::internal::set_is_malloc_allowed(false);
+  f();
+  Eigen::internal::set_is_malloc_allowed(true);
+  counting.store(false);
+  counting_this_thread = false;
+  return (this_thread_new_calls.load() - before_new) + (eigen_mallocs.load() - before_eigen);
 }
 
 }  // namespace endohaptics::test

@@ -75,3 +75,20 @@ endohaptics_add_example(endohaptics-ros-bridge ros_bridge endohaptics::model_fil
 add_executable(endohaptics-ros-touch-standin ros_bridge/touch_standin.cpp)
 target_link_libraries(endohaptics-ros-touch-standin PRIVATE endohaptics::endohaptics
   endohaptics_warnings CLI11::CLI11 fmt::fmt Threads::Threads endohaptics_ros)
+
+if(ENDOHAPTICS_BUILD_TESTS)
+  # Heap allocations of the loop thread while ROS traffic flows (tests/ros/ros_alloc_test.cpp).
+  add_executable(endohaptics-ros-alloc-test "${PROJECT_SOURCE_DIR}/tests/ros/ros_alloc_test.cpp")
+  target_include_directories(endohaptics-ros-alloc-test PRIVATE "${PROJECT_SOURCE_DIR}/tests"
+    "${CMAKE_CURRENT_LIST_DIR}")
+  target_link_libraries(endohaptics-ros-alloc-test PRIVATE endohaptics::endohaptics
+    endohaptics_warnings fmt::fmt Threads::Threads endohaptics_ros)
+  # End to end on ROS 1, each case with its own roscore on a free port (tests/ros/ros_e2e.py).
+  foreach(case topics drop-in three-hosts alloc p99)
+    add_test(NAME "ros: ${case}"
+      COMMAND "${ENDOHAPTICS_ROS_PYTHON}" "${PROJECT_SOURCE_DIR}/tests/ros/ros_e2e.py"
+        "$<TARGET_FILE_DIR:endohaptics-ros-bridge>" "${PROJECT_SOURCE_DIR}" ${case})
+    set_tests_properties("ros: ${case}" PROPERTIES LABELS ros TIMEOUT 90 RUN_SERIAL TRUE
+      PASS_REGULAR_EXPRESSION "PASS:" FAIL_REGULAR_EXPRESSION "FAIL:")
+  endforeach()
+endif()

@@ -382,7 +382,7 @@ class RosPublisher {
         stats_.publish(line);
       }
       if (last) break;
-      std::this_thread::sleep_for(std::chrono::microseconds(200));
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));  // a batch per wake-up
     }
     if (counters_.round_trips > 0) {
       counters_.round_trip_mean_ms = round_trip_sum / static_cast<double>(counters_.round_trips);

@@ -77,6 +77,29 @@ TEST_CASE("LatestValue: publish and read allocate nothing") {
   CHECK(out.sequence == 10000);
 }
 
+TEST_CASE("allocations_on_this_thread_during counts this thread's allocations, not another's") {
+  std::atomic<bool> go{false}, done{false};
+  std::thread other([&] {
+    while (!go.load()) std::this_thread::yield();
+    for (int i = 0; i < 100; ++i) {
+      auto* p = new std::uint64_t(static_cast<std::uint64_t>(i));  // NOLINT: counted on purpose
+      delete p;
+    }
+    done.store(true);
+  });
+  const long mine = endohaptics::test::allocations_on_this_thread_during([&] {
+    go.store(true);
+    while (!done.load()) std::this_thread::yield();
+  });
+  other.join();
+  CHECK(mine == 0);
+  const long counted = endohaptics::test::allocations_on_this_thread_during([] {
+    auto* p = new std::uint64_t(1);  // NOLINT: counted on purpose
+    delete p;
+  });
+  CHECK(counted == 1);
+}
+
 TEST_CASE("LatestValue: two threads, no torn value, never older than one read before") {
   tp::LatestValue<Sample> v;
   constexpr std::uint64_t count = 200000;
