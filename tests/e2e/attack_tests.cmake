@@ -34,8 +34,8 @@ set_tests_properties("e2e: strict command lines, keys" PROPERTIES LABELS e2e TIM
   PASS_REGULAR_EXPRESSION "PASS:")
 
 # The attack suite: one CTest entry per case, each a few seconds (timing-sensitive: run alone).
-foreach(case no-key bit-flips truncations replay reorder stale-session replay-after-stop
-             flood-sbrio flood-pc pinned-2016)
+foreach(case no-key bit-flips truncations replay reorder held-back stale-session
+             replay-after-stop relay-restart cross-rig flood-sbrio flood-pc pinned-2016)
   add_test(NAME "attack v2: ${case}"
     COMMAND "${Python3_EXECUTABLE}" "${PROJECT_SOURCE_DIR}/tests/e2e/attack_v2.py"
       "$<TARGET_FILE_DIR:endohaptics-bridge>" ${case})

@@ -54,14 +54,14 @@ def run_case(bin_dir, delay_ms, work):
     obeyed = sum(1 for r in rows if int(r["active_mask"]) != 0)
     times = [float(r["time"]) for r in rows if int(r["active_mask"]) != 0]
     obeyed_span = times[-1] - times[0] if times else 0.0  # s from the first to the last obeyed row
-    m = re.search(r"protocol v2 setpoints: accepted (\d+), unbound (\d+)", emu_text)
-    accepted, unbound = (int(m.group(1)), int(m.group(2))) if m else (0, 0)
+    m = re.search(r"protocol v2 datagrams: accepted (\d+), handshakes (\d+)", emu_text)
+    accepted, handshakes = (int(m.group(1)), int(m.group(2))) if m else (0, 0)
     link = re.search(r"bridge: link: (.*)", bridge.stdout)
     summary = re.search(r"complete=([0-9.]+)%", bridge.stdout)
     rtt = re.search(r"round trip .*?mean\s+([0-9.]+)", bridge.stdout)
     errors = [l for l in bridge.stdout.splitlines() if l.startswith(("error:", "bridge: WARNING"))]
     return {
-        "delay": delay_ms, "bound": accepted > 0, "accepted": accepted, "unbound": unbound,
+        "delay": delay_ms, "bound": accepted > 0, "accepted": accepted, "handshakes": handshakes,
         "rows": len(rows), "obeyed": obeyed, "exit": bridge.returncode,
         "complete": summary.group(1) if summary else "?",
         "link": link.group(1) if link else "(no link line)",
@@ -76,13 +76,13 @@ def main():
     bin_dir = args[0]
     delays = [float(a) if "." in a else int(a) for a in args[1:]] or [10, 50, 100, 150, 400, 1000]
     failures = []
-    print("| one-way delay (ms) | v2 session bound | setpoints obeyed / unbound | truth rows with a "
+    print("| one-way delay (ms) | v2 session open | setpoints obeyed / handshakes | truth rows with a "
           "motor enabled | bridge exit | bridge's link line |")
     print("|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as work:
         for d in delays:
             r = run_case(bin_dir, d, work)
-            print(f"| {d} | {'yes' if r['bound'] else 'no'} | {r['accepted']} / {r['unbound']} | "
+            print(f"| {d} | {'yes' if r['bound'] else 'no'} | {r['accepted']} / {r['handshakes']} | "
                   f"{r['obeyed']} of {r['rows']} | {r['exit']} | {r['link']} {r['said']} |",
                   flush=True)
             # After the first round trip (2 x delay) the motors must be enabled for most of the

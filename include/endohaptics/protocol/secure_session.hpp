@@ -169,7 +169,8 @@ struct InitiatorConfig {
   //! States may answer a setpoint this many older than the newest sent (0: only the newest);
   //! below packet_history.
   std::uint64_t max_answer_lag = 0;
-  //! A HELLO not answered is sent again after this long.
+  //! A HELLO not answered is sent again after this long, then after twice as long each time (up
+  //! to 1 s).
   std::chrono::nanoseconds hello_interval = std::chrono::milliseconds(10);
   //! A new handshake (fresh keys, seamless) after a session this old.
   std::chrono::nanoseconds rekey_after = std::chrono::minutes(2);
@@ -193,8 +194,8 @@ struct InitiatorConfig {
   }
 };
 
-//! The console side: asks for sessions (HELLO, resent every hello_interval until a WELCOME
-//! answers), seals setpoints under the session key, verifies states. A new handshake starts when
+//! The console side: asks for sessions (HELLO, resent with a doubling interval from
+//! hello_interval until a WELCOME answers), seals setpoints under the session key, verifies states. A new handshake starts when
 //! no state came for twice the granted round trip (at least 100 ms), or the session is
 //! `rekey_after` old; setpoints keep flowing in the old session meanwhile, and states of the old
 //! session are still taken until the first state of the new one arrives.
@@ -233,10 +234,11 @@ class SecureInitiator {
     if ((needed && !attempting_) || (attempting_ && now - attempt_started_ > give_up)) {
       start_attempt(now);
     }
-    if (!attempting_ || (hello_sent_ && now - hello_sent_at_ < config_.hello_interval)) {
-      return false;
-    }
+    if (!attempting_ || (hello_sent_ && now - hello_sent_at_ < hello_wait_)) return false;
     std::memcpy(out.data(), hello_bytes_.data(), out.size());
+    if (hello_sent_) {  // each resend waits twice as long, up to 1 s (a slow link is not flooded)
+      hello_wait_ = std::min<std::chrono::nanoseconds>(2 * hello_wait_, std::chrono::seconds(1));
+    }
     hello_sent_ = true;
     hello_sent_at_ = now;
     return true;
@@ -394,6 +396,7 @@ class SecureInitiator {
     attempting_ = true;
     attempt_started_ = now;
     hello_sent_ = false;
+    hello_wait_ = config_.hello_interval;
   }
 
   void begin_session(const Welcome& w, std::chrono::nanoseconds now) noexcept {
@@ -450,6 +453,7 @@ class SecureInitiator {
   std::uint64_t timestamp_ = 0;
   std::chrono::nanoseconds attempt_started_{0};
   std::chrono::nanoseconds hello_sent_at_{0};
+  std::chrono::nanoseconds hello_wait_{0};
   HandshakeCodec::Bytes hello_bytes_{};
 };
 
