@@ -677,22 +677,20 @@ TEST_CASE("settings are validated, errors name the field, the joint and the valu
   CHECK(error_for([](auto& s) { s.motor_order[0] = static_cast<Motor>(7); }) ==
         "ForceEstimator: motor_order[0] is not a tool joint: 7");
   CHECK(error_for([](auto& s) { s.current_sign[2] = 0.5; }) ==
-        "ForceEstimator: current_sign[clamp1] must be +1 or -1, got 0.5");
+        "ForceEstimator: current_sign[2] must be +1 or -1, got 0.5");
   CHECK(error_for([](auto& s) { s.unit_scale[1] = 0.0; }) ==
-        "ForceEstimator: unit_scale[pitch] must be finite and > 0, got 0");
+        "ForceEstimator: unit_scale[1] must be finite and > 0, got 0");
   CHECK(error_for([](auto& s) { s.output_deadzone[3] = -1.0; }) ==
-        "ForceEstimator: output_deadzone[clamp2] must be finite and >= 0, got -1");
+        "ForceEstimator: output_deadzone[3] must be finite and >= 0, got -1");
   CHECK(error_for([](auto& s) {
           s.output_limit[0] = std::numeric_limits<double>::quiet_NaN();
-        }).find("ForceEstimator: output_limit[roll] must be finite and > 0, got ") == 0);
+        }).find("ForceEstimator: output_limit[0] must be finite and > 0, got ") == 0);
   CHECK(error_for([](auto& s) {
           s.loop_period = -0.001;
         }).find("loop period: sample time must be finite and > 0 s, got -0.001") !=
         std::string::npos);
-  CHECK(error_for([](auto& s) {
-          s.friction[1].static_level = -0.1;
-        }).find("joint 1 static_level (Ks) must be finite and >= 0, got -0.1") !=
-        std::string::npos);
+  CHECK(error_for([](auto& s) { s.friction[1].static_level = -0.1; }) ==
+        "ForceEstimator: friction_level[1] must be finite and >= 0 A, got -0.1");
 }
 
 TEST_CASE("TeleopLoop interface: estimate() = step() on the packet, forces in motor order") {

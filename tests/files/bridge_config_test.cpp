@@ -135,15 +135,15 @@ TEST_CASE("file errors name the file") {
   const auto range = dir.path() / "range.json";
   write_text(range, R"({"loop": {"receive_timeout": 2}})");
   CHECK(message_of([&] { (void)files::load_bridge_config(range); }) ==
-        range.string() + ": loop.receive_timeout: must be a number in (0, 0.5] s, got 2");
+        range.string() + ": loop.receive_timeout: must be in (0, 0.5] s, got 2");
   // 0 would never wait for an answer: v2 never connected (before: accepted).
   write_text(range, R"({"loop": {"receive_timeout": 0}})");
   CHECK(message_of([&] { (void)files::load_bridge_config(range); }) ==
-        range.string() + ": loop.receive_timeout: must be a number in (0, 0.5] s, got 0");
+        range.string() + ": loop.receive_timeout: must be in (0, 0.5] s, got 0");
   // A mapping gain of 0 silently removed the clamp's force feedback (before: accepted).
   write_text(range, R"({"mapping": {"a_clamp": 0}})");
   CHECK(message_of([&] { (void)files::load_bridge_config(range); })
-            .find("a_clamp must be of magnitude in [1e-6, 1e6] (a gain of 0 freezes the joint and "
+            .find("a_clamp: must be of magnitude in [1e-6, 1e6] (a gain of 0 freezes the joint and "
                   "removes its force feedback), got 0") != std::string::npos);
 
   const auto big = dir.path() / "big.json";
@@ -156,8 +156,8 @@ TEST_CASE("file errors name the file") {
 
 TEST_CASE("unknown keys are errors that list the allowed keys") {
   CHECK(error_of(R"({"safty": {}})") ==
-        "bridge.json: unknown key 'safty' (allowed: estimator, loop, mapping, operator, "
-        "plausibility, safety)");
+        "bridge.json: unknown key 'safty' (allowed: mapping, safety, plausibility, estimator, "
+        "operator, loop)");
   CHECK(error_of(R"({"loop": {"recieve_timeout": 0.002}})") ==
         "bridge.json: unknown key 'loop.recieve_timeout' (allowed in 'loop': receive_timeout)");
   CHECK(error_of(R"({"safety": {"polcy": "zero_force"}})") ==
@@ -187,12 +187,16 @@ TEST_CASE("wrong types name the key and what it must be") {
   CHECK(error_of("[1, 2]") == "bridge.json: must be a JSON object {...}, got [1,2]");
   CHECK(error_of(R"({"safety": 3})") == "bridge.json: safety: must be an object {...}, got 3");
   CHECK(error_of(R"({"mapping": {"a_roll": "0.7"}})") ==
-        "bridge.json: mapping.a_roll: must be a finite number rad/rad, got \"0.7\"");
+        "bridge.json: mapping.a_roll: must be a number (of magnitude in [1e-6, 1e6] (a gain of 0 "
+        "freezes the joint and removes its force feedback)), got \"0.7\"");
   CHECK(error_of(R"({"mapping": {"lower": [0, 0, 0]}})") ==
-        "bridge.json: mapping.lower: must be an array of 4 numbers, each a number in [-pi, pi] "
-        "rad, got [0,0,0]");
+        "bridge.json: mapping.lower: must be an array of 4 numbers, each finite rad, got "
+        "[0,0,0]");
+  // Within the EndoWrist's joint limit, as the safety ranges are.
+  CHECK(error_of(R"({"mapping": {"upper": [1, 1, 1, 4]}})") ==
+        "bridge.json: mapping.upper[3]: must be in [-pi, pi] rad, got 4");
   CHECK(error_of(R"({"mapping": {"force_scale": [1, null, 1]}})") ==
-        "bridge.json: mapping.force_scale[1]: must be a number in [0, 100] N per unit, got null");
+        "bridge.json: mapping.force_scale[1]: must be a number (in [0, 100] N per unit), got null");
   CHECK(error_of(R"({"safety": {"policy": "freeze"}})") ==
         "bridge.json: safety.policy: must be \"hold_position\", \"disable_motors\" or "
         "\"zero_force\", got \"freeze\"");
@@ -224,8 +228,10 @@ TEST_CASE("integer fields: integral and in range, never an undefined conversion"
   CHECK(files::parse_bridge_config(R"({"safety": {"max_consecutive_misses": 0}})")
             .loop.safety.max_consecutive_misses == 0);
 
-  const std::string mask = "bridge.json: safety.enable_mask: must be an integer in [0, 15], got ";
-  CHECK(error_of(R"({"safety": {"enable_mask": 16}})") == mask + "16");
+  // A byte, then only the 4 motors' bits (SafetyConfig::validate's rule).
+  const std::string mask = "bridge.json: safety.enable_mask: must be an integer in [0, 255], got ";
+  CHECK(error_of(R"({"safety": {"enable_mask": 16}})") ==
+        "bridge.json: safety.enable_mask: must be <= 0x0F (bits 0..3: 4 motors), got 0x10");
   CHECK(error_of(R"({"safety": {"enable_mask": 256}})") == mask + "256");  // not 0 as a uint8
   CHECK(error_of(R"({"safety": {"enable_mask": 1.5}})") == mask + "1.5");
   CHECK(files::parse_bridge_config(R"({"safety": {"enable_mask": 3}})").loop.safety.enable_mask ==
@@ -234,27 +240,27 @@ TEST_CASE("integer fields: integral and in range, never an undefined conversion"
 
 TEST_CASE("out-of-range numbers name the key and the allowed range") {
   CHECK(error_of(R"({"mapping": {"force_limit": 0}})") ==
-        "bridge.json: mapping.force_limit: must be a number in (0, 3.3] N, got 0");
+        "bridge.json: mapping.force_limit: must be finite and > 0 N, got 0");
   CHECK(error_of(R"({"mapping": {"min_radius": -0.001}})") ==
-        "bridge.json: mapping.min_radius: must be a finite number >= 0 m, got -0.001");
+        "bridge.json: mapping.min_radius: must be finite and >= 0 m, got -0.001");
   CHECK(error_of(R"({"mapping": {"theta_neutral": 4}})") ==
-        "bridge.json: mapping.theta_neutral: must be a number in [-pi, pi] rad, got 4");
+        "bridge.json: mapping.theta_neutral: must be in [-pi, pi] rad, got 4");
   CHECK(error_of(R"({"mapping": {"a_roll": 1e999}})") ==
         "bridge.json: not valid JSON: number overflow parsing '1e999'");
   CHECK(error_of(R"({"safety": {"max_setpoint_rate": 0}})") ==
-        "bridge.json: safety.max_setpoint_rate: must be a number in (0, 40] rad/s, got 0");
+        "bridge.json: safety.max_setpoint_rate: must be in (0, 40] rad/s, got 0");
   CHECK(error_of(R"({"safety": {"force_ramp_time": -0.5}})") ==
-        "bridge.json: safety.force_ramp_time: must be a number in [0, 10] s, got -0.5");
+        "bridge.json: safety.force_ramp_time: must be in [0, 10] s, got -0.5");
   CHECK(error_of(R"({"estimator": {"current_sign": [-1, -1, 0.5, -1]}})") ==
-        "bridge.json: estimator.current_sign[2]: must be -1 or +1, got 0.5");
+        "bridge.json: estimator.current_sign[2]: must be +1 or -1, got 0.5");
   CHECK(error_of(R"({"estimator": {"friction_level": [0.7, -0.17, 0.21, 0.2]}})") ==
-        "bridge.json: estimator.friction_level[1]: must be a finite number >= 0 A, got -0.17");
+        "bridge.json: estimator.friction_level[1]: must be finite and >= 0 A, got -0.17");
   CHECK(error_of(R"({"estimator": {"output_limit": [0.084, 9.8, 0, 9.8]}})") ==
-        "bridge.json: estimator.output_limit[2]: must be a finite number > 0, got 0");
+        "bridge.json: estimator.output_limit[2]: must be finite and > 0, got 0");
   CHECK(error_of(R"({"operator": {"close_time": 0}})") ==
-        "bridge.json: operator.close_time: must be a finite number > 0 s, got 0");
+        "bridge.json: operator.close_time: must be finite and > 0 s, got 0");
   CHECK(error_of(R"({"loop": {"receive_timeout": -0.001}})") ==
-        "bridge.json: loop.receive_timeout: must be a number in (0, 0.5] s, got -0.001");
+        "bridge.json: loop.receive_timeout: must be in (0, 0.5] s, got -0.001");
 }
 
 TEST_CASE("cross-field checks of the library come with the file name") {
@@ -273,15 +279,15 @@ TEST_CASE("validate_bridge_config checks a configuration built in code") {
   CHECK_NOTHROW(files::validate_bridge_config(c));
   c.loop.safety.enable_mask = 0x10;
   CHECK(message_of([&] { files::validate_bridge_config(c, "built"); }) ==
-        "built: safety.enable_mask: must be an integer in [0, 15], got 16");
+        "built: safety.enable_mask: must be <= 0x0F (bits 0..3: 4 motors), got 0x10");
   c = {};
   c.loop.receive_timeout = std::chrono::seconds(2);
   CHECK(message_of([&] { files::validate_bridge_config(c, "built"); }) ==
-        "built: loop.receive_timeout: must be a number in (0, 0.5] s, got 2");
+        "built: loop.receive_timeout: must be in (0, 0.5] s, got 2");
   c = {};
   c.operator_script.r_open = std::numeric_limits<double>::quiet_NaN();
   CHECK(message_of([&] { files::validate_bridge_config(c, "built"); }) ==
-        "built: operator.r_open: must be a finite number > 0 m, got nan");
+        "built: operator.r_open: must be finite and > 0 m, got nan");
 }
 
 TEST_CASE("echoed values and keys are cut to 60 characters") {
@@ -449,13 +455,14 @@ TEST_CASE("safety-relevant values have physical bounds (issue 14's field cases)"
         "bridge.json: safety.max_consecutive_misses: must be an integer in [0, 1000], got "
         "2147483647");
   CHECK(error_of(R"({"safety": {"max_stylus_force": 1e308}})") ==
-        "bridge.json: safety.max_stylus_force: must be a number in [0, 3.3] N, got 1e+308");
+        "bridge.json: safety.max_stylus_force: must be in [0, 3.3] N (the Touch's peak), got "
+        "1e+308");
   CHECK(error_of(R"({"mapping": {"force_limit": 1e308}})") ==
-        "bridge.json: mapping.force_limit: must be a number in (0, 3.3] N, got 1e+308");
+        "bridge.json: mapping.force_limit: must be in (0, 3.3] N, got 1e+308");
   CHECK(error_of(R"({"mapping": {"force_scale": [1, -1, 1]}})") ==
-        "bridge.json: mapping.force_scale[1]: must be a number in [0, 100] N per unit, got -1");
+        "bridge.json: mapping.force_scale[1]: must be in [0, 100] N per unit, got -1");
   CHECK(error_of(R"({"safety": {"force_ramp_time": -0.9}})") ==
-        "bridge.json: safety.force_ramp_time: must be a number in [0, 10] s, got -0.9");
+        "bridge.json: safety.force_ramp_time: must be in [0, 10] s, got -0.9");
   // 300 misses at the default 1 ms are 0.3 s: accepted; 1000 are 1 s: refused by the loop.
   CHECK(files::parse_bridge_config(R"({"safety": {"max_consecutive_misses": 300}})")
             .loop.safety.max_consecutive_misses == 300);
@@ -482,15 +489,15 @@ TEST_CASE("the joint range and the plausibility bounds are keys, checked and rou
   CHECK(files::parse_bridge_config(R"({"mapping": {"channel_limit": [2, 0.5, 0.5]}})")
             .mapping.channel_limit[1] == 0.5);
   CHECK(error_of(R"({"mapping": {"channel_limit": [1, 1, 10]}})") ==
-        "bridge.json: mapping.channel_limit[2]: must be a number in (0, 3.3] N, got 10");
+        "bridge.json: mapping.channel_limit[2]: must be in (0, 3.3] N, got 10");
   CHECK(error_of(R"({"plausibility": {"max_current": 100}})") ==
-        "bridge.json: plausibility.max_current: must be a number in (0, 15] A, got 100");
+        "bridge.json: plausibility.max_current: must be in (0, 15] A, got 100");
   CHECK(error_of(R"({"plausibility": {"max_velocity": 0}})") ==
-        "bridge.json: plausibility.max_velocity: must be a number in (0, 40] rad/s, got 0");
+        "bridge.json: plausibility.max_velocity: must be in (0, 40] rad/s, got 0");
   CHECK(error_of(R"({"safety": {"joint_upper": [1, 1, 1, 4]}})") ==
-        "bridge.json: safety.joint_upper[3]: must be a number in [-pi, pi] rad, got 4");
-  CHECK(error_of(R"({"safety": {"joint_lower": [0, 0, 0, 2]}})")
-            .starts_with("bridge.json: safety: SafetyConfig: joint range of motor 3 must satisfy"));
+        "bridge.json: safety.joint_upper[3]: must be in [-pi, pi] rad, got 4");
+  CHECK(error_of(R"({"safety": {"joint_lower": [0, 0, 0, 2]}})") ==
+        "bridge.json: safety.joint_upper[3]: must be above joint_lower[3], got 1.028");
 }
 
 }  // namespace files_bridge_config_test

@@ -620,34 +620,37 @@ TEST_CASE("invalid configurations throw endohaptics::Error naming field and valu
   CHECK(message(c) == "CylindricalMapper: range of pitch is empty: lower 0.5 > upper -0.5");
   c = Config{};
   c.a_roll = not_a_number;
-  CHECK(message(c) == "CylindricalMapper: a_roll is not finite (nan)");
+  CHECK(message(c) ==
+        "CylindricalMapper: a_roll must be of magnitude in [1e-6, 1e6] (a gain of 0 freezes the "
+        "joint and removes its force feedback), got nan");
   c = Config{};
   c.upper[3] = inf;
-  CHECK(message(c) == "CylindricalMapper: upper[clamp2] is not finite (inf)");
+  CHECK(message(c) == "CylindricalMapper: upper[3] must be finite rad, got inf");
   c = Config{};
   c.force_limit = 0.0;
-  CHECK(message(c) == "CylindricalMapper: force_limit must be > 0 N, got 0");
+  CHECK(message(c) == "CylindricalMapper: force_limit must be finite and > 0 N, got 0");
   c = Config{};
   c.min_radius = -1.0;
-  CHECK(message(c) == "CylindricalMapper: min_radius must be >= 0 m, got -1");
+  CHECK(message(c) == "CylindricalMapper: min_radius must be finite and >= 0 m, got -1");
   c = Config{};
   c.theta_neutral = 4.0;
   CHECK(message(c) == "CylindricalMapper: theta_neutral must be in [-pi, pi] rad, got 4");
   c = Config{};
   c.force_scale[1] = -inf;
-  CHECK(message(c) == "CylindricalMapper: force_scale[1] is not finite (-inf)");
+  CHECK(message(c) == "CylindricalMapper: force_scale[1] must be in [0, 100] N per unit, got -inf");
   c = Config{};
   c.force_scale[0] = -1.0;  // would render the clamp force along the operator's motion
-  CHECK(message(c) == "CylindricalMapper: force_scale[0] must be >= 0, got -1");
+  CHECK(message(c) == "CylindricalMapper: force_scale[0] must be in [0, 100] N per unit, got -1");
   c = Config{};
   c.force_scale[2] = -1e-9;
-  CHECK(message(c) == "CylindricalMapper: force_scale[2] must be >= 0, got -1e-09");
+  CHECK(message(c) ==
+        "CylindricalMapper: force_scale[2] must be in [0, 100] N per unit, got -1e-09");
   c = Config{};
   c.channel_limit[2] = 0.0;
-  CHECK(message(c) == "CylindricalMapper: channel_limit[2] must be > 0 N, got 0");
+  CHECK(message(c) == "CylindricalMapper: channel_limit[2] must be finite and > 0 N, got 0");
   c = Config{};
   c.channel_limit[1] = not_a_number;
-  CHECK(message(c) == "CylindricalMapper: channel_limit[1] is not finite (nan)");
+  CHECK(message(c) == "CylindricalMapper: channel_limit[1] must be finite and > 0 N, got nan");
   c = Config{};
   c.force_scale[1] = 0.0;  // zero is allowed: that channel renders nothing
   CHECK(message(c) == "no error");

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <concepts>
 #include <cstdint>
@@ -150,14 +151,17 @@ class ParameterError : public Error {
   //! "<owner>: <field> must be <rule>, got <value>".
   ParameterError(std::string_view owner, std::string field, std::string rule, std::string value)
       : Error(std::string(owner) + ": " + field + " must be " + rule + ", got " + value),
+        owner_(owner),
         field_(std::move(field)),
         rule_(std::move(rule)),
         value_(std::move(value)) {}
+  [[nodiscard]] const std::string& owner() const noexcept { return owner_; }  //!< the struct
   [[nodiscard]] const std::string& field() const noexcept { return field_; }  //!< e.g. "gain"
   [[nodiscard]] const std::string& rule() const noexcept { return rule_; }    //!< "in [0, 1]"
   [[nodiscard]] const std::string& value() const noexcept { return value_; }  //!< as text
 
  private:
+  std::string owner_;
   std::string field_;
   std::string rule_;
   std::string value_;
@@ -213,6 +217,21 @@ struct ParameterChecker {
       ENDOHAPTICS_THROW(ParameterError(owner, std::string(field), std::string(rule),
                                        detail::format_number(value)));
     }
+  }
+  //! Throws unless `ok`, the value given as text (e.g. "0x10").
+  void require_text(bool ok, std::string_view field, std::string value,
+                    std::string_view rule) const {
+    if (!ok) {
+      ENDOHAPTICS_THROW(
+          ParameterError(owner, std::string(field), std::string(rule), std::move(value)));
+    }
+  }
+  //! A duration field, bounded in seconds.
+  template <typename Rep, typename Period>
+  void operator()(std::string_view name, const std::chrono::duration<Rep, Period>& value,
+                  const Bound& bound) const {
+    const double seconds = std::chrono::duration<double>(value).count();
+    require(bound.contains(seconds), name, seconds, bound.describe());
   }
   //! A number field.
   template <typename T>

@@ -11,6 +11,7 @@
 #include <concepts>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <string_view>
 #include <tuple>
@@ -18,6 +19,7 @@
 #include <utility>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/core/parameter.hpp"
 #include "endohaptics/estimation/force_models_2016.hpp"
 #include "endohaptics/estimation/joint_force_model.hpp"
 #include "endohaptics/estimation/kalman_corrected.hpp"
@@ -111,6 +113,19 @@ struct ForceEstimatorSettings {
   //! > 0, output units: symmetric saturation. Roll 0.084 N m (1.2 A of figure E.8 x 0.070 N m/A);
   //! pitch and clamps 9.80665 N (the 1 kg load cell the models were identified with).
   Vector output_limit = Vector(Scalar(0.084), Scalar(9.80665), Scalar(9.80665), Scalar(9.80665));
+
+  //! The per-joint settings by their configuration names, with their bounds (core/parameter.hpp;
+  //! the friction by its static levels): the one list ForceEstimator's validation and the bridge
+  //! configuration use. loop_period, motor_order and friction_options are checked apart.
+  template <typename Self, typename Visitor>
+  static void for_each_field(Self& p, Visitor&& v) {
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    v("current_sign", p.current_sign, Bound::unit_sign());
+    v("unit_scale", p.unit_scale, Bound::above(0, inf));
+    v("friction_level", model::StaticFrictionLevels(p.friction), Bound::in(0, inf, "A"));
+    v("output_deadzone", p.output_deadzone, Bound::in(0, inf));
+    v("output_limit", p.output_limit, Bound::above(0, inf));
+  }
 };
 
 //! Estimates the external force on each tool joint from the motor signals (worksheet ch. 4-5):
@@ -314,28 +329,7 @@ class ForceEstimator {
       }
       seen[j] = true;
     }
-    for (int j = 0; j < 4; ++j) {
-      if (s.current_sign[j] != ScalarType(1) && s.current_sign[j] != ScalarType(-1)) {
-        ENDOHAPTICS_THROW(Error("ForceEstimator: current_sign[" + name(j) +
-                                "] must be +1 or -1, got " +
-                                endohaptics::detail::format_number(s.current_sign[j])));
-      }
-      if (!std::isfinite(s.unit_scale[j]) || !(s.unit_scale[j] > 0)) {
-        ENDOHAPTICS_THROW(Error("ForceEstimator: unit_scale[" + name(j) +
-                                "] must be finite and > 0, got " +
-                                endohaptics::detail::format_number(s.unit_scale[j])));
-      }
-      if (!std::isfinite(s.output_deadzone[j]) || s.output_deadzone[j] < 0) {
-        ENDOHAPTICS_THROW(Error("ForceEstimator: output_deadzone[" + name(j) +
-                                "] must be finite and >= 0, got " +
-                                endohaptics::detail::format_number(s.output_deadzone[j])));
-      }
-      if (!std::isfinite(s.output_limit[j]) || !(s.output_limit[j] > 0)) {
-        ENDOHAPTICS_THROW(Error("ForceEstimator: output_limit[" + name(j) +
-                                "] must be finite and > 0, got " +
-                                endohaptics::detail::format_number(s.output_limit[j])));
-      }
-    }
+    Settings::for_each_field(s, ParameterChecker{"ForceEstimator"});
     return s;
   }
 

@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/core/parameter.hpp"
 #include "endohaptics/estimation/bidirectional_load_observer.hpp"
 #include "endohaptics/estimation/force_estimator.hpp"
 #include "endohaptics/estimation/push_load_observer.hpp"
@@ -71,182 +72,43 @@ using json_text::excerpt;
 using json_text::key_name;
 using json_text::show;
 
-//! The allowed values of a number: an interval (finite bounds or infinite), or exactly -1/+1.
-struct Range {
-  double lo = -std::numeric_limits<double>::infinity();  //!< lower bound
-  double hi = std::numeric_limits<double>::infinity();   //!< upper bound
-  bool lo_open = false;                                  //!< lo itself excluded
-  bool hi_open = false;                                  //!< hi itself excluded
-  std::string_view unit;                                 //!< appended to the description
-  std::string_view text;                                 //!< description override
-  bool sign = false;                                     //!< only -1 and +1
-
-  //! Any finite number.
-  [[nodiscard]] static Range any(std::string_view units = "") {
-    Range r;
-    r.unit = units;
-    return r;
-  }
-  //! Finite and >= low.
-  [[nodiscard]] static Range at_least(double low, std::string_view units = "") {
-    Range r = any(units);
-    r.lo = low;
-    return r;
-  }
-  //! Finite and > low.
-  [[nodiscard]] static Range above(double low, std::string_view units = "") {
-    Range r = at_least(low, units);
-    r.lo_open = true;
-    return r;
-  }
-  //! In [low, high].
-  [[nodiscard]] static Range between(double low, double high, std::string_view units = "") {
-    Range r = at_least(low, units);
-    r.hi = high;
-    return r;
-  }
-  //! Exactly -1 or +1.
-  [[nodiscard]] static Range plus_minus_one() {
-    Range r;
-    r.text = "-1 or +1";
-    r.sign = true;
-    return r;
-  }
-  //! In [low, high], described by `description` (e.g. "a number in [-pi, pi] rad").
-  [[nodiscard]] static Range described(double low, double high, std::string_view description) {
-    Range r = between(low, high);
-    r.text = description;
-    return r;
-  }
-
-  //! True when `v` is allowed.
-  [[nodiscard]] bool contains(double v) const noexcept {
-    if (sign) return v == 1.0 || v == -1.0;
-    return std::isfinite(v) && (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
-  }
-  //! "a finite number >= 0 s", "a number in [0, 1] s", "-1 or +1", ...
-  [[nodiscard]] std::string describe() const {
-    using endohaptics::detail::format_number;
-    if (!text.empty()) return std::string(text);
-    const bool has_lo = std::isfinite(lo);
-    const bool has_hi = std::isfinite(hi);
-    std::string d;
-    if (has_lo && has_hi) {
-      d = "a number in " + std::string(lo_open ? "(" : "[") + format_number(lo) + ", " +
-          format_number(hi) + (hi_open ? ")" : "]");
-    } else if (has_lo) {
-      d = "a finite number " + std::string(lo_open ? "> " : ">= ") + format_number(lo);
-    } else if (has_hi) {
-      d = "a finite number " + std::string(hi_open ? "< " : "<= ") + format_number(hi);
-    } else {
-      d = "a finite number";
-    }
-    return unit.empty() ? d : d + " " + std::string(unit);
-  }
-};
-
-//! The schema: every key of the file, its field and its range, in file order. `v` is one of the
-//! visitors below (key collection, reading, writing, checking); `c` a (const) BridgeConfig.
-template <typename Config, typename Visitor>
-void visit_schema(Config& c, Visitor& v) {
-  constexpr double pi = std::numbers::pi;
-  auto& m = c.mapping;
-  v.number("mapping", "a_roll", m.a_roll, Range::any("rad/rad"));
-  v.number("mapping", "b_roll", m.b_roll, Range::any("rad"));
-  v.number("mapping", "a_pitch", m.a_pitch, Range::any("rad/m"));
-  v.number("mapping", "b_pitch", m.b_pitch, Range::any("rad"));
-  v.number("mapping", "a_clamp", m.a_clamp, Range::any("rad/m"));
-  v.number("mapping", "b_clamp", m.b_clamp, Range::any("rad"));
-  v.vector("mapping", "lower", m.lower, Range::described(-pi, pi, "a number in [-pi, pi] rad"));
-  v.vector("mapping", "upper", m.upper, Range::described(-pi, pi, "a number in [-pi, pi] rad"));
-  v.number("mapping", "min_radius", m.min_radius, Range::at_least(0.0, "m"));
-  v.number("mapping", "theta_neutral", m.theta_neutral,
-           Range::described(-pi, pi, "a number in [-pi, pi] rad"));
-  // >= 0: a negative scale would push along the operator's motion
-  // (docs/models/cylindrical_mapper.md)
-  v.vector("mapping", "force_scale", m.force_scale, Range::between(0.0, 100.0, "N per unit"));
-  Range force_limit = Range::between(0.0, teleop::SafetyBounds::max_stylus_force, "N");
-  force_limit.lo_open = true;
-  v.number("mapping", "force_limit", m.force_limit, force_limit);
-  // Per channel (clamp, roll, pitch) before the shared force_limit: one wrong estimate cannot
-  // crowd out the others.
-  v.vector("mapping", "channel_limit", m.channel_limit, force_limit);
-
-  auto& s = c.loop.safety;
-  using SB = teleop::SafetyBounds;
-  v.integer("safety", "max_consecutive_misses", s.max_consecutive_misses, 0,
-            SB::max_consecutive_misses);
-  v.policy("safety", "policy", s.policy);
-  Range hold = Range::between(0.0, SB::max_hold_time, "s");
-  hold.lo_open = true;
-  v.number("safety", "max_hold_time", s.max_hold_time, hold);
-  v.number("safety", "force_ramp_time", s.force_ramp_time,
-           Range::between(0.0, SB::max_force_ramp_time, "s"));
-  Range rate = Range::between(0.0, SB::max_setpoint_rate, "rad/s");
-  rate.lo_open = true;
-  v.number("safety", "max_setpoint_rate", s.max_setpoint_rate, rate);
-  v.number("safety", "max_stylus_force", s.max_stylus_force,
-           Range::between(0.0, SB::max_stylus_force, "N"));
-  v.integer("safety", "enable_mask", s.enable_mask, 0, 15);
-  Range activation = Range::between(0.0, SB::max_activation_timeout, "s");
-  activation.lo_open = true;
-  v.number("safety", "activation_timeout", s.activation_timeout, activation);
-  v.vector("safety", "joint_lower", s.joint_lower,
-           Range::described(-pi, pi, "a number in [-pi, pi] rad"));
-  v.vector("safety", "joint_upper", s.joint_upper,
-           Range::described(-pi, pi, "a number in [-pi, pi] rad"));
-
-  using PB = teleop::PlausibilityBounds;
-  auto& p = s.plausibility;
-  v.number("plausibility", "position_margin", p.position_margin,
-           Range::between(0.0, PB::max_margin, "rad"));
-  Range velocity = Range::between(0.0, PB::max_velocity, "rad/s");
-  velocity.lo_open = true;
-  v.number("plausibility", "max_velocity", p.max_velocity, velocity);
-  Range current = Range::between(0.0, PB::max_current, "A");
-  current.lo_open = true;
-  v.number("plausibility", "max_current", p.max_current, current);
-  v.number("plausibility", "jump_tolerance", p.jump_tolerance,
-           Range::between(0.0, PB::max_margin, "rad"));
-
-  auto& e = c.estimator;
-  v.vector("estimator", "current_sign", e.current_sign, Range::plus_minus_one());
-  v.vector("estimator", "unit_scale", e.unit_scale, Range::above(0.0));
-  v.friction("estimator", "friction_level", e.friction, Range::at_least(0.0, "A"));
-  v.vector("estimator", "output_deadzone", e.output_deadzone, Range::at_least(0.0));
-  v.vector("estimator", "output_limit", e.output_limit, Range::above(0.0));
-  v.path("estimator", "clamp_model", c.clamp_model);
-
-  auto& o = c.operator_script;
-  v.number("operator", "theta", o.theta, Range::any("rad"));
-  v.number("operator", "z", o.z, Range::any("m"));
-  v.number("operator", "r_open", o.r_open, Range::above(0.0, "m"));
-  v.number("operator", "r_closed", o.r_closed, Range::at_least(0.0, "m"));
-  v.number("operator", "open_time", o.open_time, Range::at_least(0.0, "s"));
-  v.number("operator", "close_time", o.close_time, Range::above(0.0, "s"));
-  v.number("operator", "hold_time", o.hold_time, Range::at_least(0.0, "s"));
-  v.number("operator", "release_time", o.release_time, Range::above(0.0, "s"));
-
-  // (0, the loop's watchdog bound]: 0 would never wait for an answer (the link never comes up).
-  Range timeout = Range::between(
-      0.0, std::chrono::duration<double>(teleop::TeleopLoopConfig::max_watchdog_time).count(), "s");
-  timeout.lo_open = true;
-  v.seconds("loop", "receive_timeout", c.loop.receive_timeout, timeout);
+//! The file's sections in file order, each the field list of one library struct (its
+//! `for_each_field`: names and bounds are the struct's own): `f(section, config struct)`.
+//! "estimator" has one key more, clamp_model (BridgeConfig's, a path).
+template <typename Config, typename F>
+void for_each_section(Config& c, F&& f) {
+  f("mapping", c.mapping);
+  f("safety", c.loop.safety);
+  f("plausibility", c.loop.safety.plausibility);
+  f("estimator", c.estimator);
+  f("operator", c.operator_script);
+  f("loop", c.loop);
 }
+
+//! The section whose struct's validation names `owner` (ParameterError::owner()), or "".
+inline std::string_view section_of(std::string_view owner) {
+  if (owner == "CylindricalMapper") return "mapping";
+  if (owner == "SafetyConfig") return "safety";
+  if (owner == "StatePlausibility") return "plausibility";
+  if (owner == "ForceEstimator") return "estimator";
+  if (owner == "OperatorScript") return "operator";
+  if (owner == "TeleopLoopConfig") return "loop";
+  return {};
+}
+
+//! The bound of the mapping's force limits in the bridge: at most the Touch's peak
+//! (SafetyBounds::max_stylus_force), a relation of the mapping to the device it drives.
+inline constexpr Bound device_force_bound =
+    Bound::above(0, teleop::SafetyBounds::max_stylus_force, "N");
+//! The bound of the mapping's joint ranges in the bridge: within the EndoWrist's joint limit
+//! (SafetyBounds::joint_limit), as the safety ranges are.
+inline constexpr Bound device_angle_bound =
+    Bound::in(-teleop::SafetyBounds::joint_limit, teleop::SafetyBounds::joint_limit, "rad")
+        .described("in [-pi, pi] rad");
 
 //! "section.key".
 inline std::string dotted(std::string_view section, std::string_view key) {
   return std::string(section) + "." + std::string(key);
-}
-
-//! The policies by their names in the file.
-inline const std::array<std::pair<std::string_view, teleop::SafeStatePolicy>, 3>& policies() {
-  static const std::array<std::pair<std::string_view, teleop::SafeStatePolicy>, 3> table = {{
-      {"hold_position", teleop::SafeStatePolicy::hold_position},
-      {"disable_motors", teleop::SafeStatePolicy::disable_motors},
-      {"zero_force", teleop::SafeStatePolicy::zero_force},
-  }};
-  return table;
 }
 
 //! Throws Error "<source>: <key>: <what>".
@@ -255,246 +117,176 @@ inline const std::array<std::pair<std::string_view, teleop::SafeStatePolicy>, 3>
   ENDOHAPTICS_THROW(Error(std::string(source) + ": " + std::string(key) + ": " + what));
 }
 
-//! Throws unless `value` lies in `range`.
-inline void check(std::string_view source, const std::string& key, double value,
-                  const Range& range) {
-  if (!range.contains(value)) {
-    fail(source, key,
-         "must be " + range.describe() + ", got " + endohaptics::detail::format_number(value));
+//! "an integer in [lo, hi]" for an integer field, else the bound's description.
+template <typename T>
+std::string describe(const Bound& bound) {
+  if constexpr (std::is_integral_v<T>) {
+    return "an integer in [" + std::to_string(static_cast<long long>(bound.lo)) + ", " +
+           std::to_string(static_cast<long long>(bound.hi)) + "]";
+  } else {
+    return bound.describe();
   }
 }
 
-//! Visitor: the keys of each section, in schema order.
-struct KeyCollector {
-  std::map<std::string, std::vector<std::string>, std::less<>> keys;  //!< section -> keys
+//! A number of a field's value, by kind: plain, a vector (element access), a duration.
+template <typename T>
+concept Duration = requires(const T& d) {
+  std::chrono::duration<double>(d).count();
+};
 
-  void add(std::string_view section, std::string_view key) {
-    keys[std::string(section)].emplace_back(key);
-  }
+//! Visitor: the field names of a section, in list order.
+struct KeyCollector {
+  std::vector<std::string>& keys;  //!< the names
   template <typename T>
-  void number(std::string_view s, std::string_view k, T&, const Range&) {
-    add(s, k);
-  }
-  template <typename T>
-  void vector(std::string_view s, std::string_view k, T&, const Range&) {
-    add(s, k);
-  }
-  template <typename T>
-  void integer(std::string_view s, std::string_view k, T&, long long, long long) {
-    add(s, k);
-  }
-  template <typename T>
-  void policy(std::string_view s, std::string_view k, T&) {
-    add(s, k);
-  }
-  template <typename T>
-  void friction(std::string_view s, std::string_view k, T&, const Range&) {
-    add(s, k);
-  }
-  template <typename T>
-  void path(std::string_view s, std::string_view k, T&) {
-    add(s, k);
-  }
-  template <typename T>
-  void seconds(std::string_view s, std::string_view k, T&, const Range&) {
-    add(s, k);
+  void operator()(std::string_view name, T&&, const Bound&) const {
+    keys.emplace_back(name);
   }
 };
 
-//! Visitor: reads the keys present in `root` into a BridgeConfig.
+//! Visitor: reads the keys present in one section's object into its struct, each checked
+//! against its field's bound as it is read (file order).
 struct Reader {
-  const json& root;                //!< the whole file, an object with known sections only
-  std::string_view source;         //!< for messages
-  std::filesystem::path base_dir;  //!< relative clamp_model paths start here
+  const json& object;        //!< the section, an object with known keys only
+  std::string_view source;   //!< for messages
+  std::string_view section;  //!< e.g. "safety"
 
-  [[nodiscard]] const json* find(std::string_view section, std::string_view key) const {
-    const auto s = root.find(std::string(section));
-    if (s == root.end()) return nullptr;
-    const auto k = s->find(std::string(key));
-    return k == s->end() ? nullptr : &*k;
-  }
-  [[nodiscard]] double read(const json& j, const std::string& key, const Range& range) const {
-    if (!j.is_number()) {
-      fail(source, key, "must be " + range.describe() + ", got " + show(j));
-    }
+  [[nodiscard]] double number(const json& j, const std::string& key, const Bound& bound) const {
+    if (!j.is_number())
+      fail(source, key, "must be a number (" + bound.describe() + "), got " + show(j));
     const double value = j.get<double>();
-    if (!std::isfinite(value)) {
-      fail(source, key, "must be " + range.describe() + ", got " + show(j));
+    if (!bound.contains(value)) {
+      fail(source, key,
+           "must be " + bound.describe() + ", got " + endohaptics::detail::format_number(value));
     }
-    check(source, key, value, range);
     return value;
   }
-  void number(std::string_view s, std::string_view k, double& out, const Range& range) const {
-    if (const json* j = find(s, k)) out = read(*j, dotted(s, k), range);
-  }
-  template <int N>
-  void read_vector(const json& j, const std::string& key, Eigen::Matrix<double, N, 1>& out,
-                   const Range& range) const {
-    if (!j.is_array() || j.size() != static_cast<std::size_t>(N)) {
-      fail(source, key,
-           "must be an array of " + std::to_string(N) + " numbers, each " + range.describe() +
-               ", got " + show(j));
-    }
-    for (int i = 0; i < N; ++i) {
-      out[i] = read(j[static_cast<std::size_t>(i)], key + "[" + std::to_string(i) + "]", range);
-    }
-  }
-  template <int N>
-  void vector(std::string_view s, std::string_view k, Eigen::Matrix<double, N, 1>& out,
-              const Range& range) const {
-    if (const json* j = find(s, k)) read_vector(*j, dotted(s, k), out, range);
-  }
-  template <typename Int>
-  void integer(std::string_view s, std::string_view k, Int& out, long long lo, long long hi) const {
-    const json* j = find(s, k);
-    if (j == nullptr) return;
+  template <typename T>
+  void read_integer(const json& j, const std::string& key, T& out, const Bound& bound) const {
+    const auto lo = static_cast<long long>(bound.lo);
+    const auto hi = static_cast<long long>(bound.hi);
     const auto bad = [&] {
-      fail(source, dotted(s, k),
-           "must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " +
-               show(*j));
+      fail(source, key, "must be " + describe<T>(bound) + ", got " + show(j));
     };
     // Compared in the type the parser chose, converted only once known to be in range.
-    if (j->is_number_unsigned()) {
-      const auto u = j->get<std::uint64_t>();
+    if (j.is_number_unsigned()) {
+      const auto u = j.get<std::uint64_t>();
       if (u > static_cast<std::uint64_t>(hi)) bad();
-      out = static_cast<Int>(u);
-    } else if (j->is_number_integer()) {
-      const auto i = j->get<std::int64_t>();
+      out = static_cast<T>(u);
+    } else if (j.is_number_integer()) {
+      const auto i = j.get<std::int64_t>();
       if (i < lo || i > hi) bad();
-      out = static_cast<Int>(i);
-    } else if (j->is_number_float()) {
-      const double d = j->get<double>();
+      out = static_cast<T>(i);
+    } else if (j.is_number_float()) {
+      const double d = j.get<double>();
       if (!(std::isfinite(d) && d == std::trunc(d) && d >= static_cast<double>(lo) &&
             d <= static_cast<double>(hi))) {
         bad();
       }
-      out = static_cast<Int>(static_cast<long long>(d));
+      out = static_cast<T>(static_cast<long long>(d));
     } else {
       bad();
     }
   }
-  void policy(std::string_view s, std::string_view k, teleop::SafeStatePolicy& out) const {
-    const json* j = find(s, k);
-    if (j == nullptr) return;
-    if (j->is_string()) {
-      for (const auto& [name, value] : policies()) {
-        if (j->get_ref<const std::string&>() == name) {
-          out = value;
-          return;
+  template <typename T>
+  void operator()(std::string_view name, T&& value, const Bound& bound) const {
+    using V = std::remove_cvref_t<T>;
+    const auto it = object.find(std::string(name));
+    if (it == object.end()) return;
+    const json& j = *it;
+    const std::string key = dotted(section, name);
+    if constexpr (NamedEnum<V>) {
+      if (j.is_string()) {
+        for (const auto& [label, e] : enumerators(value)) {
+          if (j.get_ref<const std::string&>() == label) {
+            value = e;
+            return;
+          }
+        }
+      }
+      fail(source, key, "must be " + enumerator_list(value) + ", got " + show(j));
+    } else if constexpr (std::is_integral_v<V>) {
+      read_integer(j, key, value, bound);
+    } else if constexpr (std::is_floating_point_v<V>) {
+      value = static_cast<V>(number(j, key, bound));
+    } else if constexpr (Duration<V>) {
+      // The bound is finite (at most 1 s): the conversion to ns cannot overflow.
+      value = std::chrono::duration_cast<V>(
+          std::chrono::nanoseconds(std::llround(number(j, key, bound) * 1e9)));
+    } else {
+      const auto n = static_cast<std::size_t>(value.size());
+      if (!j.is_array() || j.size() != n) {
+        fail(source, key,
+             "must be an array of " + std::to_string(n) + " numbers, each " + bound.describe() +
+                 ", got " + show(j));
+      }
+      for (std::size_t i = 0; i < n; ++i) {
+        const double x = number(j[i], key + "[" + std::to_string(i) + "]", bound);
+        if constexpr (requires { value.set(0L, x); }) {
+          value.set(static_cast<long>(i), x);
+        } else {
+          value[static_cast<Eigen::Index>(i)] =
+              static_cast<std::remove_cvref_t<decltype(value[0])>>(x);
         }
       }
     }
-    fail(source, dotted(s, k),
-         "must be \"hold_position\", \"disable_motors\" or \"zero_force\", got " + show(*j));
-  }
-  void friction(std::string_view s, std::string_view k,
-                std::array<model::JointFriction<double>, 4>& out, const Range& range) const {
-    const json* j = find(s, k);
-    if (j == nullptr) return;
-    Eigen::Vector4d levels;
-    read_vector(*j, dotted(s, k), levels, range);
-    for (int i = 0; i < 4; ++i) {
-      out[static_cast<std::size_t>(i)] = model::JointFriction<double>::simplified(levels[i]);
-    }
-  }
-  void path(std::string_view s, std::string_view k, std::filesystem::path& out) const {
-    const json* j = find(s, k);
-    if (j == nullptr) return;
-    if (!j->is_string() || j->get_ref<const std::string&>().empty()) {
-      fail(source, dotted(s, k),
-           "must be the name of a model file (a non-empty string), got " + show(*j));
-    }
-    const std::filesystem::path p = j->get<std::string>();
-    out = p.is_absolute() || base_dir.empty() ? p : base_dir / p;
-  }
-  void seconds(std::string_view s, std::string_view k, std::chrono::nanoseconds& out,
-               const Range& range) const {
-    // The range is finite (at most 1 s): the conversion to ns cannot overflow.
-    if (const json* j = find(s, k)) {
-      out = std::chrono::nanoseconds(std::llround(read(*j, dotted(s, k), range) * 1e9));
-    }
   }
 };
 
-//! Visitor: writes every key of a BridgeConfig into `out` (clamp_model only when set).
+//! Visitor: writes every field of one section into `out`.
 struct Writer {
-  nlohmann::ordered_json out = nlohmann::ordered_json::object();  //!< the file, in schema order
-
-  void number(std::string_view s, std::string_view k, const double& v, const Range&) {
-    out[std::string(s)][std::string(k)] = v;
-  }
-  template <int N>
-  void vector(std::string_view s, std::string_view k, const Eigen::Matrix<double, N, 1>& v,
-              const Range&) {
-    auto a = nlohmann::ordered_json::array();
-    for (int i = 0; i < N; ++i) a.push_back(v[i]);
-    out[std::string(s)][std::string(k)] = a;
-  }
-  template <typename Int>
-  void integer(std::string_view s, std::string_view k, const Int& v, long long, long long) {
-    out[std::string(s)][std::string(k)] = static_cast<long long>(v);
-  }
-  void policy(std::string_view s, std::string_view k, const teleop::SafeStatePolicy& v) {
-    for (const auto& [name, value] : policies()) {
-      if (value == v) out[std::string(s)][std::string(k)] = std::string(name);
+  nlohmann::ordered_json& out;  //!< the section's object
+  template <typename T>
+  void operator()(std::string_view name, T&& value, const Bound&) const {
+    using V = std::remove_cvref_t<T>;
+    const std::string key(name);
+    if constexpr (NamedEnum<V>) {
+      out[key] = std::string(enumerator_name(value));
+    } else if constexpr (std::is_integral_v<V>) {
+      out[key] = static_cast<long long>(value);
+    } else if constexpr (std::is_floating_point_v<V>) {
+      out[key] = static_cast<double>(value);
+    } else if constexpr (Duration<V>) {
+      out[key] = std::chrono::duration<double>(value).count();
+    } else {
+      auto a = nlohmann::ordered_json::array();
+      for (long i = 0; i < static_cast<long>(value.size()); ++i) {
+        a.push_back(static_cast<double>(value[i]));
+      }
+      out[key] = a;
     }
-  }
-  void friction(std::string_view s, std::string_view k,
-                const std::array<model::JointFriction<double>, 4>& v, const Range& r) {
-    vector(
-        s, k,
-        Eigen::Vector4d(v[0].static_level, v[1].static_level, v[2].static_level, v[3].static_level),
-        r);
-  }
-  void path(std::string_view s, std::string_view k, const std::filesystem::path& v) {
-    if (!v.empty()) out[std::string(s)][std::string(k)] = v.string();
-  }
-  void seconds(std::string_view s, std::string_view k, const std::chrono::nanoseconds& v,
-               const Range&) {
-    out[std::string(s)][std::string(k)] = static_cast<double>(v.count()) / 1e9;
   }
 };
 
-//! Visitor: checks every field of a BridgeConfig against the schema's ranges.
+//! Visitor: checks every field of one section of a built BridgeConfig against its bound.
 struct Checker {
-  std::string_view source;  //!< for messages
+  std::string_view source;   //!< for messages
+  std::string_view section;  //!< e.g. "safety"
 
-  void number(std::string_view s, std::string_view k, const double& v, const Range& r) const {
-    check(source, dotted(s, k), v, r);
+  void check(const std::string& key, double value, const std::string& rule, bool ok) const {
+    if (!ok)
+      fail(source, key, "must be " + rule + ", got " + endohaptics::detail::format_number(value));
   }
-  template <int N>
-  void vector(std::string_view s, std::string_view k, const Eigen::Matrix<double, N, 1>& v,
-              const Range& r) const {
-    for (int i = 0; i < N; ++i)
-      check(source, dotted(s, k) + "[" + std::to_string(i) + "]", v[i], r);
-  }
-  template <typename Int>
-  void integer(std::string_view s, std::string_view k, const Int& v, long long lo,
-               long long hi) const {
-    const auto x = static_cast<long long>(v);
-    if (x < lo || x > hi) {
-      fail(source, dotted(s, k),
-           "must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " +
-               std::to_string(x));
+  template <typename T>
+  void operator()(std::string_view name, const T& value, const Bound& bound) const {
+    const std::string key = dotted(section, name);
+    if constexpr (NamedEnum<T>) {
+      if (enumerator_name(value).empty()) {
+        fail(source, key,
+             "is not one of " + enumerator_list(value) + " (" +
+                 std::to_string(static_cast<long long>(value)) + ")");
+      }
+    } else if constexpr (std::is_arithmetic_v<T>) {
+      check(key, static_cast<double>(value), describe<T>(bound),
+            bound.contains(static_cast<double>(value)));
+    } else if constexpr (Duration<T>) {
+      const double seconds = std::chrono::duration<double>(value).count();
+      check(key, seconds, bound.describe(), bound.contains(seconds));
+    } else {
+      for (long i = 0; i < static_cast<long>(value.size()); ++i) {
+        const auto x = static_cast<double>(value[i]);
+        check(key + "[" + std::to_string(i) + "]", x, bound.describe(), bound.contains(x));
+      }
     }
-  }
-  void policy(std::string_view s, std::string_view k, const teleop::SafeStatePolicy& v) const {
-    for (const auto& [name, value] : policies()) {
-      if (value == v) return;
-    }
-    fail(source, dotted(s, k),
-         "is not a SafeStatePolicy (" + std::to_string(static_cast<int>(v)) + ")");
-  }
-  void friction(std::string_view s, std::string_view k,
-                const std::array<model::JointFriction<double>, 4>& v, const Range& r) const {
-    for (std::size_t i = 0; i < v.size(); ++i) {
-      check(source, dotted(s, k) + "[" + std::to_string(i) + "]", v[i].static_level, r);
-    }
-  }
-  void path(std::string_view, std::string_view, const std::filesystem::path&) const {}
-  void seconds(std::string_view s, std::string_view k, const std::chrono::nanoseconds& v,
-               const Range& r) const {
-    check(source, dotted(s, k), static_cast<double>(v.count()) / 1e9, r);
   }
 };
 
@@ -506,11 +298,16 @@ inline json parse(std::string_view text, std::string_view source) {
       {.max_depth = bridge_config_max_depth, .needed = "the bridge configuration needs 3"});
 }
 
-//! Runs a library validator; its Error gets "<source>: <key>: " in front.
+//! Runs a library validator; a ParameterError becomes "<source>: <section>.<field>: must be
+//! <rule>, got <value>" (its owner's section), another Error gets "<source>: <key>: " in front.
 template <typename F>
 void with_prefix(std::string_view source, std::string_view key, F&& validate) {
   try {
     validate();
+  } catch (const ParameterError& e) {
+    const std::string_view section = section_of(e.owner());
+    if (section.empty()) fail(source, key, e.what());
+    fail(source, dotted(section, e.field()), "must be " + e.rule() + ", got " + e.value());
   } catch (const Error& e) {
     fail(source, key, e.what());
   }
@@ -754,8 +551,27 @@ inline constexpr int bridge_clamp_states = 6;
 inline void validate_bridge_config(const BridgeConfig& config,
                                    std::string_view source = "bridge configuration") {
   namespace bc = detail::bridge_config;
-  bc::Checker checker{source};
-  bc::visit_schema(config, checker);
+  bc::for_each_section(config, [&](std::string_view section, const auto& part) {
+    std::remove_cvref_t<decltype(part)>::for_each_field(part, bc::Checker{source, section});
+  });
+  // The mapping's force limits against the device (the Touch's peak).
+  bc::Checker mapping{source, "mapping"};
+  mapping.check("mapping.force_limit", config.mapping.force_limit,
+                bc::device_force_bound.describe(),
+                bc::device_force_bound.contains(config.mapping.force_limit));
+  for (int i = 0; i < 4; ++i) {
+    for (const auto& [name, range] :
+         {std::pair{"lower", &config.mapping.lower}, std::pair{"upper", &config.mapping.upper}}) {
+      mapping.check("mapping." + std::string(name) + "[" + std::to_string(i) + "]", (*range)[i],
+                    bc::device_angle_bound.describe(),
+                    bc::device_angle_bound.contains((*range)[i]));
+    }
+  }
+  for (int i = 0; i < 3; ++i) {
+    mapping.check("mapping.channel_limit[" + std::to_string(i) + "]",
+                  config.mapping.channel_limit[i], bc::device_force_bound.describe(),
+                  bc::device_force_bound.contains(config.mapping.channel_limit[i]));
+  }
   // Cross-field checks, named by the section they concern.
   bc::with_prefix(source, "safety", [&] { config.loop.validate(); });
   bc::with_prefix(source, "mapping",
@@ -782,18 +598,22 @@ inline void validate_bridge_config(const BridgeConfig& config,
         Error(std::string(source) + ": must be a JSON object {...}, got " + bc::show(root)));
   }
   BridgeConfig config;
-  bc::KeyCollector schema;
-  bc::visit_schema(config, schema);
+  std::map<std::string, std::vector<std::string>, std::less<>> schema;  // section -> keys
+  std::vector<std::string> sections;
+  bc::for_each_section(config, [&](std::string_view section, auto& part) {
+    sections.emplace_back(section);
+    std::vector<std::string>& keys = schema[std::string(section)];
+    std::remove_cvref_t<decltype(part)>::for_each_field(part, bc::KeyCollector{keys});
+    if (section == "estimator") keys.emplace_back("clamp_model");
+  });
   auto list = [](const auto& names) {
     std::string out;
     for (const auto& n : names) out += (out.empty() ? "" : ", ") + std::string(n);
     return out;
   };
-  std::vector<std::string> sections;
-  for (const auto& [section, keys] : schema.keys) sections.push_back(section);
   for (const auto& [section, value] : root.items()) {
-    const auto known = schema.keys.find(section);
-    if (known == schema.keys.end()) {
+    const auto known = schema.find(section);
+    if (known == schema.end()) {
       ENDOHAPTICS_THROW(Error(std::string(source) + ": unknown key " + bc::key_name(section) +
                               " (allowed: " + list(sections) + ")"));
     }
@@ -810,8 +630,20 @@ inline void validate_bridge_config(const BridgeConfig& config,
       }
     }
   }
-  bc::Reader reader{root, source, base_dir};
-  bc::visit_schema(config, reader);
+  bc::for_each_section(config, [&](std::string_view section, auto& part) {
+    const auto it = root.find(std::string(section));
+    if (it == root.end()) return;
+    std::remove_cvref_t<decltype(part)>::for_each_field(part, bc::Reader{*it, source, section});
+    if (section != "estimator") return;
+    const auto model = it->find("clamp_model");
+    if (model == it->end()) return;
+    if (!model->is_string() || model->get_ref<const std::string&>().empty()) {
+      bc::fail(source, "estimator.clamp_model",
+               "must be the name of a model file (a non-empty string), got " + bc::show(*model));
+    }
+    const std::filesystem::path p = model->get<std::string>();
+    config.clamp_model = p.is_absolute() || base_dir.empty() ? p : base_dir / p;
+  });
   validate_bridge_config(config, source);
   return config;
 }
@@ -830,9 +662,16 @@ inline void validate_bridge_config(const BridgeConfig& config,
 //! The configuration as JSON text in the file's format (every key; clamp_model when set):
 //! parse_bridge_config reads it back to the same values.
 [[nodiscard]] inline std::string bridge_config_json(const BridgeConfig& config, int indent = 2) {
-  detail::bridge_config::Writer writer;
-  detail::bridge_config::visit_schema(config, writer);
-  return writer.out.dump(indent);
+  namespace bc = detail::bridge_config;
+  nlohmann::ordered_json out = nlohmann::ordered_json::object();
+  bc::for_each_section(config, [&](std::string_view section, const auto& part) {
+    nlohmann::ordered_json& object = out[std::string(section)] = nlohmann::ordered_json::object();
+    std::remove_cvref_t<decltype(part)>::for_each_field(part, bc::Writer{object});
+    if (section == "estimator" && !config.clamp_model.empty()) {
+      object["clamp_model"] = config.clamp_model.string();
+    }
+  });
+  return out.dump(indent);
 }
 
 }  // namespace endohaptics::files

@@ -24,6 +24,7 @@
 #include <string_view>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/core/parameter.hpp"
 #include "endohaptics/protocol/motor_order.hpp"
 
 namespace endohaptics::kinematics {
@@ -113,6 +114,36 @@ struct CylindricalMapperConfig {
   //! defaults the shared limit never scales a force whose channels are each within their limit.
   Vector3 channel_limit = Vector3::Constant(Scalar(1.4));
   Scalar force_limit = Scalar(2.5);  //!< N, magnitude limit of the stylus force (Touch peak 3.3)
+
+  //! Every field but motor_order (a permutation, checked by CylindricalMapper) by its
+  //! configuration name, with its bound (core/parameter.hpp): the one list CylindricalMapper's
+  //! validation and the bridge configuration use.
+  template <typename Self, typename Visitor>
+  static void for_each_field(Self& p, Visitor&& v) {
+    constexpr double pi = std::numbers::pi;
+    // The gains of eq. 5.9 scale the motion and, through eq. 5.8's transpose, the force felt:
+    // a gain of 0 would freeze the joint and silently remove its force feedback.
+    const Bound gain = Bound::magnitude(1e-6, 1e6).described(
+        "of magnitude in [1e-6, 1e6] (a gain of 0 freezes the joint and removes its force "
+        "feedback)");
+    const Bound angle = Bound::in(-pi, pi, "rad").described("in [-pi, pi] rad");
+    // Per channel before the shared force_limit (the bridge holds both to the Touch's peak).
+    const Bound force = Bound::above(0, std::numeric_limits<double>::infinity(), "N");
+    v("a_roll", p.a_roll, gain);
+    v("b_roll", p.b_roll, Bound::finite("rad"));
+    v("a_pitch", p.a_pitch, gain);
+    v("b_pitch", p.b_pitch, Bound::finite("rad"));
+    v("a_clamp", p.a_clamp, gain);
+    v("b_clamp", p.b_clamp, Bound::finite("rad"));
+    v("lower", p.lower, Bound::finite("rad"));
+    v("upper", p.upper, Bound::finite("rad"));
+    v("min_radius", p.min_radius, Bound::in(0, std::numeric_limits<double>::infinity(), "m"));
+    v("theta_neutral", p.theta_neutral, angle);
+    // >= 0: a negative scale would push along the operator's motion.
+    v("force_scale", p.force_scale, Bound::in(0, 100, "N per unit"));
+    v("force_limit", p.force_limit, force);
+    v("channel_limit", p.channel_limit, force);
+  }
 };
 
 //! The rest pose of the mapping frame (m): the stylus straight ahead (theta = pi/2, +x) at the
@@ -309,30 +340,10 @@ class CylindricalMapper {
   }
 
   void validate() {
-    endohaptics::detail::require_finite(config_.a_roll, "CylindricalMapper", "a_roll");
-    endohaptics::detail::require_finite(config_.b_roll, "CylindricalMapper", "b_roll");
-    endohaptics::detail::require_finite(config_.a_pitch, "CylindricalMapper", "a_pitch");
-    endohaptics::detail::require_finite(config_.b_pitch, "CylindricalMapper", "b_pitch");
-    endohaptics::detail::require_finite(config_.a_clamp, "CylindricalMapper", "a_clamp");
-    endohaptics::detail::require_finite(config_.b_clamp, "CylindricalMapper", "b_clamp");
-    // The gains of eq. 5.9 scale the motion and, through eq. 5.8's transpose, the force felt:
-    // a gain of 0 would freeze the joint and silently remove its force feedback.
-    for (const auto& [gain, name] :
-         {std::pair{config_.a_roll, "a_roll"}, std::pair{config_.a_pitch, "a_pitch"},
-          std::pair{config_.a_clamp, "a_clamp"}}) {
-      if (!(std::fabs(gain) >= min_gain && std::fabs(gain) <= max_gain)) {
-        ENDOHAPTICS_THROW(Error(std::string("CylindricalMapper: ") + name +
-                                " must be of magnitude in [1e-6, 1e6] (a gain of 0 freezes the "
-                                "joint and removes its force feedback), got " +
-                                endohaptics::detail::format_number(gain)));
-      }
-    }
+    const ParameterChecker check{"CylindricalMapper"};
+    Config::for_each_field(config_, check);
     for (int j = 0; j < num_joints; ++j) {
       const std::string name(to_string(static_cast<Motor>(j)));
-      endohaptics::detail::require_finite(config_.lower[j], "CylindricalMapper",
-                                          ("lower[" + name + "]").c_str());
-      endohaptics::detail::require_finite(config_.upper[j], "CylindricalMapper",
-                                          ("upper[" + name + "]").c_str());
       if (config_.lower[j] > config_.upper[j]) {
         ENDOHAPTICS_THROW(Error("CylindricalMapper: range of " + name + " is empty: lower " +
                                 endohaptics::detail::format_number(config_.lower[j]) + " > upper " +
@@ -353,41 +364,6 @@ class CylindricalMapper {
       }
       seen[j] = true;
       motor_of_joint_[j] = static_cast<int>(m);
-    }
-    endohaptics::detail::require_finite(config_.min_radius, "CylindricalMapper", "min_radius");
-    if (config_.min_radius < 0) {
-      ENDOHAPTICS_THROW(Error("CylindricalMapper: min_radius must be >= 0 m, got " +
-                              endohaptics::detail::format_number(config_.min_radius)));
-    }
-    endohaptics::detail::require_finite(config_.theta_neutral, "CylindricalMapper",
-                                        "theta_neutral");
-    if (std::fabs(config_.theta_neutral) > std::numbers::pi_v<Scalar>) {
-      ENDOHAPTICS_THROW(Error("CylindricalMapper: theta_neutral must be in [-pi, pi] rad, got " +
-                              endohaptics::detail::format_number(config_.theta_neutral)));
-    }
-    for (int k = 0; k < 3; ++k) {
-      // Appended, not "[" + to_string(k): GCC 12's -Wrestrict misfires on const char* + string&&.
-      std::string index(1, '[');
-      index += std::to_string(k);
-      index += ']';
-      endohaptics::detail::require_finite(config_.force_scale[k], "CylindricalMapper",
-                                          ("force_scale" + index).c_str());
-      if (config_.force_scale[k] < 0) {  // the feedback would push along the operator's motion
-        ENDOHAPTICS_THROW(Error("CylindricalMapper: force_scale" + index + " must be >= 0, got " +
-                                endohaptics::detail::format_number(config_.force_scale[k])));
-      }
-      endohaptics::detail::require_finite(config_.channel_limit[k], "CylindricalMapper",
-                                          ("channel_limit" + index).c_str());
-      if (!(config_.channel_limit[k] > 0)) {
-        ENDOHAPTICS_THROW(Error("CylindricalMapper: channel_limit" + index +
-                                " must be > 0 N, got " +
-                                endohaptics::detail::format_number(config_.channel_limit[k])));
-      }
-    }
-    endohaptics::detail::require_finite(config_.force_limit, "CylindricalMapper", "force_limit");
-    if (!(config_.force_limit > 0)) {
-      ENDOHAPTICS_THROW(Error("CylindricalMapper: force_limit must be > 0 N, got " +
-                              endohaptics::detail::format_number(config_.force_limit)));
     }
   }
 

@@ -52,6 +52,32 @@ struct JointFriction {
   friend bool operator==(const JointFriction&, const JointFriction&) = default;
 };
 
+//! The static levels of an array of JointFriction as a vector of numbers (a field of a parameter
+//! list, core/parameter.hpp): element i reads friction[i].static_level, set(i, level) makes
+//! friction[i] the simplified model of that level. Configuration time.
+template <typename Array>
+class StaticFrictionLevels {
+ public:
+  //! A view of `friction` (const for reading only).
+  explicit StaticFrictionLevels(Array& friction) noexcept : a_(friction) {}
+  //! The number of joints.
+  [[nodiscard]] long size() const noexcept { return static_cast<long>(a_.size()); }
+  //! friction[i].static_level.
+  [[nodiscard]] auto operator[](long i) const noexcept {
+    return a_[static_cast<std::size_t>(i)].static_level;
+  }
+  //! friction[i] = JointFriction::simplified(level).
+  template <typename Scalar>
+  void set(long i, Scalar level) noexcept {
+    using Friction = std::remove_cvref_t<decltype(a_[0])>;
+    a_[static_cast<std::size_t>(i)] =
+        Friction::simplified(static_cast<decltype(Friction::static_level)>(level));
+  }
+
+ private:
+  Array& a_;
+};
+
 //! Table 5.2 presets (simplified model, Kc = Ks, F_mu = 0), in A. The roll value is doubtful:
 //! the 2016 analysis script and the logs give about 0.13 A (docs/models/friction_model.md).
 namespace friction_2016 {

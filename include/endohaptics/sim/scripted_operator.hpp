@@ -11,11 +11,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <string>
 
 #include "endohaptics/core/clock.hpp"
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/core/parameter.hpp"
 #include "endohaptics/kinematics/cylindrical_mapper.hpp"
 #include "endohaptics/model/human_arm_model.hpp"
 #include "endohaptics/teleop/haptic_device.hpp"
@@ -43,24 +45,28 @@ struct OperatorScript {
     return open_time + close_time + hold_time + release_time;
   }
 
-  //! Throws Error naming the field and value.
+  //! Every field but arm_sample_time (the arm model's, not the script's) by its configuration
+  //! name, with its bound (core/parameter.hpp): the one list validate() and the bridge
+  //! configuration use.
+  template <typename Self, typename Visitor>
+  static void for_each_field(Self& p, Visitor&& v) {
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    v("theta", p.theta, Bound::finite("rad"));
+    v("z", p.z, Bound::finite("m"));
+    v("r_open", p.r_open, Bound::above(0, inf, "m"));
+    v("r_closed", p.r_closed, Bound::in(0, inf, "m"));
+    v("open_time", p.open_time, Bound::in(0, inf, "s"));
+    v("close_time", p.close_time, Bound::above(0, inf, "s"));
+    v("hold_time", p.hold_time, Bound::in(0, inf, "s"));
+    v("release_time", p.release_time, Bound::above(0, inf, "s"));
+  }
+
+  //! Throws ParameterError naming the field, its value and the rule.
   void validate() const {
-    auto check = [](bool ok, const char* field, double v) {
-      if (!ok) {
-        ENDOHAPTICS_THROW(
-            Error(std::string("OperatorScript: ") + field + " out of range: " + std::to_string(v)));
-      }
-    };
-    check(std::isfinite(theta), "theta", theta);
-    check(std::isfinite(z), "z", z);
-    check(std::isfinite(r_open) && r_open > 0.0, "r_open", r_open);
-    check(std::isfinite(r_closed) && r_closed >= 0.0, "r_closed", r_closed);
-    check(std::isfinite(open_time) && open_time >= 0.0, "open_time", open_time);
-    check(std::isfinite(close_time) && close_time > 0.0, "close_time", close_time);
-    check(std::isfinite(hold_time) && hold_time >= 0.0, "hold_time", hold_time);
-    check(std::isfinite(release_time) && release_time > 0.0, "release_time", release_time);
-    check(std::isfinite(arm_sample_time) && arm_sample_time > 0.0, "arm_sample_time",
-          arm_sample_time);
+    const ParameterChecker check{"OperatorScript"};
+    for_each_field(*this, check);
+    check("arm_sample_time", arm_sample_time,
+          Bound::above(0, std::numeric_limits<double>::infinity(), "s"));
   }
 
   //! Where the hand aims at time `t` (s since start), m, mapping frame.

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -12,8 +13,10 @@
 #include <limits>
 #include <string>
 #include <string_view>
+#include <utility>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/core/parameter.hpp"
 #include "endohaptics/protocol/motor_order.hpp"
 #include "endohaptics/teleop/state_plausibility.hpp"
 
@@ -37,6 +40,14 @@ enum class SafeStatePolicy : std::uint8_t {
       return "zero-force";
   }
   return "unknown policy";
+}
+
+//! The policies by their configuration names ("hold_position", "disable_motors", "zero_force").
+[[nodiscard]] constexpr std::array<std::pair<std::string_view, SafeStatePolicy>, 3> enumerators(
+    SafeStatePolicy) noexcept {
+  return {{{"hold_position", SafeStatePolicy::hold_position},
+           {"disable_motors", SafeStatePolicy::disable_motors},
+           {"zero_force", SafeStatePolicy::zero_force}}};
 }
 
 //! Link state as the watchdog sees it.
@@ -114,59 +125,44 @@ struct SafetyConfig {
     return position.cwiseMax(joint_lower).cwiseMin(joint_upper);
   }
 
-  //! Throws Error naming the field, the value and the allowed range. `motors` (1..8): how many
-  //! the link carries; the enable mask may only name those (bits 0..motors-1).
+  //! Every field but `plausibility` (its own list) by its configuration name, with its bound
+  //! (core/parameter.hpp): the one list validate() and the bridge configuration use.
+  template <typename Self, typename Visitor>
+  static void for_each_field(Self& p, Visitor&& v) {
+    using B = SafetyBounds;
+    const Bound joint =
+        Bound::in(-B::joint_limit, B::joint_limit, "rad").described("in [-pi, pi] rad");
+    v("max_consecutive_misses", p.max_consecutive_misses, Bound::in(0, B::max_consecutive_misses));
+    v("policy", p.policy, Bound{});
+    v("max_hold_time", p.max_hold_time, Bound::above(0, B::max_hold_time, "s"));
+    v("force_ramp_time", p.force_ramp_time, Bound::in(0, B::max_force_ramp_time, "s"));
+    v("max_setpoint_rate", p.max_setpoint_rate, Bound::above(0, B::max_setpoint_rate, "rad/s"));
+    v("max_stylus_force", p.max_stylus_force,
+      Bound::in(0, B::max_stylus_force, "N").described("in [0, 3.3] N (the Touch's peak)"));
+    v("enable_mask", p.enable_mask, Bound::in(0, 255));
+    v("activation_timeout", p.activation_timeout, Bound::above(0, B::max_activation_timeout, "s"));
+    v("joint_lower", p.joint_lower, joint);
+    v("joint_upper", p.joint_upper, joint);
+  }
+
+  //! Throws ParameterError naming the field, the value and the allowed range. `motors` (1..8):
+  //! how many the link carries; the enable mask may only name those (bits 0..motors-1).
   void validate(int motors = protocol::endowrist_motors) const {
-    auto fail = [](const std::string& what) { ENDOHAPTICS_THROW(Error("SafetyConfig: " + what)); };
     auto hex = [](unsigned value) {
       char text[8];
       std::snprintf(text, sizeof text, "0x%02X", value);
       return std::string(text);
     };
-    using endohaptics::detail::format_number;
-    if (motors < 1 || motors > 8) {
-      fail("motors must be 1..8 (one mask byte), got " + std::to_string(motors));
-    }
+    const ParameterChecker check{"SafetyConfig"};
+    check.require(motors >= 1 && motors <= 8, "motors", motors, "1..8 (one mask byte)");
+    for_each_field(*this, check);
     const unsigned allowed = (1u << static_cast<unsigned>(motors)) - 1u;
-    if ((enable_mask & ~allowed) != 0u) {
-      fail("enable_mask must be <= " + hex(allowed) + " (bits 0.." + std::to_string(motors - 1) +
-           ": " + std::to_string(motors) + " motors), got " + hex(enable_mask));
-    }
-    if (max_consecutive_misses < 0 ||
-        max_consecutive_misses > SafetyBounds::max_consecutive_misses) {
-      fail("max_consecutive_misses must be in [0, " +
-           std::to_string(SafetyBounds::max_consecutive_misses) + "], got " +
-           std::to_string(max_consecutive_misses));
-    }
-    if (!(force_ramp_time >= 0.0 && force_ramp_time <= SafetyBounds::max_force_ramp_time)) {
-      fail("force_ramp_time must be in [0, " + format_number(SafetyBounds::max_force_ramp_time) +
-           "] s, got " + format_number(force_ramp_time));
-    }
-    if (!(max_hold_time > 0.0 && max_hold_time <= SafetyBounds::max_hold_time)) {
-      fail("max_hold_time must be in (0, " + format_number(SafetyBounds::max_hold_time) +
-           "] s, got " + format_number(max_hold_time));
-    }
-    if (!(activation_timeout > 0.0 && activation_timeout <= SafetyBounds::max_activation_timeout)) {
-      fail("activation_timeout must be in (0, " +
-           format_number(SafetyBounds::max_activation_timeout) + "] s, got " +
-           format_number(activation_timeout));
-    }
-    if (!(max_setpoint_rate > 0.0 && max_setpoint_rate <= SafetyBounds::max_setpoint_rate)) {
-      fail("max_setpoint_rate must be in (0, " + format_number(SafetyBounds::max_setpoint_rate) +
-           "] rad/s, got " + format_number(max_setpoint_rate));
-    }
-    if (!(max_stylus_force >= 0.0 && max_stylus_force <= SafetyBounds::max_stylus_force)) {
-      fail("max_stylus_force must be in [0, " + format_number(SafetyBounds::max_stylus_force) +
-           "] N (the Touch's peak), got " + format_number(max_stylus_force));
-    }
+    check.require_text((enable_mask & ~allowed) == 0u, "enable_mask", hex(enable_mask),
+                       "<= " + hex(allowed) + " (bits 0.." + std::to_string(motors - 1) + ": " +
+                           std::to_string(motors) + " motors)");
     for (int m = 0; m < protocol::endowrist_motors; ++m) {
-      const double lo = joint_lower[m];
-      const double hi = joint_upper[m];
-      if (!(lo >= -SafetyBounds::joint_limit && hi <= SafetyBounds::joint_limit && lo < hi)) {
-        fail("joint range of motor " + std::to_string(m) +
-             " must satisfy -pi <= lower < upper <= pi rad, got [" + format_number(lo) + ", " +
-             format_number(hi) + "]");
-      }
+      check.require(joint_lower[m] < joint_upper[m], "joint_upper[" + std::to_string(m) + "]",
+                    joint_upper[m], "above joint_lower[" + std::to_string(m) + "]");
     }
     plausibility.validate();
   }

@@ -14,6 +14,7 @@
 #include <string_view>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/core/parameter.hpp"
 #include "endohaptics/protocol/packet_codec.hpp"
 
 namespace endohaptics::teleop {
@@ -64,23 +65,18 @@ struct StatePlausibility {
   double max_current = 15.0;     //!< A, per motor
   double jump_tolerance = 0.05;  //!< rad on top of max_velocity x elapsed (encoder, play)
 
-  //! Throws Error naming the field, its value and the allowed range.
-  void validate() const {
-    auto check = [](double value, double lo, double hi, bool lo_open, std::string_view name,
-                    std::string_view unit) {
-      const bool ok = std::isfinite(value) && (lo_open ? value > lo : value >= lo) && value <= hi;
-      if (!ok) {
-        ENDOHAPTICS_THROW(Error(
-            "StatePlausibility: " + std::string(name) + " must be in " + (lo_open ? "(" : "[") +
-            endohaptics::detail::format_number(lo) + ", " + endohaptics::detail::format_number(hi) +
-            "] " + std::string(unit) + ", got " + endohaptics::detail::format_number(value)));
-      }
-    };
-    check(position_margin, 0.0, PlausibilityBounds::max_margin, false, "position_margin", "rad");
-    check(max_velocity, 0.0, PlausibilityBounds::max_velocity, true, "max_velocity", "rad/s");
-    check(max_current, 0.0, PlausibilityBounds::max_current, true, "max_current", "A");
-    check(jump_tolerance, 0.0, PlausibilityBounds::max_margin, false, "jump_tolerance", "rad");
+  //! Every field by its configuration name, with its bound (core/parameter.hpp).
+  template <typename Self, typename Visitor>
+  static void for_each_field(Self& p, Visitor&& v) {
+    using B = PlausibilityBounds;
+    v("position_margin", p.position_margin, Bound::in(0, B::max_margin, "rad"));
+    v("max_velocity", p.max_velocity, Bound::above(0, B::max_velocity, "rad/s"));
+    v("max_current", p.max_current, Bound::above(0, B::max_current, "A"));
+    v("jump_tolerance", p.jump_tolerance, Bound::in(0, B::max_margin, "rad"));
   }
+
+  //! Throws ParameterError naming the field, its value and the allowed range.
+  void validate() const { for_each_field(*this, ParameterChecker{"StatePlausibility"}); }
 
   //! The first fault of `state` (checked in the order of StateFault), or StateFault::none.
   //! `lower`/`upper`: the joint range, rad, motor order. `previous`: the last plausible state,

@@ -128,6 +128,15 @@ struct TeleopLoopConfig {
     return std::max(receive_timeout, std::chrono::nanoseconds(std::chrono::milliseconds(1)));
   }
 
+  //! The fields a configuration file sets, by name, with their bounds (core/parameter.hpp):
+  //! receive_timeout in (0, max_watchdog_time] s (0 would never wait for an answer: the link could
+  //! never come up). The period (the bridge's --rate), safety and passivity are checked apart.
+  template <typename Self, typename Visitor>
+  static void for_each_field(Self& p, Visitor&& v) {
+    v("receive_timeout", p.receive_timeout,
+      Bound::above(0, std::chrono::duration<double>(max_watchdog_time).count(), "s"));
+  }
+
   //! Throws Error naming the field and value.
   void validate() const {
     if (period.count() < 0) {
@@ -136,16 +145,7 @@ struct TeleopLoopConfig {
                 "allows), got " +
                 std::to_string(period.count())));
     }
-    if (receive_timeout.count() <= 0 || receive_timeout > max_watchdog_time) {
-      // 0 would never wait for an answer: the link could never come up.
-      ENDOHAPTICS_THROW(Error("TeleopLoopConfig: receive_timeout must be in (0, " +
-                              endohaptics::detail::format_number(
-                                  std::chrono::duration<double>(max_watchdog_time).count()) +
-                              "] s, got " +
-                              endohaptics::detail::format_number(
-                                  std::chrono::duration<double>(receive_timeout).count()) +
-                              " s"));
-    }
+    for_each_field(*this, ParameterChecker{"TeleopLoopConfig"});
     safety.validate(protocol::endowrist_motors);
     passivity.validate();
     // The watchdog declares the link lost after max_consecutive_misses + 1 missed ticks of at
