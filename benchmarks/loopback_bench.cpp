@@ -71,6 +71,14 @@ protocol::ResponderConfig robot_config() {
   return c;
 }
 
+// The emulator's socket: 127.0.0.1, any free port, every other setting its default.
+transport::UdpServerConfig loopback_server() {
+  transport::UdpServerConfig c;
+  c.bind_address = "127.0.0.1";
+  c.port = 0;
+  return c;
+}
+
 // The emulated sbRIO in its own thread, on 127.0.0.1, any free port; over protocol v2 when
 // `V2`.
 template <bool V2>
@@ -78,7 +86,7 @@ class EmulatorThread {
  public:
   using Link = std::conditional_t<V2, ServerV2, transport::UdpServerTransport>;
   explicit EmulatorThread(int fifo_priority = 0)
-      : server_({.bind_address = "127.0.0.1", .port = 0}),
+      : server_(loopback_server()),
         link_(make_link()),
         rig_(sim::endowrist_2016_rig<4>(sim::Environment::tissue)),
         emulator_(*link_, rig_, clock_),

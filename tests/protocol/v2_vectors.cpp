@@ -69,8 +69,8 @@ int main() {
   // The session keys, exported here only to print them (a session never shows its keys).
   protocol::SecureKey setpoint_key(counting_from<protocol::SecureKey::size>(0));
   protocol::SecureKey state_key(counting_from<protocol::SecureKey::size>(0));
-  protocol::derive_session_key(key, protocol::PacketType::setpoint, rig, console_nonce,
-                               robot_nonce, setpoint_key);
+  protocol::derive_session_key(key, protocol::PacketType::setpoint, rig, console_nonce, robot_nonce,
+                               setpoint_key);
   protocol::derive_session_key(key, protocol::PacketType::state, rig, console_nonce, robot_nonce,
                                state_key);
   const std::uint64_t pc = protocol::session_id_of(console_nonce);

@@ -82,14 +82,16 @@ class SecureTransport {
     ReceiveResult r = inner_->receive(std::span<std::byte>(rx_), timeout, gate);
     counters_.wrong_size += r.oversized;
     r.oversized = 0;
-    if constexpr (requires { session_.take_reply(); }) {
-      // A HELLO was the newest datagram taken: the inner transport answers its sender.
-      if (r.status == TransportStatus::ok && gate.last_hello) {
+    if (r.status == TransportStatus::ok && gate.last_handshake) {
+      // A handshake step was the newest datagram taken (the drain returns at once: a session
+      // opens one round trip after the HELLO). Robot side: the inner transport answers the
+      // HELLO's sender. Either way nothing for the caller: silence.
+      if constexpr (requires { session_.take_reply(); }) {
         if (const auto reply = session_.take_reply(); !reply.empty()) (void)inner_->send(reply);
-        r.status = TransportStatus::timeout;
-        r.size = 0;
-        return r;
       }
+      r.status = TransportStatus::timeout;
+      r.size = 0;
+      return r;
     }
     if (r.status == TransportStatus::ok) {
       if (buffer.size() < Session::receive_payload_size) {
@@ -131,19 +133,15 @@ class SecureTransport {
     SecureTransport* self;
     F* filter;
     bool filter_refused = false;  // the caller's filter refused an authentic, fresh payload
-    bool last_hello = false;      // the newest datagram taken is a HELLO (robot side)
+    bool last_handshake = false;  // the newest datagram taken is a HELLO or a WELCOME
     bool operator()(std::span<const std::byte> datagram) noexcept {
       const auto now = SecureTransport::now();
       protocol::SecureVerified v;
       const protocol::SecureStatus s = self->session_.verify(datagram, now, v);
       if (s != protocol::SecureStatus::ok) self->counters_.record(s);
-      if (s == protocol::SecureStatus::welcome) {  // console: a session opens; nothing to hand
-        self->session_.commit(v, now);
-        return false;
-      }
-      if (s == protocol::SecureStatus::hello) {  // robot: answered after the drain, to its sender
-        self->session_.commit(v, now);
-        last_hello = true;
+      if (s == protocol::SecureStatus::welcome || s == protocol::SecureStatus::hello) {
+        self->session_.commit(v, now);  // a session opens (console), or is offered (robot)
+        last_handshake = true;
         return true;
       }
       if (s != protocol::SecureStatus::ok) return false;
@@ -163,7 +161,7 @@ class SecureTransport {
           self->answer_round_trip_ = now - self->sent_at_[ack % self->sent_at_.size()];
         }
       }
-      last_hello = false;
+      last_handshake = false;
       return true;
     }
   };
