@@ -51,6 +51,13 @@ int main(int argc, char** argv) {
     opt.device = "ros " + input;
     const endohaptics::files::BridgeConfig cfg = bridge::load_config(opt);
 
+    // With --cpu, ROS's threads (roscpp's own, the spinner, the publisher) and their network
+    // work stay off the loop's CPU: set before they exist, they inherit it.
+    if (opt.cpu >= 0) {
+      for (const auto& m : endohaptics::teleop::avoid_cpu(opt.cpu)) {
+        fmt::print("ros-bridge: realtime: {}\n", m);
+      }
+    }
     ros::init(ros_argc, argv, "endohaptics_bridge",
               ros::init_options::NoSigintHandler | ros::init_options::NoRosout);
     if (!ros::master::check()) {

@@ -29,7 +29,6 @@
 #include <endohaptics/teleop/haptic_device.hpp>
 #include <endohaptics/teleop/latest_value.hpp>
 #include <endohaptics/teleop/loop_stats.hpp>
-#include <endohaptics/teleop/realtime.hpp>
 #include <string>
 #include <thread>
 
@@ -287,7 +286,8 @@ class RosPublisher {
     }
   }
 
-  //! Starts the publishing thread (before the loop thread turns real-time: it stays normal).
+  //! Starts the publishing thread (before the loop thread turns real-time: it stays
+  //! SCHED_OTHER, with the CPUs the starting thread had).
   void start() {
     thread_ = std::thread([this] { run(); });
   }
@@ -308,9 +308,6 @@ class RosPublisher {
 
  private:
   void run() {
-    for (const auto& m : endohaptics::teleop::leave_realtime()) {
-      ROS_INFO("publisher: %s", m.c_str());
-    }
     sensor_msgs::JointState js, sp, jf;
     geometry_msgs::WrenchStamped cf;
     std_msgs::Float64MultiArray row;
@@ -345,7 +342,8 @@ class RosPublisher {
           fill_vector3(feedback.position, Eigen::Vector3d::Zero());  // as the 2016 node sent it
           omni_feedback_.publish(feedback);
         }
-        fill_tick_log<std_msgs::Float64MultiArray, std_msgs::MultiArrayDimension>(row, r);
+        fill_tick_log<std_msgs::Float64MultiArray, std_msgs::MultiArrayDimension>(
+            row, r, counters_.ticks % 1000 == 0);
         tick_log_.publish(row);
         const std::string_view s = operating_state(r);
         if (s != last_state || std::chrono::steady_clock::now() >= next_state) {

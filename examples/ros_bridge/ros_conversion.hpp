@@ -41,7 +41,7 @@ struct Topics {
   //! One line of loop figures every second (std_msgs/String).
   [[nodiscard]] std::string loop_stats() const { return robot + "/loop_stats"; }
   //! Every tick-log column of every tick (std_msgs/Float64MultiArray; the column names in
-  //! layout.dim[0].label): what tools/bag_to_tick_log.py turns into the bridge's --log CSV.
+  //! layout.dim[0].label once a second): what bag_to_tick_log.py turns into the bridge's --log.
   [[nodiscard]] std::string tick_log() const { return robot + "/tick_log"; }
   //! The CRTK stylus pose the bridge follows (geometry_msgs/PoseStamped, Touch frame, m).
   [[nodiscard]] std::string stylus_pose() const { return touch + "/measured_cp"; }
@@ -117,20 +117,23 @@ void fill_vector3(Vector3& v, const Eigen::Vector3d& x) {
   v.z = x.z();
 }
 
-//! Fills a Float64MultiArray with the tick-log row `r`, the columns named in layout.dim[0].label
-//! (teleop::tick_log_columns, comma-separated; set once).
+//! Fills a Float64MultiArray with the tick-log row `r`. `named`: the column names go in
+//! layout.dim[0].label (teleop::tick_log_columns, comma-separated); otherwise the label is empty
+//! (the bridge names one message a second: 0.4 kB less per tick; bag_to_tick_log.py takes the
+//! names from any one).
 template <typename Float64MultiArray, typename Dimension>
-void fill_tick_log(Float64MultiArray& m, const tp::TickRecord& r) {
-  if (m.layout.dim.empty()) {
-    Dimension d;
+void fill_tick_log(Float64MultiArray& m, const tp::TickRecord& r, bool named) {
+  if (m.layout.dim.empty()) m.layout.dim.push_back(Dimension{});
+  auto& d = m.layout.dim.front();
+  d.label.clear();
+  if (named) {
     for (const auto c : tp::tick_log_columns) {
       if (!d.label.empty()) d.label += ',';
       d.label += std::string(c);
     }
-    d.size = static_cast<std::uint32_t>(tp::tick_log_columns.size());
-    d.stride = d.size;
-    m.layout.dim.push_back(d);
   }
+  d.size = static_cast<std::uint32_t>(tp::tick_log_columns.size());
+  d.stride = d.size;
   const auto row = r.values();
   m.data.assign(row.begin(), row.end());
 }

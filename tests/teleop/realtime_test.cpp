@@ -64,4 +64,36 @@ TEST_CASE("leave_realtime: SCHED_FIFO inherited from the creating thread is drop
   CHECK(after == SCHED_OTHER);
 }
 
+TEST_CASE("avoid_cpu keeps the calling thread and the threads it creates off one CPU") {
+  std::thread owner([] {
+    cpu_set_t before;
+    CPU_ZERO(&before);
+    REQUIRE(::sched_getaffinity(0, sizeof before, &before) == 0);
+    int first = -1;
+    for (int c = 0; c < CPU_SETSIZE && first < 0; ++c) {
+      if (CPU_ISSET(static_cast<unsigned>(c), &before)) first = c;
+    }
+    REQUIRE(first >= 0);
+    const auto messages = tp::avoid_cpu(first);
+    if (CPU_COUNT(&before) == 1) {  // one CPU: refused, with the reason
+      REQUIRE(messages.size() == 1);
+      CHECK(messages[0].find("only one allowed") != std::string::npos);
+      return;
+    }
+    CHECK(messages.empty());
+    bool helper_on_it = true;
+    std::thread helper([&] {
+      cpu_set_t now;
+      CPU_ZERO(&now);
+      if (::sched_getaffinity(0, sizeof now, &now) == 0) {
+        helper_on_it = CPU_ISSET(static_cast<unsigned>(first), &now);
+      }
+    });
+    helper.join();
+    CHECK_FALSE(helper_on_it);
+  });
+  owner.join();
+  CHECK(tp::avoid_cpu(-1).size() == 1);
+}
+
 }  // namespace teleop_realtime_test

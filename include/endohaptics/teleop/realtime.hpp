@@ -103,4 +103,27 @@ inline RealtimeReport apply_realtime(const RealtimeOptions& options) {
   return refused;
 }
 
+//! For a program whose loop thread will be pinned to `cpu` (apply_realtime's RealtimeOptions::cpu)
+//! and whose helpers must stay off it (a middleware's threads, their network work): keeps the
+//! calling thread, and every thread it creates from now on, on every CPU but `cpu`. Call it
+//! before creating the helpers; apply_realtime later pins the loop thread itself. Returns one
+//! line per refusal (also when `cpu` is the only CPU allowed); empty when applied.
+[[nodiscard]] inline std::vector<std::string> avoid_cpu(int cpu) {
+  cpu_set_t allowed;
+  CPU_ZERO(&allowed);
+  if (::sched_getaffinity(0, sizeof allowed, &allowed) != 0) {
+    return {std::string("reading the CPU affinity refused: ") + std::strerror(errno)};
+  }
+  if (cpu < 0 || cpu >= CPU_SETSIZE) return {"avoid_cpu: no CPU " + std::to_string(cpu)};
+  CPU_CLR(static_cast<unsigned>(cpu), &allowed);
+  if (CPU_COUNT(&allowed) == 0) {
+    return {"avoid_cpu: CPU " + std::to_string(cpu) + " is the only one allowed"};
+  }
+  if (::sched_setaffinity(0, sizeof allowed, &allowed) != 0) {
+    return {std::string("every CPU but ") + std::to_string(cpu) +
+            " refused: " + std::strerror(errno)};
+  }
+  return {};
+}
+
 }  // namespace endohaptics::teleop
