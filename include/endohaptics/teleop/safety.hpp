@@ -149,7 +149,7 @@ struct SafetyConfig {
   //! how many the link carries; the enable mask may only name those (bits 0..motors-1).
   void validate(int motors = protocol::endowrist_motors) const {
     auto hex = [](unsigned value) {
-      char text[8];
+      char text[16];
       std::snprintf(text, sizeof text, "0x%02X", value);
       return std::string(text);
     };
