@@ -18,6 +18,7 @@
 
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/identification/subspace.hpp"
+#include "endohaptics/model/fit_metric.hpp"
 
 namespace endohaptics::identification {
 
@@ -34,9 +35,10 @@ ENDOHAPTICS_DECL double column_scale(const Eigen::MatrixXd& y, const Eigen::Matr
 
 }  // namespace detail::fit
 
-//! NRMSE fit per output, %: 100 (1 - ||y_i - yhat_i|| / ||y_i - mean(y_i)||) (MATLAB goodnessOfFit
-//! 'NRMSE' as 100 (1 - cost), what compare prints). 100 is perfect, 0 is as good as the mean,
-//! negative is worse; -Inf when y_i is constant and yhat_i differs from it, 100 when equal.
+//! NRMSE fit per output, %: model::fit_percent of each column (100 (1 - ||y_i - yhat_i|| /
+//! ||y_i - mean(y_i)||), MATLAB goodnessOfFit 'NRMSE' as 100 (1 - cost), what compare prints).
+//! 100 is perfect, 0 is as good as the mean, negative is worse; -Inf when y_i is constant and
+//! yhat_i differs from it, 100 when equal.
 //! y and yhat are N x ny. Throws Error on mismatched sizes, no samples, non-finite values.
 [[nodiscard]] ENDOHAPTICS_DECL Eigen::VectorXd nrmse_fit(const Eigen::MatrixXd& y,
                                                          const Eigen::MatrixXd& y_hat);

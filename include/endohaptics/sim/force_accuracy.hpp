@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/model/fit_metric.hpp"
 
 namespace endohaptics::sim {
 
@@ -47,11 +48,6 @@ inline Eigen::VectorXd interpolate(std::span<const double> t, std::span<const do
     out[i] = y[j] + w * (y[j + 1] - y[j]);
   }
   return out;
-}
-
-inline double nrmse_fit(const Eigen::VectorXd& y, const Eigen::VectorXd& yhat) {
-  const double denom = (y.array() - y.mean()).matrix().norm();
-  return denom > 0.0 ? 100.0 * (1.0 - (y - yhat).norm() / denom) : std::nan("");
 }
 
 inline double pearson(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
@@ -112,7 +108,7 @@ inline void check_series(std::span<const double> t, std::span<const double> y, c
   ForceAccuracy a;
   a.samples = static_cast<std::size_t>(n);
   a.span = step * static_cast<double>(n - 1);
-  a.fit_percent = detail::nrmse_fit(y, yhat);
+  a.fit_percent = model::fit_percent(y, yhat);
   a.correlation = detail::pearson(y, yhat);
   a.rmse = std::sqrt((y - yhat).squaredNorm() / static_cast<double>(n));
   a.truth_peak = y.cwiseAbs().maxCoeff();
@@ -130,7 +126,7 @@ inline void check_series(std::span<const double> t, std::span<const double> y, c
   }
   a.delay = step * static_cast<double>(best);
   a.correlation_at_delay = best_corr >= -1.0 ? best_corr : std::nan("");
-  a.fit_percent_at_delay = detail::nrmse_fit(y.head(m), yhat.segment(best, m));
+  a.fit_percent_at_delay = model::fit_percent(y.head(m), yhat.segment(best, m));
   return a;
 }
 

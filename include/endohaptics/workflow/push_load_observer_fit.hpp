@@ -25,6 +25,7 @@
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/estimation/current_offset_reference.hpp"
 #include "endohaptics/estimation/push_load_observer.hpp"
+#include "endohaptics/estimation/simulate.hpp"
 
 namespace endohaptics::workflow {
 
@@ -65,6 +66,32 @@ ENDOHAPTICS_DECL void check_experiments(std::span<const LoadObserverData> data, 
 //! experiments as measured). Throws Error as referred_current.
 [[nodiscard]] ENDOHAPTICS_DECL std::vector<LoadObserverData> referred_experiments(
     std::span<const LoadObserverData> data, const CurrentReference& reference, const char* where);
+
+namespace detail {
+//! The causal output of an observer `model` (PushLoadObserver, BidirectionalLoadObserver) from its
+//! reset state on one experiment: estimation::simulate on the (referred) current and the encoder
+//! angle. Throws Error naming `where` and the sample when a step fails.
+template <typename Observer>
+[[nodiscard]] Eigen::VectorXd simulate_observer(const Observer& model, const LoadObserverData& d,
+                                                const CurrentReference& reference,
+                                                const char* where) {
+  Observer m = model;
+  m.reset();
+  const Eigen::VectorXd current = referred_current(d, reference, where);
+  Eigen::VectorXd y(d.current.size());
+  const estimation::SimulationResult r = estimation::simulate(
+      m,
+      [&](Eigen::Index k) noexcept {
+        return estimation::JointSignals<double>{d.position[k], 0.0, current[k], 0.0};
+      },
+      y);
+  if (!r.ok()) {
+    ENDOHAPTICS_THROW(Error(std::string(where) + ": non-finite signal or result at sample " +
+                            std::to_string(r.sample)));
+  }
+  return y;
+}
+}  // namespace detail
 
 //! The causal output of `model` (from its reset state) on one experiment; with a `reference`, the
 //! current referred to the command first (the experiment must then carry it).

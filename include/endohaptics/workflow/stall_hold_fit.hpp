@@ -17,7 +17,9 @@
 #include "endohaptics/core/separate_compilation.hpp"
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/estimation/simulate.hpp"
 #include "endohaptics/estimation/stall_hold.hpp"
+#include "endohaptics/model/fit_metric.hpp"
 
 namespace endohaptics::workflow {
 

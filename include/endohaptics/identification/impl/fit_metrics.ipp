@@ -35,18 +35,7 @@ namespace endohaptics::identification {
 ENDOHAPTICS_DECL Eigen::VectorXd nrmse_fit(const Eigen::MatrixXd& y, const Eigen::MatrixXd& y_hat) {
   detail::fit::check_pair(y, y_hat, "nrmse_fit");
   Eigen::VectorXd fit(y.cols());
-  for (Eigen::Index i = 0; i < y.cols(); ++i) {
-    const double scale = detail::fit::column_scale(y, y_hat, i);
-    const Eigen::VectorXd a = y.col(i) / scale;
-    const Eigen::VectorXd b = y_hat.col(i) / scale;
-    const double error = (a - b).norm();
-    const double spread = (a.array() - a.mean()).matrix().norm();
-    if (spread > 0.0) {
-      fit[i] = 100.0 * (1.0 - error / spread);
-    } else {
-      fit[i] = error == 0.0 ? 100.0 : -std::numeric_limits<double>::infinity();
-    }
-  }
+  for (Eigen::Index i = 0; i < y.cols(); ++i) fit[i] = model::fit_percent(y.col(i), y_hat.col(i));
   return fit;
 }
 

@@ -11,21 +11,7 @@ namespace endohaptics::workflow {
 ENDOHAPTICS_DECL Eigen::VectorXd simulate_bidirectional_observer(
     const estimation::BidirectionalLoadObserver<double>& model, const LoadObserverData& d,
     const CurrentReference& reference) {
-  estimation::BidirectionalLoadObserver<double> m = model;
-  m.reset();
-  const Eigen::VectorXd current = referred_current(d, reference, "simulate_bidirectional_observer");
-  Eigen::VectorXd y(d.current.size());
-  for (Eigen::Index k = 0; k < d.current.size(); ++k) {
-    const estimation::JointSignals<double> s{d.position[k], 0.0, current[k], 0.0};
-    if (m.advance(s) != model::StepStatus::ok) {
-      ENDOHAPTICS_THROW(
-          Error("simulate_bidirectional_observer: non-finite signal or result at "
-                "sample " +
-                std::to_string(k)));
-    }
-    y[k] = m.force(s);
-  }
-  return y;
+  return detail::simulate_observer(model, d, reference, "simulate_bidirectional_observer");
 }
 
 namespace detail {

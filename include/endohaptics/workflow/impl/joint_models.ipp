@@ -50,13 +50,15 @@ ENDOHAPTICS_DECL Eigen::VectorXd simulate_joint_model(const files::ModelFile& mo
   if (const auto* p = std::get_if<estimation::StallHoldParameters<double>>(&model.parameters)) {
     estimation::StallHold<double> m(*p);
     Eigen::VectorXd y(u.rows());
-    for (Eigen::Index k = 0; k < u.rows(); ++k) {
-      const estimation::JointSignals<double> s{0.0, u(k, 1), u(k, 0), 0.0};
-      if (m.advance(s) != model::StepStatus::ok) {
-        detail::fail("simulate_joint_model: stall_hold: non-finite signal or result at sample " +
-                     std::to_string(k));
-      }
-      y[k] = m.force(s);
+    const estimation::SimulationResult r = estimation::simulate(
+        m,
+        [&](Eigen::Index k) noexcept {
+          return estimation::JointSignals<double>{0.0, u(k, 1), u(k, 0), 0.0};
+        },
+        y);
+    if (!r.ok()) {
+      detail::fail("simulate_joint_model: stall_hold: non-finite signal or result at sample " +
+                   std::to_string(r.sample));
     }
     return y;
   }
@@ -74,13 +76,6 @@ ENDOHAPTICS_DECL Eigen::VectorXd simulate_joint_model(const files::ModelFile& mo
 }
 
 namespace detail {
-
-//! NRMSE fit % of `y_hat` against `y` (-Inf for a constant `y`).
-inline double fit_percent(const Eigen::VectorXd& y, const Eigen::VectorXd& y_hat) {
-  const double spread = (y.array() - y.mean()).matrix().norm();
-  return spread > 0 ? 100.0 * (1.0 - (y - y_hat).norm() / spread)
-                    : -std::numeric_limits<double>::infinity();
-}
 
 // An observer fitted on logs with a third input (the command) must refer its current to it.
 inline void require_reference(const char* kind, const std::vector<files::SignalInfo>& inputs,
@@ -101,7 +96,7 @@ void score_training(JointModelFit& out, const std::vector<LoadObserverData>& dat
   double sum = 0.0;
   for (const LoadObserverData& d : data) {
     const auto n = d.load.size() - skip;
-    out.training_fit.push_back(fit_percent(d.load.tail(n), simulate(d).tail(n)));
+    out.training_fit.push_back(model::fit_percent(d.load.tail(n), simulate(d).tail(n)));
     sum += out.training_fit.back();
   }
   out.model.provenance.fit_percent = {sum / static_cast<double>(out.training_fit.size())};

@@ -81,19 +81,7 @@ ENDOHAPTICS_DECL CurrentReference fit_current_reference(std::span<const LoadObse
 ENDOHAPTICS_DECL Eigen::VectorXd simulate_load_observer(
     const estimation::PushLoadObserver<double>& model, const LoadObserverData& d,
     const CurrentReference& reference) {
-  estimation::PushLoadObserver<double> m = model;
-  m.reset();
-  const Eigen::VectorXd current = referred_current(d, reference, "simulate_load_observer");
-  Eigen::VectorXd y(d.current.size());
-  for (Eigen::Index k = 0; k < d.current.size(); ++k) {
-    const estimation::JointSignals<double> s{d.position[k], 0.0, current[k], 0.0};
-    if (m.advance(s) != model::StepStatus::ok) {
-      ENDOHAPTICS_THROW(Error("simulate_load_observer: non-finite signal or result at sample " +
-                              std::to_string(k)));
-    }
-    y[k] = m.force(s);
-  }
-  return y;
+  return detail::simulate_observer(model, d, reference, "simulate_load_observer");
 }
 
 ENDOHAPTICS_DECL std::vector<double> load_observer_rmse(

@@ -12,13 +12,15 @@ ENDOHAPTICS_DECL Eigen::VectorXd simulate_stall_hold(const estimation::StallHold
   estimation::StallHold<double> m = model;
   m.reset();
   Eigen::VectorXd y(d.current.size());
-  for (Eigen::Index k = 0; k < d.current.size(); ++k) {
-    const estimation::JointSignals<double> s{0.0, d.velocity[k], d.current[k], 0.0};
-    if (m.advance(s) != model::StepStatus::ok) {
-      ENDOHAPTICS_THROW(
-          Error("simulate_stall_hold: non-finite signal at sample " + std::to_string(k)));
-    }
-    y[k] = m.force(s);
+  const estimation::SimulationResult r = estimation::simulate(
+      m,
+      [&](Eigen::Index k) noexcept {
+        return estimation::JointSignals<double>{0.0, d.velocity[k], d.current[k], 0.0};
+      },
+      y);
+  if (!r.ok()) {
+    ENDOHAPTICS_THROW(
+        Error("simulate_stall_hold: non-finite signal at sample " + std::to_string(r.sample)));
   }
   return y;
 }
@@ -71,9 +73,7 @@ ENDOHAPTICS_DECL StallHoldFit fit_stall_hold(std::span<const StallHoldData> data
       const auto n = data[e].current.size() - skip;
       const Eigen::VectorXd y = data[e].force.tail(n);
       const Eigen::VectorXd y_hat = p.gain * shapes[e].tail(n);
-      const double spread = (y.array() - y.mean()).matrix().norm();
-      const double fit = spread > 0 ? 100.0 * (1.0 - (y - y_hat).norm() / spread)
-                                    : -std::numeric_limits<double>::infinity();
+      const double fit = model::fit_percent(y, y_hat);
       candidate.fit_percent.push_back(fit);
       sum += fit;
     }
