@@ -157,6 +157,15 @@ TEST_CASE("SecureSession: the HELLO is resent until answered, the same WELCOME c
   CHECK(robot.take_reply().empty());
   const Handshake w2 = welcome_for(robot, again, 20ms);
   CHECK(w2 == w1);
+  // Resends are bounded: at most max_welcome_resends, and none once the session could no longer
+  // open (twice the granted round trip after the first WELCOME).
+  int resent = 0;
+  for (int i = 0; i < 20; ++i) {
+    const auto t = 30ms + i * 10ms;
+    if (robot.open(again, got, t) == SecureStatus::hello && !robot.take_reply().empty()) ++resent;
+  }
+  CHECK(resent == Responder::max_welcome_resends - 1);
+  CHECK(robot.open(again, got, 411ms) == SecureStatus::replayed);
   StatePayload state{};
   REQUIRE(pc.open(w2, state, 21ms) == SecureStatus::welcome);
   CHECK(pc.open(w1, state, 21ms) == SecureStatus::replayed);  // the duplicate WELCOME

@@ -195,10 +195,10 @@ struct InitiatorConfig {
 };
 
 //! The console side: asks for sessions (HELLO, resent with a doubling interval from
-//! hello_interval until a WELCOME answers), seals setpoints under the session key, verifies states. A new handshake starts when
-//! no state came for twice the granted round trip (at least 100 ms), or the session is
-//! `rekey_after` old; setpoints keep flowing in the old session meanwhile, and states of the old
-//! session are still taken until the first state of the new one arrives.
+//! hello_interval until a WELCOME answers), seals setpoints under the session key, verifies states.
+//! A new handshake starts when no state came for twice the granted round trip (at least 100 ms), or
+//! the session is `rekey_after` old; setpoints keep flowing in the old session meanwhile, and
+//! states of the old session are still taken until the first state of the new one arrives.
 template <int NumMotors = 4>
 class SecureInitiator {
  public:
@@ -514,7 +514,7 @@ class SecureResponder {
   //! hello (commit it, then send take_reply()), or the refusal.
   [[nodiscard]] SecureStatus verify(std::span<const std::byte> bytes, std::chrono::nanoseconds now,
                                     SecureVerified& out) const noexcept {
-    if (bytes.size() == HandshakeCodec::packet_size) return verify_hello(bytes, out);
+    if (bytes.size() == HandshakeCodec::packet_size) return verify_hello(bytes, now, out);
     if (bytes.size() != receive_packet_size) return SecureStatus::wrong_size;
     const bool live = live_at(now);
     const bool pending = pending_ && now - welcome_at_pending_ <= 2 * pending_granted_;
@@ -546,6 +546,8 @@ class SecureResponder {
 
   //! The shortest gap between two WELCOMEs answering the same HELLO.
   static constexpr std::chrono::milliseconds min_welcome_gap{5};
+  //! WELCOMEs sent again for one HELLO resent (its first answer lost) at most.
+  static constexpr int max_welcome_resends = 4;
 
   //! Takes what verify() returned ok or hello for, at `now`.
   void commit(const SecureVerified& v, std::chrono::nanoseconds now) noexcept {
@@ -668,7 +670,8 @@ class SecureResponder {
     return a.sequence == ack && now - a.received <= granted_;
   }
 
-  SecureStatus verify_hello(std::span<const std::byte> bytes, SecureVerified& out) const noexcept {
+  SecureStatus verify_hello(std::span<const std::byte> bytes, std::chrono::nanoseconds now,
+                            SecureVerified& out) const noexcept {
     KeyId id{};
     if (const SecureStatus s = HandshakeCodec::peek_key_id(bytes, PacketType::hello, id);
         s != SecureStatus::ok) {
@@ -687,9 +690,9 @@ class SecureResponder {
     bool again = false;
     if (hello.timestamp <= highest) {
       // Only the HELLO the pending session answered may come again (the console resends it
-      // until a WELCOME arrives); any other is a recording.
+      // until a WELCOME arrives), while that session may still open; any other is a recording.
       again = hello.timestamp == highest && pending_ && pending_slot_ == *slot &&
-              hello.nonce == pending_nonce_;
+              hello.nonce == pending_nonce_ && now - welcome_at_pending_ <= 2 * pending_granted_;
       if (!again) return SecureStatus::replayed;
     }
     out.type = PacketType::hello;
@@ -701,15 +704,19 @@ class SecureResponder {
 
   void answer_hello(const SecureVerified& v, std::chrono::nanoseconds now) noexcept {
     if (v.retransmission) {
-      // The same WELCOME again, at most once per min_welcome_gap: a replayed HELLO cannot make
-      // this side a reflector.
-      if (now - welcome_at_pending_ >= min_welcome_gap) {
+      // The same WELCOME again, at most max_welcome_resends times, min_welcome_gap apart, and
+      // only while the session may open (twice the granted round trip from the first WELCOME):
+      // a replayed HELLO cannot make this side a reflector.
+      if (now - welcome_sent_at_ >= min_welcome_gap && welcome_resends_ < max_welcome_resends) {
         reply_due_ = true;
-        welcome_at_pending_ = now;
+        welcome_sent_at_ = now;
+        ++welcome_resends_;
       }
       return;
     }
     reply_due_ = true;
+    welcome_sent_at_ = now;
+    welcome_resends_ = 0;
     const SecureKey& key = keys_.at(v.key_slot);
     highest_timestamp_[v.key_slot] = v.hello.timestamp;
     Nonce robot{};
@@ -795,7 +802,9 @@ class SecureResponder {
   std::uint64_t pending_session_ = 0;
   std::uint64_t pending_peer_ = 0;
   std::chrono::nanoseconds pending_granted_{0};
-  std::chrono::nanoseconds welcome_at_pending_{0};
+  std::chrono::nanoseconds welcome_at_pending_{0};  // the first WELCOME: the session's age
+  std::chrono::nanoseconds welcome_sent_at_{0};     // the last WELCOME sent
+  int welcome_resends_ = 0;
   HandshakeCodec::Bytes welcome_bytes_{};
   bool reply_due_ = false;
 };
