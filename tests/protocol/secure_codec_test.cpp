@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <cstring>
+#include <utility>
 #include <vector>
 
 #include "alloc_counter.hpp"
@@ -248,3 +249,37 @@ TEST_CASE("SecureCodec: encode and verify+decode allocate nothing") {
 }
 
 }  // namespace protocol_secure_codec_test
+
+namespace protocol_secure_codec_test_memory {
+
+TEST_CASE("SecureKey: one locked copy: copies share it, a wipe reaches them all") {
+  std::array<std::byte, endohaptics::protocol::SecureKey::size> bytes{};
+  bytes[0] = std::byte{1};
+  endohaptics::protocol::SecureKey key(bytes);
+  const endohaptics::protocol::SecureKey copy = key;  // a handle, not a second copy
+  const std::array<std::byte, 5> message{};
+  std::array<std::byte, endohaptics::protocol::SecureKey::tag_size> tag{};
+  copy.tag(message, tag);
+  CHECK(key.verify(message, tag));
+  key.wipe();
+  CHECK_FALSE(copy.verify(message, tag));  // the one box is zeroed, for every handle
+}
+
+TEST_CASE("LockedBox: zero-initialised, movable, wiped on request") {
+  struct Secret {
+    std::array<unsigned char, 64> bytes;
+  };
+  endohaptics::protocol::LockedBox<Secret> box;
+  for (unsigned char b : box->bytes) CHECK(b == 0);
+  box->bytes[3] = 7;
+  endohaptics::protocol::LockedBox<Secret> moved = std::move(box);
+  CHECK(moved->bytes[3] == 7);
+  moved.wipe();
+  CHECK(moved->bytes[3] == 0);
+  endohaptics::protocol::LockedBox<Secret> other;
+  other->bytes[0] = 9;
+  swap(moved, other);
+  CHECK(moved->bytes[0] == 9);
+}
+
+}  // namespace protocol_secure_codec_test_memory
