@@ -353,12 +353,20 @@ TEST_CASE("estimator.clamp_model loads an identified model file, relative to the
   const files::BridgeConfig c = files::load_bridge_config(dir.path() / "bridge.json");
   CHECK(c.clamp_model == dir.path() / "clamp.json");
   const auto models = files::bridge_force_models(c);
-  REQUIRE(models.clamp1.yaw() != nullptr);
-  REQUIRE(models.clamp2.yaw() != nullptr);
-  CHECK(models.clamp1.yaw()->model().input_nonlinearity().channel(0).upper() == 0.3);
-  CHECK(models.clamp2.yaw()->model().input_nonlinearity().channel(0).upper() == 0.3);
+  REQUIRE(models.clamp1.get<endohaptics::estimation::ClampModel2016<double>>() != nullptr);
+  REQUIRE(models.clamp2.get<endohaptics::estimation::ClampModel2016<double>>() != nullptr);
+  CHECK(models.clamp1.get<endohaptics::estimation::ClampModel2016<double>>()
+            ->model()
+            .input_nonlinearity()
+            .channel(0)
+            .upper() == 0.3);
+  CHECK(models.clamp2.get<endohaptics::estimation::ClampModel2016<double>>()
+            ->model()
+            .input_nonlinearity()
+            .channel(0)
+            .upper() == 0.3);
   CHECK(files::bridge_force_models(files::BridgeConfig{})
-            .clamp1.yaw()
+            .clamp1.get<endohaptics::estimation::ClampModel2016<double>>()
             ->model()
             .input_nonlinearity()
             .channel(0)
@@ -402,14 +410,19 @@ TEST_CASE("estimator.clamp_model of a lower order runs in the bridge's 6 states,
   write_text(dir.path() / "bridge.json", R"({"estimator": {"clamp_model": "clamp.json"}})");
   const auto models =
       files::bridge_force_models(files::load_bridge_config(dir.path() / "bridge.json"));
-  REQUIRE(models.clamp1.yaw() != nullptr);
-  const auto& linear = models.clamp1.yaw()->model().linear();
+  REQUIRE(models.clamp1.get<endohaptics::estimation::ClampModel2016<double>>() != nullptr);
+  const auto& linear =
+      models.clamp1.get<endohaptics::estimation::ClampModel2016<double>>()->model().linear();
   static_assert(std::remove_cvref_t<decltype(linear)>::states == files::bridge_clamp_states);
   CHECK(linear.A().topLeftCorner<2, 2>() == A);
   CHECK(linear.A().rightCols<4>().isZero());
   CHECK(linear.A().bottomRows<4>().isZero());
   CHECK(linear.dc_gain() == low.dc_gain());
-  CHECK(models.clamp1.yaw()->model().input_nonlinearity().channel(0).upper() == 0.19);
+  CHECK(models.clamp1.get<endohaptics::estimation::ClampModel2016<double>>()
+            ->model()
+            .input_nonlinearity()
+            .channel(0)
+            .upper() == 0.19);
   // Seven states do not fit: refused, naming the file.
   const endohaptics::model::StateSpace<7, 2, 1> seven(
       Eigen::Matrix<double, 7, 7>::Identity() * 0.5, Eigen::Matrix<double, 7, 2>::Ones(),

@@ -448,8 +448,8 @@ TEST_CASE("bridge: a model file of each kind configures the clamps and runs in t
                std::string(R"({"estimator": {"clamp_model": ")") + name + "\"}}");
     const files::BridgeConfig config = files::load_bridge_config(dir.path() / "bridge.json");
     const files::BridgeForceModels models = files::bridge_force_models(config);
-    CHECK(models.clamp1.is_joint_model());
-    CHECK(models.clamp1.yaw() == nullptr);
+    CHECK(models.clamp1.index() != 0);
+    CHECK(models.clamp1.get<est::ClampModel2016<double>>() == nullptr);
     auto settings = files::bridge_estimator_settings(config, models);
     // The joint models hold their own friction: the 5.2.3 gate of the clamps is opened.
     CHECK(settings.friction[2].static_level == 0.0);
@@ -493,11 +493,13 @@ TEST_CASE("bridge: a model file of each kind configures the clamps and runs in t
     (void)model.advance({0.05, 0.1, -0.7, 0.0});
     model.reset(saved);
     CHECK(model.state() == saved);
-    if (const auto* o = estimator.joint_model<est::Motor::clamp1>().observer()) {
+    if (const auto* o =
+            estimator.joint_model<est::Motor::clamp1>().get<est::PushLoadObserver<double>>()) {
       CHECK(o->state()[6] == 0.04);
       CHECK(o->state()[7] == o->parameters().initial_variance);
     }
-    if (const auto* b = estimator.joint_model<est::Motor::clamp1>().bidirectional()) {
+    if (const auto* b = estimator.joint_model<est::Motor::clamp1>()
+                            .get<est::BidirectionalLoadObserver<double>>()) {
       CHECK(b->load_estimate() == -65.8);
       CHECK(b->state()[est::BidirectionalLoadObserver<double>::p_ff] == 62.0);
     }

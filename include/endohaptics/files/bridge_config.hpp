@@ -28,6 +28,7 @@
 
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/core/parameter.hpp"
+#include "endohaptics/estimation/any_joint_force_model.hpp"
 #include "endohaptics/estimation/bidirectional_load_observer.hpp"
 #include "endohaptics/estimation/force_estimator.hpp"
 #include "endohaptics/estimation/push_load_observer.hpp"
@@ -318,113 +319,12 @@ void with_prefix(std::string_view source, std::string_view key, F&& validate) {
 //! The clamp model the bridge runs, whichever kind the model file holds: the appendix C yaw
 //! Hammerstein-Wiener type (estimation::ClampModel2016, also identified "hammerstein_wiener" files
 //! of 6 states, 2 inputs, 1 output), estimation::StallHold, estimation::PushLoadObserver or
-//! estimation::BidirectionalLoadObserver. A JointForceModel (noexcept, allocation-free, fixed
-//! size: a std::variant of the four). Its State is the model's own, padded with zeros to the
-//! largest of the four (the bidirectional observer's 23 numbers); reset() is the
-//! model's own start state (ForceEstimator::reset, through RateStepper: the yaw model at x = 0,
-//! the observer with its filters waiting for the next sample and its initial load and variance).
-class ClampForceModel {
- public:
-  using ScalarType = double;  //!< floating-point type
-  //! the bidirectional load observer (kind "bidirectional_load_observer")
-  using Bidirectional = estimation::BidirectionalLoadObserver<double>;
-  using Signals = estimation::JointSignals<double>;       //!< one joint's signals for one tick
-  using Yaw = estimation::ClampModel2016<double>;         //!< the Hammerstein-Wiener kind
-  using StallHold = estimation::StallHold<double>;        //!< kind "stall_hold"
-  using Observer = estimation::PushLoadObserver<double>;  //!< kind "push_load_observer"
-  //! The model's state, zero-padded to the largest.
-  using State = Eigen::Matrix<double, Bidirectional::State::RowsAtCompileTime, 1>;
-
- private:
-  template <typename F>
-  decltype(auto) visit(F&& f) const noexcept {
-    if (const auto* m = std::get_if<Yaw>(&model_)) return f(*m);
-    if (const auto* m = std::get_if<StallHold>(&model_)) return f(*m);
-    if (const auto* m = std::get_if<Observer>(&model_)) return f(*m);
-    return f(*std::get_if<Bidirectional>(&model_));
-  }
-  template <typename F>
-  decltype(auto) visit_mutable(F&& f) noexcept {
-    if (auto* m = std::get_if<Yaw>(&model_)) return f(*m);
-    if (auto* m = std::get_if<StallHold>(&model_)) return f(*m);
-    if (auto* m = std::get_if<Observer>(&model_)) return f(*m);
-    return f(*std::get_if<Bidirectional>(&model_));
-  }
-  template <typename M>
-  static constexpr int size_of = static_cast<int>(M::State::RowsAtCompileTime);
-  static_assert(size_of<Yaw> <= size_of<Bidirectional> &&
-                size_of<StallHold> <= size_of<Bidirectional> &&
-                size_of<Observer> <= size_of<Bidirectional>);
-
- public:
-  //! The Hammerstein-Wiener clamp model.
-  explicit ClampForceModel(const Yaw& m) : model_(m) {}
-  //! The stall-hold model.
-  explicit ClampForceModel(const StallHold& m) : model_(m) {}
-  //! The push-load observer.
-  explicit ClampForceModel(const Observer& m) : model_(m) {}
-  //! The bidirectional load observer.
-  explicit ClampForceModel(const Bidirectional& m) : model_(m) {}
-
-  //! True for the kinds with their own friction handling (stall_hold, the observers).
-  [[nodiscard]] bool is_joint_model() const noexcept { return model_.index() != 0; }
-  //! The Hammerstein-Wiener model, or null for another kind.
-  [[nodiscard]] const Yaw* yaw() const noexcept { return std::get_if<Yaw>(&model_); }
-  //! The stall-hold model, or null for another kind.
-  [[nodiscard]] const StallHold* stall_hold() const noexcept {
-    return std::get_if<StallHold>(&model_);
-  }
-  //! The push-load observer, or null for another kind.
-  [[nodiscard]] const Observer* observer() const noexcept { return std::get_if<Observer>(&model_); }
-  //! The bidirectional load observer, or null for another kind.
-  [[nodiscard]] const Bidirectional* bidirectional() const noexcept {
-    return std::get_if<Bidirectional>(&model_);
-  }
-
-  //! s, the model's sample time.
-  [[nodiscard]] double sample_time() const noexcept {
-    return visit([](const auto& m) noexcept { return m.sample_time(); });
-  }
-  //! As the model's.
-  [[nodiscard]] bool memoryless() const noexcept {
-    return visit([](const auto& m) noexcept { return m.memoryless(); });
-  }
-  //! The model's force at its current state.
-  [[nodiscard]] double force(const Signals& s) const noexcept {
-    return visit([&s](const auto& m) noexcept { return m.force(s); });
-  }
-  //! One model period (the model's StepStatus; all-or-nothing).
-  [[nodiscard]] model::StepStatus advance(const Signals& s) noexcept {
-    return visit_mutable([&s](auto& m) noexcept { return m.advance(s); });
-  }
-  //! The model's state, padded with zeros.
-  [[nodiscard]] State state() const noexcept {
-    return visit([](const auto& m) noexcept {
-      State x = State::Zero();
-      x.head<size_of<std::remove_cvref_t<decltype(m)>>>() = m.state();
-      return x;
-    });
-  }
-  //! Sets the model's state to the leading entries of `x` (what state() returned restores it
-  //! exactly).
-  void reset(const State& x) noexcept {
-    visit_mutable([&x](auto& m) noexcept {
-      using M = std::remove_cvref_t<decltype(m)>;
-      m.reset(typename M::State(x.head<size_of<M>>()));
-      return 0;
-    });
-  }
-  //! The model's own start state (its reset()).
-  void reset() noexcept {
-    visit_mutable([](auto& m) noexcept {
-      m.reset();
-      return 0;
-    });
-  }
-
- private:
-  std::variant<Yaw, StallHold, Observer, Bidirectional> model_;
-};
+//! estimation::BidirectionalLoadObserver, as an estimation::AnyJointForceModel of the four (a
+//! JointForceModel: noexcept, allocation-free, its State the model's padded to the bidirectional
+//! observer's 23 numbers; reset() the model's own start state).
+using ClampForceModel = estimation::AnyJointForceModel<
+    estimation::ClampModel2016<double>, estimation::StallHold<double>,
+    estimation::PushLoadObserver<double>, estimation::BidirectionalLoadObserver<double>>;
 
 static_assert(estimation::JointForceModel<ClampForceModel>);
 
@@ -536,7 +436,7 @@ inline constexpr int bridge_clamp_states = 6;
 [[nodiscard]] inline estimation::ForceEstimatorSettings<double> bridge_estimator_settings(
     const BridgeConfig& config, const BridgeForceModels& models) {
   estimation::ForceEstimatorSettings<double> settings = config.estimator;
-  if (models.clamp1.is_joint_model()) {
+  if (models.clamp1.index() != 0) {  // not the Hammerstein-Wiener kind
     for (const auto joint : {estimation::Motor::clamp1, estimation::Motor::clamp2}) {
       settings.friction[static_cast<std::size_t>(joint)] =
           model::JointFriction<double>::simplified(0.0);
