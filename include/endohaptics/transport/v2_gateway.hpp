@@ -1,0 +1,267 @@
+//! @file
+//! V2Gateway: the robot side of protocol v2 as a relay in front of an unchanged 2016 sbRIO. It
+//! takes authentic, fresh setpoints from a v2 transport (SecureTransport with SecureResponder),
+//! relays their 2016 payload to the sbRIO over a point-to-point link, and seals the sbRIO's
+//! answer back to the console. When no setpoint was relayed for the watchdog time (silence, or
+//! nothing but forgeries and replays, which never get through) it sends the 2016 "all disabled"
+//! setpoint to the sbRIO itself, once a period. Nothing from the network reaches the sbRIO unless
+//! the v2 layer accepted it. Every call of step() is noexcept and allocation-free.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+
+#include "endohaptics/core/clock.hpp"
+#include "endohaptics/core/error.hpp"
+#include "endohaptics/protocol/packet_codec.hpp"
+#include "endohaptics/transport/transport.hpp"
+
+namespace endohaptics::transport {
+
+//! The gateway's timing.
+struct GatewayConfig {
+  //! No setpoint relayed for this long: the gateway disables every motor itself (its sbRIO-side
+  //! watchdog, ahead of the sbRIO's own).
+  std::chrono::nanoseconds watchdog = std::chrono::milliseconds(100);
+  //! While silent, one "all disabled" setpoint per period (the sbRIO loop's rate).
+  std::chrono::nanoseconds period = std::chrono::milliseconds(1);
+  //! How long a relayed setpoint waits for the sbRIO's answer before it is given up (counted).
+  std::chrono::nanoseconds answer_timeout = std::chrono::milliseconds(2);
+
+  //! Throws Error naming the field, its value and its range.
+  void validate() const {
+    const auto check = [](std::chrono::nanoseconds v, std::chrono::nanoseconds lo,
+                          std::chrono::nanoseconds hi, const char* field, const char* range) {
+      if (v < lo || v > hi) {
+        ENDOHAPTICS_THROW(Error(std::string("GatewayConfig: ") + field + " must be in " + range +
+                                ", got " + std::to_string(v.count()) + " ns"));
+      }
+    };
+    using std::chrono::microseconds;
+    using std::chrono::milliseconds;
+    check(watchdog, milliseconds(1), std::chrono::seconds(10), "watchdog", "[1 ms, 10 s]");
+    check(period, microseconds(100), milliseconds(100), "period", "[0.1, 100] ms");
+    check(answer_timeout, microseconds(10), milliseconds(100), "answer_timeout", "[0.01, 100] ms");
+    if (period > watchdog) {
+      ENDOHAPTICS_THROW(Error("GatewayConfig: period (" + std::to_string(period.count()) +
+                              " ns) must not exceed watchdog (" + std::to_string(watchdog.count()) +
+                              " ns)"));
+    }
+  }
+};
+
+//! Running totals of a gateway (monotonic).
+struct GatewayCounters {
+  std::uint64_t relayed = 0;         //!< authentic, fresh setpoints relayed to the sbRIO
+  std::uint64_t returned = 0;        //!< sbRIO states sealed back to the console
+  std::uint64_t disabled = 0;        //!< "all disabled" setpoints sent on silence
+  std::uint64_t sbrio_refused = 0;   //!< sbRIO datagrams that are no 2016 state (size, NaN, mask)
+  std::uint64_t unanswered = 0;      //!< relayed setpoints the sbRIO did not answer in time
+  std::uint64_t watchdog_trips = 0;  //!< times relaying stopped for the watchdog time
+  std::uint64_t network_errors = 0;  //!< v2 side receive or send failures
+  std::uint64_t sbrio_errors = 0;    //!< sbRIO side receive or send failures
+};
+
+//! What one step did.
+struct GatewayStep {
+  bool relayed = false;   //!< a setpoint went to the sbRIO
+  bool returned = false;  //!< the sbRIO's answer went back to the console
+  bool disabled = false;  //!< an "all disabled" setpoint went to the sbRIO
+  bool error = false;     //!< a transport failed
+};
+
+//! The gateway between a v2 `Network` (it must authenticate: SecureTransport over the console's
+//! socket, with SecureResponder) and the 2016 `Link` to the sbRIO (a connected UdpTransport).
+//! Both are owned by the caller and must outlive it.
+template <FilteringTransport Network, FilteringTransport Link,
+          endohaptics::Clock ClockT = endohaptics::SteadyClock, int N = 4>
+requires requires(const Network& n) {
+  { n.counters().rejected() } -> std::convertible_to<std::uint64_t>;
+}
+class V2Gateway {
+ public:
+  using Codec = protocol::PacketCodec<N>;  //!< the 2016 protocol for N motors
+
+  //! Throws Error on a bad config.
+  V2Gateway(Network& network, Link& link, ClockT& clock, const GatewayConfig& config = {})
+      : network_(&network),
+        link_(&link),
+        clock_(&clock),
+        config_((config.validate(), config)),
+        next_disabled_(clock.now()) {}
+
+  //! One round: waits up to `max_wait` (less while silent: the next disabled setpoint is due
+  //! sooner) for a v2 setpoint and relays it; takes the sbRIO's answer (waiting up to the
+  //! answer timeout after a relay) and seals it back; on silence sends the disabled setpoint
+  //! when one is due.
+  [[nodiscard]] GatewayStep step(std::chrono::nanoseconds max_wait) noexcept {
+    GatewayStep out;
+    auto now = clock_->now();
+    auto wait = std::max(max_wait, std::chrono::nanoseconds(0));
+    if (silent_at(now)) wait = std::clamp(next_disabled_ - now, std::chrono::nanoseconds(0), wait);
+    SetpointFilter accept;
+    const ReceiveResult r = network_->receive(std::span<std::byte>(setpoint_rx_), wait, accept);
+    if (r.status == TransportStatus::ok && r.size == Codec::setpoint_packet_size) {
+      // An answer still due to a disabled setpoint must not pass for this setpoint's.
+      if (disabled_outstanding_) take_state(std::chrono::nanoseconds(0), out);
+      relay(out);
+    } else if (r.status == TransportStatus::error) {
+      ++counters_.network_errors;
+      out.error = true;
+    }
+    now = clock_->now();
+    take_state(awaiting_ ? std::max(relayed_at_ + config_.answer_timeout - now,
+                                    std::chrono::nanoseconds(0))
+                         : std::chrono::nanoseconds(0),
+               out);
+    now = clock_->now();
+    if (silent_at(now)) {
+      if (obeyed_ && !tripped_) {
+        tripped_ = true;
+        ++counters_.watchdog_trips;
+      }
+      if (now >= next_disabled_) send_disabled(now, out);
+    }
+    return out;
+  }
+
+  //! Running totals since construction.
+  [[nodiscard]] const GatewayCounters& counters() const noexcept { return counters_; }
+  //! True while nothing was relayed for the watchdog time (or never): the motors are disabled.
+  [[nodiscard]] bool silent() const noexcept { return silent_at(clock_->now()); }
+  //! The "all disabled" setpoint sent now: enable mask 0, positions held (hold_position()).
+  [[nodiscard]] typename Codec::Setpoint disabled_setpoint() const noexcept {
+    typename Codec::Setpoint s;
+    s.position = hold_position();
+    s.enable_mask = 0;
+    return s;
+  }
+  //! Where a disabled setpoint holds the motors: the sbRIO's newest measured positions (the tool
+  //! where it is, also while it coasts: whatever the loop does with a disabled motor's setpoint,
+  //! nothing pulls it back to where the console last commanded); before any state, the last
+  //! relayed setpoint; before that, zero.
+  [[nodiscard]] typename Codec::Setpoint::Vector hold_position() const noexcept {
+    if (have_measured_) return measured_;
+    return last_relayed_.position;
+  }
+  //! The settings.
+  [[nodiscard]] const GatewayConfig& config() const noexcept { return config_; }
+
+ private:
+  // The v2 side's payload filter: a decodable 2016 setpoint (bad payloads are counted there).
+  struct SetpointFilter {
+    bool operator()(std::span<const std::byte> datagram) const noexcept {
+      typename Codec::Setpoint scratch;
+      return Codec::decode_setpoint(datagram, scratch) == protocol::CodecStatus::ok;
+    }
+  };
+  // The sbRIO side's filter: a decodable 2016 state.
+  struct StateFilter {
+    bool operator()(std::span<const std::byte> datagram) const noexcept {
+      typename Codec::State scratch;
+      return Codec::decode_state(datagram, scratch) == protocol::CodecStatus::ok;
+    }
+  };
+
+  [[nodiscard]] bool silent_at(std::chrono::nanoseconds now) const noexcept {
+    return !obeyed_ || now - last_obeyed_ >= config_.watchdog;
+  }
+
+  void relay(GatewayStep& out) noexcept {
+    const auto bytes = std::span<const std::byte>(setpoint_rx_.data(), Codec::setpoint_packet_size);
+    typename Codec::Setpoint decoded;
+    if (Codec::decode_setpoint(bytes, decoded) != protocol::CodecStatus::ok) return;  // filtered
+    if (link_->send(bytes) != TransportStatus::ok) {
+      ++counters_.sbrio_errors;
+      out.error = true;
+      return;
+    }
+    const auto now = clock_->now();
+    last_relayed_ = decoded;
+    ++counters_.relayed;
+    obeyed_ = true;
+    tripped_ = false;
+    last_obeyed_ = now;
+    if (awaiting_) ++counters_.unanswered;  // the previous one's answer never came
+    awaiting_ = true;
+    relayed_at_ = now;
+    out.relayed = true;
+  }
+
+  // Reads the sbRIO's newest state (waiting up to `wait`); answers the awaited setpoint with it.
+  void take_state(std::chrono::nanoseconds wait, GatewayStep& out) noexcept {
+    StateFilter accept;
+    const ReceiveResult s = link_->receive(std::span<std::byte>(state_rx_), wait, accept);
+    counters_.sbrio_refused += s.rejected + s.oversized;
+    if (s.status == TransportStatus::ok && s.size == Codec::state_packet_size) {
+      const auto bytes = std::span<const std::byte>(state_rx_.data(), Codec::state_packet_size);
+      typename Codec::State state;
+      if (Codec::decode_state(bytes, state) == protocol::CodecStatus::ok) {
+        measured_ = state.position;
+        have_measured_ = true;
+      }
+      disabled_outstanding_ = false;
+      if (awaiting_) {
+        awaiting_ = false;
+        if (network_->send(bytes) == TransportStatus::ok) {
+          ++counters_.returned;
+          out.returned = true;
+        } else {
+          ++counters_.network_errors;
+          out.error = true;
+        }
+      }
+      return;
+    }
+    if (s.status == TransportStatus::error) {
+      ++counters_.sbrio_errors;
+      out.error = true;
+    }
+    if (awaiting_ && clock_->now() - relayed_at_ >= config_.answer_timeout) {
+      awaiting_ = false;
+      ++counters_.unanswered;
+    }
+  }
+
+  void send_disabled(std::chrono::nanoseconds now, GatewayStep& out) noexcept {
+    typename Codec::SetpointBytes bytes{};
+    if (Codec::encode_setpoint(disabled_setpoint(), bytes) != protocol::CodecStatus::ok ||
+        link_->send(bytes) != TransportStatus::ok) {
+      ++counters_.sbrio_errors;
+      out.error = true;
+    } else {
+      ++counters_.disabled;
+      disabled_outstanding_ = true;
+      out.disabled = true;
+    }
+    // Once a period from now on; a late step does not send a burst to catch up.
+    next_disabled_ += config_.period;
+    if (next_disabled_ <= now) next_disabled_ = now + config_.period;
+  }
+
+  Network* network_;
+  Link* link_;
+  ClockT* clock_;
+  GatewayConfig config_;
+  GatewayCounters counters_{};
+  bool obeyed_ = false;                // a setpoint was relayed once
+  bool tripped_ = false;               // silent since the last relayed setpoint
+  bool awaiting_ = false;              // the setpoint relayed last awaits the sbRIO's answer
+  bool disabled_outstanding_ = false;  // a disabled setpoint was sent and not answered yet
+  bool have_measured_ = false;
+  std::chrono::nanoseconds last_obeyed_{0};
+  std::chrono::nanoseconds relayed_at_{0};
+  std::chrono::nanoseconds next_disabled_{0};
+  typename Codec::Setpoint last_relayed_{};
+  typename Codec::Setpoint::Vector measured_ = Codec::Setpoint::Vector::Zero();
+  // One byte longer than the packets: a longer datagram never decodes as its first bytes.
+  std::array<std::byte, Codec::setpoint_packet_size + 1> setpoint_rx_{};
+  std::array<std::byte, Codec::state_packet_size + 1> state_rx_{};
+};
+
+}  // namespace endohaptics::transport

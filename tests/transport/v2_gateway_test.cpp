@@ -1,0 +1,306 @@
+#include "endohaptics/transport/v2_gateway.hpp"
+
+#include <doctest/doctest.h>
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <vector>
+
+#include "alloc_counter.hpp"
+#include "endohaptics/protocol/packet_codec.hpp"
+#include "endohaptics/protocol/secure_session.hpp"
+#include "endohaptics/transport/in_memory_transport.hpp"
+#include "endohaptics/transport/secure_transport.hpp"
+
+namespace transport_v2_gateway_test {
+
+namespace {
+
+using namespace std::chrono_literals;
+namespace protocol = endohaptics::protocol;
+namespace transport = endohaptics::transport;
+using transport::TransportStatus;
+using Link = transport::InMemoryLink<128, 16>;
+using Endpoint = Link::Endpoint;
+using Console = transport::SecureTransport<Endpoint, protocol::SecureInitiator<4>>;
+using RobotSide = transport::SecureTransport<Endpoint, protocol::SecureResponder<4>>;
+using Legacy = protocol::PacketCodec<4>;
+
+protocol::SecureKey key(std::uint8_t seed = 1) {
+  std::array<std::byte, protocol::SecureKey::size> k{};
+  for (std::size_t i = 0; i < k.size(); ++i) k[i] = std::byte{static_cast<std::uint8_t>(seed * i)};
+  return protocol::SecureKey(k);
+}
+
+Legacy::SetpointBytes setpoint_bytes(std::uint8_t mask, double position = 0.5) {
+  Legacy::Setpoint s;
+  s.position << position, -position, 0.25, 0.125;
+  s.enable_mask = mask;
+  Legacy::SetpointBytes b{};
+  REQUIRE(Legacy::encode_setpoint(s, b) == protocol::CodecStatus::ok);
+  return b;
+}
+
+// The 2016 sbRIO on the other end of the point-to-point link: records every setpoint it is sent
+// and answers each with a state (positions 1, 2, 3, 4 rad; active bits = the enable bits), or
+// with `junk` bytes, or not at all.
+struct FakeSbrio {
+  std::vector<Legacy::Setpoint> received;
+  bool answer = true;
+  bool junk = false;
+};
+struct SbrioResponder {
+  FakeSbrio* sbrio;
+  template <typename Reply>
+  void operator()(std::span<const std::byte> datagram, Reply& reply) noexcept {
+    Legacy::Setpoint s;
+    if (Legacy::decode_setpoint(datagram, s) != protocol::CodecStatus::ok) return;
+    sbrio->received.push_back(s);  // the test's own bookkeeping (reserved: no allocation)
+    if (!sbrio->answer) return;
+    if (sbrio->junk) {
+      const std::array<std::byte, 20> junk{};
+      (void)reply.send(junk);
+      return;
+    }
+    Legacy::State state;
+    state.position << 1.0, 2.0, 3.0, 4.0;
+    state.active_mask = s.enable_mask;
+    Legacy::StateBytes bytes{};
+    (void)Legacy::encode_state(state, bytes);
+    (void)reply.send(bytes);
+  }
+};
+using SbrioLink = transport::RespondingTransport<SbrioResponder, 128, 16>;
+using Gateway = transport::V2Gateway<RobotSide, SbrioLink, endohaptics::ManualClock>;
+
+protocol::InitiatorConfig console_config() {
+  protocol::InitiatorConfig c;
+  c.rig = protocol::make_rig_id("bench");
+  return c;
+}
+
+protocol::ResponderConfig robot_config() {
+  protocol::ResponderConfig c;
+  c.rig = protocol::make_rig_id("bench");
+  c.expiry = std::chrono::seconds(60);
+  return c;
+}
+
+struct Rig {
+  FakeSbrio sbrio;
+  Link network;
+  endohaptics::ManualClock clock{std::chrono::seconds(1)};
+  Console console{network.a(), protocol::SecureInitiator<4>(key(), console_config())};
+  RobotSide robot{network.b(), protocol::SecureResponder<4>(key(), robot_config())};
+  SbrioLink link{SbrioResponder{&sbrio}};
+  Gateway gateway{robot, link, clock, transport::GatewayConfig{}};
+
+  Rig() { sbrio.received.reserve(20000); }
+
+  // The handshake: the console's first send is the HELLO, the gateway's step answers it.
+  void connect() {
+    REQUIRE(console.send(setpoint_bytes(0x0F)) == TransportStatus::ok);
+    (void)gateway.step(0ns);
+    std::array<std::byte, Legacy::state_packet_size + 1> back{};
+    REQUIRE(console.receive(back, 0ns).status == TransportStatus::timeout);
+    REQUIRE(console.session().established());
+  }
+
+  // One setpoint from the console; true when its sealed answer came back.
+  bool exchange(std::uint8_t mask, double position = 0.5) {
+    REQUIRE(console.send(setpoint_bytes(mask, position)) == TransportStatus::ok);
+    (void)gateway.step(0ns);
+    std::array<std::byte, Legacy::state_packet_size + 1> back{};
+    return console.receive(back, 0ns).status == TransportStatus::ok;
+  }
+
+  // Setpoints the sbRIO received with any motor enabled.
+  [[nodiscard]] std::size_t enabled_received() const {
+    std::size_t n = 0;
+    for (const auto& s : sbrio.received) n += s.enable_mask != 0 ? 1 : 0;
+    return n;
+  }
+};
+
+}  // namespace
+
+TEST_CASE("V2Gateway: authentic setpoints reach the sbRIO, its answers return sealed") {
+  Rig rig;
+  rig.connect();
+  rig.sbrio.received.clear();
+  CHECK(rig.exchange(0x0F));
+  REQUIRE(rig.sbrio.received.size() == 1);
+  CHECK(rig.sbrio.received[0].enable_mask == 0x0F);
+  CHECK(rig.sbrio.received[0].position[0] == doctest::Approx(0.5));
+  for (int i = 0; i < 50; ++i) {
+    rig.clock.advance(1ms);
+    CHECK(rig.exchange(0x05, 0.25));
+  }
+  CHECK(rig.sbrio.received.back().enable_mask == 0x05);
+  const auto& c = rig.gateway.counters();
+  CHECK(c.relayed == 51);
+  CHECK(c.returned == 51);
+  CHECK(c.unanswered == 0);
+  CHECK(c.watchdog_trips == 0);
+  CHECK(rig.robot.counters().accepted == 51);
+  CHECK(rig.console.counters().accepted == 51);
+  CHECK(rig.enabled_received() == 51);
+}
+
+TEST_CASE("V2Gateway: 2016 packets, forgeries and replays from the network never reach the sbRIO") {
+  Rig rig;
+  rig.connect();
+  REQUIRE(rig.exchange(0x0F));
+  // Capture a valid v2 setpoint on the wire, deliver it once.
+  REQUIRE(rig.console.send(setpoint_bytes(0x0F)) == TransportStatus::ok);
+  std::array<std::byte, 128> wire{};
+  std::size_t size = 0;
+  bool truncated = false;
+  REQUIRE(rig.network.a_to_b().pop(wire, size, truncated));
+  REQUIRE(size == 67);
+  const auto valid = std::span<const std::byte>(wire.data(), size);
+  rig.network.a_to_b().push(valid);
+  (void)rig.gateway.step(0ns);
+  REQUIRE(rig.gateway.counters().relayed == 2);
+  const auto enabled_before = rig.enabled_received();
+
+  rig.network.a_to_b().push(valid);                 // replayed
+  rig.network.a_to_b().push(setpoint_bytes(0x0F));  // a plain 2016 setpoint: 17 bytes
+  std::array<std::byte, 67> forged{};
+  std::copy(valid.begin(), valid.end(), forged.begin());
+  forged[30] ^= std::byte{0x01};
+  rig.network.a_to_b().push(forged);  // one bit flipped
+  (void)rig.gateway.step(0ns);
+  CHECK(rig.robot.counters().replayed == 1);
+  CHECK(rig.robot.counters().wrong_size == 1);
+  CHECK(rig.robot.counters().forged == 1);
+  CHECK(rig.gateway.counters().relayed == 2);
+  CHECK(rig.enabled_received() == enabled_before);
+
+  // Nothing but attacks for the watchdog time: the gateway disables the motors itself.
+  for (int i = 0; i < 150; ++i) {
+    rig.clock.advance(1ms);
+    rig.network.a_to_b().push(valid);
+    rig.network.a_to_b().push(forged);
+    (void)rig.gateway.step(0ns);
+  }
+  CHECK(rig.gateway.counters().relayed == 2);
+  CHECK(rig.enabled_received() == enabled_before);
+  CHECK(rig.gateway.counters().watchdog_trips == 1);
+  CHECK(rig.gateway.counters().disabled >= 49);
+  CHECK(rig.sbrio.received.back().enable_mask == 0);
+}
+
+TEST_CASE("V2Gateway: silence sends the disabled setpoint once a period, held where measured") {
+  Rig rig;
+  // Silent from the start: disabled setpoints at once, positions zero (nothing measured yet).
+  (void)rig.gateway.step(0ns);
+  REQUIRE(rig.sbrio.received.size() == 1);
+  CHECK(rig.sbrio.received[0].enable_mask == 0);
+  CHECK(rig.sbrio.received[0].position.isZero());
+  (void)rig.gateway.step(0ns);  // not due again within the period
+  CHECK(rig.sbrio.received.size() == 1);
+
+  rig.connect();
+  rig.sbrio.received.clear();
+  REQUIRE(rig.exchange(0x0F));
+  CHECK_FALSE(rig.gateway.silent());
+  // The watchdog (100 ms) runs out: from then on one disabled setpoint per 1 ms period, at the
+  // positions the sbRIO measured last (1, 2, 3, 4 rad), not the commanded 0.5 rad.
+  rig.clock.advance(99ms);
+  (void)rig.gateway.step(0ns);
+  CHECK(rig.sbrio.received.size() == 1);
+  rig.clock.advance(1ms);
+  const auto step = rig.gateway.step(0ns);
+  CHECK(step.disabled);
+  CHECK(rig.gateway.silent());
+  for (int i = 0; i < 9; ++i) {
+    rig.clock.advance(1ms);
+    (void)rig.gateway.step(0ns);
+  }
+  CHECK(rig.gateway.counters().disabled == 11);  // 1 at the start, 10 after the watchdog
+  CHECK(rig.gateway.counters().watchdog_trips == 1);
+  REQUIRE(rig.sbrio.received.size() == 11);
+  for (std::size_t i = 1; i < rig.sbrio.received.size(); ++i) {
+    CHECK(rig.sbrio.received[i].enable_mask == 0);
+    CHECK(rig.sbrio.received[i].position[0] == doctest::Approx(1.0));
+    CHECK(rig.sbrio.received[i].position[3] == doctest::Approx(4.0));
+  }
+  // A late step sends one, not a burst.
+  rig.clock.advance(50ms);
+  (void)rig.gateway.step(0ns);
+  CHECK(rig.gateway.counters().disabled == 12);
+  // The console is back: obeyed again, and no more disabled setpoints.
+  CHECK(rig.exchange(0x0F));
+  CHECK_FALSE(rig.gateway.silent());
+  CHECK(rig.sbrio.received.back().enable_mask == 0x0F);
+  rig.clock.advance(5ms);
+  (void)rig.gateway.step(0ns);
+  CHECK(rig.gateway.counters().disabled == 12);
+}
+
+TEST_CASE("V2Gateway: the sbRIO's junk is refused and counted, a missing answer is given up") {
+  Rig rig;
+  rig.connect();
+  rig.sbrio.junk = true;
+  CHECK_FALSE(rig.exchange(0x0F));
+  CHECK(rig.gateway.counters().sbrio_refused == 1);
+  CHECK(rig.gateway.counters().returned == 0);
+  rig.clock.advance(3ms);
+  (void)rig.gateway.step(0ns);
+  CHECK(rig.gateway.counters().unanswered == 1);
+  rig.sbrio.junk = false;
+  rig.sbrio.answer = false;
+  rig.clock.advance(1ms);
+  (void)rig.console.send(setpoint_bytes(0x0F));
+  (void)rig.gateway.step(0ns);
+  rig.clock.advance(3ms);
+  (void)rig.gateway.step(0ns);
+  CHECK(rig.gateway.counters().relayed == 2);
+  CHECK(rig.gateway.counters().unanswered == 2);
+  CHECK(rig.gateway.counters().returned == 0);
+}
+
+TEST_CASE("V2Gateway: a step allocates nothing") {
+  Rig rig;
+  rig.connect();
+  const auto sp = setpoint_bytes(0x0F);
+  const long allocations = endohaptics::test::allocations_during([&] {
+    std::array<std::byte, 64> back{};
+    for (int i = 0; i < 1000; ++i) {
+      rig.clock.advance(1ms);
+      REQUIRE(rig.console.send(sp) == TransportStatus::ok);
+      REQUIRE(rig.gateway.step(0ns).returned);
+      REQUIRE(rig.console.receive(back, 0ns).status == TransportStatus::ok);
+    }
+    for (int i = 0; i < 200; ++i) {  // silence: disabled setpoints
+      rig.clock.advance(1ms);
+      (void)rig.gateway.step(0ns);
+    }
+  });
+  CHECK(allocations == 0);
+  CHECK(rig.gateway.counters().returned == 1000);
+  CHECK(rig.gateway.counters().disabled > 0);
+}
+
+TEST_CASE("GatewayConfig: out-of-range timing is refused naming the field") {
+  transport::GatewayConfig c;
+  CHECK_NOTHROW(c.validate());
+  c.watchdog = 0ns;
+  CHECK_THROWS_WITH_AS(c.validate(), doctest::Contains("watchdog must be in [1 ms, 10 s]"),
+                       endohaptics::Error);
+  c = {};
+  c.period = 200ms;
+  CHECK_THROWS_WITH_AS(c.validate(), doctest::Contains("period"), endohaptics::Error);
+  c = {};
+  c.watchdog = 5ms;
+  c.period = 10ms;
+  CHECK_THROWS_WITH_AS(c.validate(), doctest::Contains("must not exceed watchdog"),
+                       endohaptics::Error);
+  c = {};
+  c.answer_timeout = -1ns;
+  CHECK_THROWS_WITH_AS(c.validate(), doctest::Contains("answer_timeout"), endohaptics::Error);
+}
+
+}  // namespace transport_v2_gateway_test
