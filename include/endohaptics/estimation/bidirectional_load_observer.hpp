@@ -14,8 +14,8 @@
 
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/core/parameter.hpp"
+#include "endohaptics/estimation/directional_front_end.hpp"
 #include "endohaptics/estimation/joint_force_model.hpp"
-#include "endohaptics/model/butterworth_biquad.hpp"
 #include "endohaptics/model/state_space.hpp"
 #include "endohaptics/model/stop_operators.hpp"
 
@@ -165,8 +165,9 @@ class BidirectionalLoadObserver {
   //! Validates `p` (throws Error naming the field).
   explicit BidirectionalLoadObserver(const Parameters& p = {})
       : p_((p.validate(), p)), stops_(p.stop_thresholds, p.start_travel) {
-    current_ = model::ButterworthBiquad<Scalar>::lowpass(p_.current_cutoff, p_.sample_time);
-    velocity_ = model::ButterworthBiquad<Scalar>::lowpass(p_.velocity_cutoff, p_.sample_time);
+    front_ =
+        DirectionalFrontEnd<Scalar>(p_.current_cutoff, p_.velocity_cutoff, p_.direction_scale,
+                                    p_.direction_threshold, p_.velocity_threshold, p_.sample_time);
     backward_weight_ = -p_.forward_gain / p_.backward_gain;
     reset();
   }
@@ -188,23 +189,12 @@ class BidirectionalLoadObserver {
       return model::StepStatus::non_finite_input;
     }
     State x = x_;
-    if (x[started] == Scalar(0)) {  // first sample: filters at its steady state, no motion yet
-      current_.start(sig.current, x[current_z1], x[current_z2]);
-      velocity_.start(Scalar(0), x[velocity_z1], x[velocity_z2]);
-      x[previous_position] = sig.position;
-      x[started] = Scalar(1);
-    }
-    const Scalar delta = sig.position - x[previous_position];
-    x[previous_position] = sig.position;
-    const Scalar i_f = current_.step(sig.current, x[current_z1], x[current_z2]);
-    const Scalar v = velocity_.step(delta / p_.sample_time, x[velocity_z1], x[velocity_z2]);
-    if (delta != Scalar(0)) {  // Dahl: towards sign(delta) by |delta| / q0 of the way
-      const Scalar w = std::fmin(Scalar(1), std::fabs(delta) / p_.direction_scale);
-      x[direction] += w * ((delta > 0 ? Scalar(1) : Scalar(-1)) - x[direction]);
-    }
-    x[regime_index] = x[direction] >= p_.direction_threshold && v > p_.velocity_threshold     ? 1
-                      : x[direction] <= -p_.direction_threshold && v < -p_.velocity_threshold ? -1
-                                                                                              : 0;
+    // The shared front end on x[current_z1 .. direction], started flag x[started].
+    static_assert(current_z1 == 0 && direction == DirectionalFrontEnd<Scalar>::state_size - 1);
+    const auto front = front_.step(x.data(), x[started], sig.position, sig.current);
+    const Scalar i_f = front.current;
+    const Scalar v = front.velocity;
+    x[regime_index] = front.regime;
     typename Stops::State z = x.template segment<N + 2>(stops_begin);
     StopValues s;
     stops_.step(z, sig.position, s);
@@ -278,8 +268,7 @@ class BidirectionalLoadObserver {
  private:
   Parameters p_;
   Stops stops_;
-  model::ButterworthBiquad<Scalar> current_{};
-  model::ButterworthBiquad<Scalar> velocity_{};
+  DirectionalFrontEnd<Scalar> front_{};
   Scalar backward_weight_{};  // -kappa = -g_f / g_b, from the parameters
   State x_ = State::Zero();
   Scalar last_filtered_current_{};

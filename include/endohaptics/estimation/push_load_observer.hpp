@@ -21,8 +21,8 @@
 
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/core/parameter.hpp"
+#include "endohaptics/estimation/directional_front_end.hpp"
 #include "endohaptics/estimation/joint_force_model.hpp"
-#include "endohaptics/model/butterworth_biquad.hpp"
 #include "endohaptics/model/state_space.hpp"
 
 namespace endohaptics::estimation {
@@ -107,8 +107,9 @@ class PushLoadObserver {
 
   //! Validates `p` (throws Error naming the field).
   explicit PushLoadObserver(const Parameters& p = {}) : p_((p.validate(), p)) {
-    current_ = model::ButterworthBiquad<Scalar>::lowpass(p_.current_cutoff, p_.sample_time);
-    velocity_ = model::ButterworthBiquad<Scalar>::lowpass(p_.velocity_cutoff, p_.sample_time);
+    front_ =
+        DirectionalFrontEnd<Scalar>(p_.current_cutoff, p_.velocity_cutoff, p_.direction_scale,
+                                    p_.direction_threshold, p_.velocity_threshold, p_.sample_time);
     reset();
   }
 
@@ -128,26 +129,13 @@ class PushLoadObserver {
       return model::StepStatus::non_finite_input;
     }
     State x = x_;
-    if (x[9] == Scalar(0)) {  // first sample: filters at its steady state, no motion yet
-      current_.start(s.current, x[0], x[1]);
-      velocity_.start(Scalar(0), x[2], x[3]);
-      x[4] = s.position;
-      x[9] = Scalar(1);
-    }
-    const Scalar delta = s.position - x[4];
-    x[4] = s.position;
-    const Scalar i_f = current_.step(s.current, x[0], x[1]);
-    const Scalar v = velocity_.step(delta / p_.sample_time, x[2], x[3]);
-    // Direction state: moves towards sign(delta) by |delta| / q0 of the way (at most all of it).
-    if (delta != Scalar(0)) {
-      const Scalar w = std::fmin(Scalar(1), std::fabs(delta) / p_.direction_scale);
-      x[5] += w * ((delta > 0 ? Scalar(1) : Scalar(-1)) - x[5]);
-    }
-    const Scalar h = p_.push_sign * x[5];
-    const Scalar vp = p_.push_sign * v;
-    x[8] = h >= p_.direction_threshold && vp > p_.velocity_threshold     ? Scalar(1)
-           : h <= -p_.direction_threshold && vp < -p_.velocity_threshold ? Scalar(-1)
-                                                                         : Scalar(0);
+    // The shared front end on x[0..5] (filters, previous position, direction), started flag x[9];
+    // the regime judged in the push direction.
+    const auto front = front_.step(x.data(), x[9], s.position, s.current, p_.push_sign);
+    const Scalar delta = front.delta;
+    const Scalar i_f = front.current;
+    const Scalar v = front.velocity;
+    x[8] = front.regime;
     if (x[8] < 0 && x[10] == Scalar(0) && p_.back_current_per_load != Scalar(0) &&
         p_.initial_variance > Scalar(0)) {
       // Back-driven before any push: the prior and this sample's back-driven inversion, weighed by
@@ -193,8 +181,7 @@ class PushLoadObserver {
 
  private:
   Parameters p_;
-  model::ButterworthBiquad<Scalar> current_{};
-  model::ButterworthBiquad<Scalar> velocity_{};
+  DirectionalFrontEnd<Scalar> front_{};
   State x_ = State::Zero();
   Scalar last_filtered_current_{};
   Scalar last_filtered_velocity_{};
