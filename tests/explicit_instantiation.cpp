@@ -110,6 +110,7 @@ template class eh::transport::InMemoryLink<64, 4>;
 template class eh::transport::FaultInjectingTransport<eh::transport::InMemoryTransport<128, 16>>;
 template class eh::teleop::DurationStats<100, 1000>;
 template class eh::teleop::SetpointRateLimiter<4>;
+template class eh::teleop::LatestValue<eh::teleop::StylusSample>;
 template class eh::sim::SimulatedRig<1, float>;
 template class eh::sim::SimulatedRig<4>;
 template class eh::sim::ScriptedOperator<eh::ManualClock>;

@@ -59,6 +59,7 @@
 #include "endohaptics/sim/scripted_operator.hpp"
 #include "endohaptics/sim/simulated_rig.hpp"
 #include "endohaptics/teleop/haptic_device.hpp"
+#include "endohaptics/teleop/latest_value.hpp"
 #include "endohaptics/teleop/loop_stats.hpp"
 #include "endohaptics/teleop/passivity.hpp"
 #include "endohaptics/teleop/realtime.hpp"
