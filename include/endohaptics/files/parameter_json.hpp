@@ -19,18 +19,19 @@
 #include "endohaptics/core/parameter.hpp"
 #include "endohaptics/files/json_text.hpp"
 
+namespace nlohmann {
 //! Fixed-size Eigen vectors as JSON arrays of numbers (write; read: an array of exactly the size).
 template <typename Scalar, int N, int Options, int MaxRows, int MaxCols>
-requires(
-    N > 0) struct nlohmann::adl_serializer<Eigen::Matrix<Scalar, N, 1, Options, MaxRows, MaxCols>> {
+struct adl_serializer<Eigen::Matrix<Scalar, N, 1, Options, MaxRows, MaxCols>> {
+  static_assert(N > 0, "a fixed-size vector");
   using Vector = Eigen::Matrix<Scalar, N, 1, Options, MaxRows, MaxCols>;  //!< the vector type
   //! [v0, v1, ...].
-  static void to_json(nlohmann::json& j, const Vector& v) {
-    j = nlohmann::json::array();
+  static void to_json(json& j, const Vector& v) {
+    j = json::array();
     for (int i = 0; i < N; ++i) j.push_back(static_cast<double>(v[i]));
   }
   //! Throws Error unless `j` is an array of N numbers.
-  static void from_json(const nlohmann::json& j, Vector& v) {
+  static void from_json(const json& j, Vector& v) {
     if (!j.is_array() || j.size() != static_cast<std::size_t>(N)) {
       endohaptics::detail::fail("expected an array of " + std::to_string(N) + " numbers, got " +
                                 j.dump());
@@ -38,6 +39,7 @@ requires(
     for (int i = 0; i < N; ++i) v[i] = j[static_cast<std::size_t>(i)].template get<Scalar>();
   }
 };
+}  // namespace nlohmann
 
 namespace endohaptics::files {
 
