@@ -77,8 +77,8 @@ target_link_libraries(endohaptics-ros-touch-standin PRIVATE endohaptics::endohap
   endohaptics_warnings CLI11::CLI11 fmt::fmt Threads::Threads endohaptics_ros)
 
 if(ENDOHAPTICS_BUILD_TESTS)
-  # Heap allocations of the loop thread while ROS traffic flows (tests/ros/ros_alloc_test.cpp).
-  add_executable(endohaptics-ros-alloc-test "${PROJECT_SOURCE_DIR}/tests/ros/ros_alloc_test.cpp")
+  # Heap allocations of the loop thread while ROS traffic flows (tests/ros/ros_alloc_check.cpp).
+  add_executable(endohaptics-ros-alloc-test "${PROJECT_SOURCE_DIR}/tests/ros/ros_alloc_check.cpp")
   target_include_directories(endohaptics-ros-alloc-test PRIVATE "${PROJECT_SOURCE_DIR}/tests"
     "${CMAKE_CURRENT_LIST_DIR}")
   target_link_libraries(endohaptics-ros-alloc-test PRIVATE endohaptics::endohaptics
