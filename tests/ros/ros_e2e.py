@@ -385,7 +385,7 @@ def case_alloc(work):
           os.path.join(work, "standin.log"))
     hz = start(["rostopic", "hz", "/EW/measured_js", "--tcpnodelay"], env,
                os.path.join(work, "hz.log"))
-    code, out = run([os.path.join(BIN, "endohaptics-ros-alloc-test")], env, timeout=30)
+    code, out = run([os.path.join(BIN, "endohaptics-ros-alloc-test")], env, timeout=45)
     print(out.strip())
     if code != 0 or "PASS" not in out:
         fail(f"endohaptics-ros-alloc-test exit {code}")
@@ -443,5 +443,14 @@ if __name__ == "__main__":
     with tempfile.TemporaryDirectory(prefix="ros_e2e_") as work:
         try:
             CASES[CASE](work)
+        except Exception as e:  # say why, whatever broke (a timeout, a missing line)
+            import traceback
+            traceback.print_exc()
+            logs = [f for f in os.listdir(work) if f.endswith(".log")]
+            for f in sorted(logs):
+                print(f"--- {f} (last lines)\n" +
+                      "".join(open(os.path.join(work, f), errors="replace").readlines()[-15:]))
+            print(f"FAIL: {CASE}: {type(e).__name__}: {e}")
+            sys.exit(1)
         finally:
             stop_all()
