@@ -18,7 +18,8 @@ every process it started (by process group). Cases (each prints "PASS: ..." or "
   alloc       the loop with the ROS stylus and publisher counts heap allocations on its own
               thread over 2000 ticks while ROS traffic flows both ways: 0
   p99         the loop's p99 period error with ROS publishing (a bag recording every topic)
-              against endohaptics-bridge without ROS, same emulator, same rate
+              against endohaptics-bridge without ROS, same emulator, same rate (3 interleaved
+              runs of 1.5 s each; ROS_E2E_P99_RUNS and ROS_E2E_P99_SECONDS for longer ones)
 """
 import csv
 import os
@@ -164,11 +165,11 @@ def bag_table(bag, env):
 def case_topics(work):
     port = start_roscore(work)
     env = ros_env(work, "127.0.0.1", port, "127.0.0.1")
-    sbrio, key, truth = start_emulator(work, env, extra=["--duration", "12"])
+    sbrio, key, truth = start_emulator(work, env, extra=["--duration", "10"])
     standin = start([os.path.join(BIN, "endohaptics-ros-touch-standin"), "--bad-every", "500",
-                     "--duration", "10"], env, os.path.join(work, "standin.log"))
+                     "--duration", "8"], env, os.path.join(work, "standin.log"))
     bridge_log = os.path.join(work, "bridge.log")
-    bridge = start(bridge_args(sbrio, key, duration=6.5,
+    bridge = start(bridge_args(sbrio, key, duration=5.5,
                                extra=["--log", os.path.join(work, "tick.csv"), "--input-frame",
                                       "touch", *FIFO]), env, bridge_log)
     if not wait_for(bridge_log, r"bridge: sbRIO"):
@@ -269,11 +270,11 @@ def case_drop_in(work):
     sbrio, key, _ = start_emulator(work, env, extra=["--duration", "10"])
     standin_log = os.path.join(work, "standin.log")
     standin = start([os.path.join(BIN, "endohaptics-ros-touch-standin"), "--mode", "phantom-omni",
-                     "--stop-after", "2.5", "--duration", "6"], env, standin_log)
+                     "--stop-after", "2.0", "--duration", "4"], env, standin_log)
     if not wait_for(standin_log, r"standin: phantom-omni"):
         fail("the stand-in did not start: " + open(standin_log).read())
     tick = os.path.join(work, "tick.csv")
-    code, out = run(bridge_args(sbrio, key, duration=4.0,
+    code, out = run(bridge_args(sbrio, key, duration=3.0,
                                 extra=["--input", "phantom-omni", "--input-timeout", "100",
                                        "--log", tick]), env)
     standin.wait(timeout=20)
@@ -306,7 +307,7 @@ def case_drop_in(work):
         problems.append(f"md5 {md5} != {expected_md5}")
     if received < 1000:
         problems.append(f"the stand-in got {received} force commands")
-    if len(up) < 1500:
+    if len(up) < 1000:
         problems.append(f"only {len(up)} ticks ok while the stylus moved")
     if not released or any(int(r["enable_mask"]) != 0 for r in released):
         problems.append("no release after the stylus stopped")
@@ -335,10 +336,10 @@ def case_three_hosts(work):
     robot_side = ros_env(work, "127.0.0.1", port, "127.0.0.2")
     sbrio, key, _ = start_emulator(work, console, ip="127.0.0.3", extra=["--duration", "10"])
     standin_log = os.path.join(work, "standin.log")
-    standin = start([os.path.join(BIN, "endohaptics-ros-touch-standin"), "--duration", "6"],
+    standin = start([os.path.join(BIN, "endohaptics-ros-touch-standin"), "--duration", "4"],
                     console, standin_log)
     bridge_log = os.path.join(work, "bridge.log")
-    bridge = start(bridge_args(sbrio, key, ip="127.0.0.3", duration=3.5,
+    bridge = start(bridge_args(sbrio, key, ip="127.0.0.3", duration=2.5,
                                extra=["--local", f"127.0.0.2:{free_port(socket.SOCK_DGRAM)}"]),
                    robot_side, bridge_log)
     if not wait_for(bridge_log, r"bridge: sbRIO"):
@@ -381,7 +382,7 @@ def case_three_hosts(work):
 def case_alloc(work):
     port = start_roscore(work)
     env = ros_env(work, "127.0.0.1", port, "127.0.0.1")
-    start([os.path.join(BIN, "endohaptics-ros-touch-standin"), "--duration", "8"], env,
+    start([os.path.join(BIN, "endohaptics-ros-touch-standin"), "--duration", "7"], env,
           os.path.join(work, "standin.log"))
     hz = start(["rostopic", "hz", "/EW/measured_js", "--tcpnodelay"], env,
                os.path.join(work, "hz.log"))
@@ -407,7 +408,7 @@ def case_p99(work):
     results = {"without ROS": [], "with ROS": []}
     # Longer measurements: ROS_E2E_P99_RUNS (default 3), ROS_E2E_P99_SECONDS (default 2.5).
     runs = int(os.environ.get("ROS_E2E_P99_RUNS", "3"))
-    seconds = os.environ.get("ROS_E2E_P99_SECONDS", "2.5")
+    seconds = os.environ.get("ROS_E2E_P99_SECONDS", "1.5")
     for _ in range(runs):  # interleaved, so both see the same machine load; the median of each
         code, plain = run([os.path.join(BIN, "endohaptics-bridge"), "--sbrio",
                            f"127.0.0.1:{sbrio}", "--key", key, "--duration", seconds, *FIFO],
