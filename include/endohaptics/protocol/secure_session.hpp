@@ -590,7 +590,7 @@ class SecureResponder {
     const SecureStatus s = Codec::seal(send_key_, h, payload, out);
     if (s != SecureStatus::ok) return s;
     ++sent_;
-    answered_[sent_ % answered_.size()] = {sent_, answer_received_at_};
+    answered_[static_cast<std::size_t>(sent_ % answered_.size())] = {sent_, answer_received_at_};
     return s;
   }
 
@@ -666,7 +666,7 @@ class SecureResponder {
   [[nodiscard]] bool fresh(std::uint64_t ack, std::chrono::nanoseconds now) const noexcept {
     if (ack == 0) return now - welcome_at_ <= 2 * granted_;
     if (ack > sent_ || sent_ - ack >= answered_.size()) return false;
-    const Answered& a = answered_[ack % answered_.size()];
+    const Answered& a = answered_[static_cast<std::size_t>(ack % answered_.size())];
     return a.sequence == ack && now - a.received <= granted_;
   }
 

@@ -48,7 +48,7 @@ class SecureTransport {
     const TransportStatus s =
         inner_->send(std::span<const std::byte>(tx_.data(), Session::send_packet_size));
     if constexpr (requires { session_.hello_due(t, hello_); }) {
-      sent_at_[session_.sent() % sent_at_.size()] = t;
+      sent_at_[static_cast<std::size_t>(session_.sent() % sent_at_.size())] = t;
     }
     return s;
   }
@@ -158,7 +158,8 @@ class SecureTransport {
         const std::uint64_t ack = v.header.ack;
         const std::uint64_t sent = self->session_.sent();
         if (!v.previous_session && ack > 0 && ack <= sent && sent - ack < self->sent_at_.size()) {
-          self->answer_round_trip_ = now - self->sent_at_[ack % self->sent_at_.size()];
+          self->answer_round_trip_ =
+              now - self->sent_at_[static_cast<std::size_t>(ack % self->sent_at_.size())];
         }
       }
       last_handshake = false;
