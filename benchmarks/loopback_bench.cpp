@@ -7,7 +7,12 @@
 // over protocol v2 (SecureTransport on both sides, docs/protocol.md) in the same run.
 #include <benchmark/benchmark.h>
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
 #include <sched.h>
+#include <sys/socket.h>
+#include <sys/time.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <chrono>
@@ -26,6 +31,7 @@
 #include <endohaptics/transport/udp_transport.hpp>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string_view>
 #include <thread>
 #include <type_traits>
@@ -235,6 +241,65 @@ void BM_Loopback_v2_handshake(benchmark::State& st) {
       static_cast<double>(sends) / static_cast<double>(st.iterations());
 }
 
+// The wire's floor for `--rate max`: a raw POSIX UDP ping-pong on 127.0.0.1 between this thread
+// and an echo thread, each blocking in recv (17 bytes out, 49 back, the 2016 sizes): the rate the
+// loop would reach if the loop, the emulator and the transports cost nothing. rate_hz here and in
+// BM_Loopback_max_rate, same run, give the ratio docs/performance.md tracks.
+void BM_Baseline_udp_ping_pong(benchmark::State& st) {
+  const auto ticks = st.range(0);
+  const auto open_socket = [] {
+    const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    if (fd < 0 || ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) {
+      throw std::runtime_error("cannot open a UDP socket on 127.0.0.1");
+    }
+    return fd;
+  };
+  const int server = open_socket();
+  const int client = open_socket();
+  sockaddr_in server_address{};
+  socklen_t length = sizeof server_address;
+  (void)::getsockname(server, reinterpret_cast<sockaddr*>(&server_address), &length);
+  (void)::connect(client, reinterpret_cast<sockaddr*>(&server_address), sizeof server_address);
+  const timeval wake{0, 100000};  // the echo thread looks at `stop` at least every 100 ms
+  (void)::setsockopt(server, SOL_SOCKET, SO_RCVTIMEO, &wake, sizeof wake);
+  std::atomic<bool> stop{false};
+  std::thread echo([&] {
+    std::array<char, 64> in{};
+    const std::array<char, 49> state{};
+    sockaddr_in from{};
+    while (!stop.load(std::memory_order_relaxed)) {
+      socklen_t n = sizeof from;
+      if (::recvfrom(server, in.data(), in.size(), 0, reinterpret_cast<sockaddr*>(&from), &n) > 0) {
+        (void)::sendto(server, state.data(), state.size(), 0, reinterpret_cast<sockaddr*>(&from),
+                       n);
+      }
+    }
+  });
+  const std::array<char, 17> setpoint{};
+  std::array<char, 64> in{};
+  std::int64_t done = 0;
+  for (auto _ : st) {
+    for (std::int64_t i = 0; i < ticks; ++i) {
+      if (::send(client, setpoint.data(), setpoint.size(), 0) < 0 ||
+          ::recv(client, in.data(), in.size(), 0) <= 0) {
+        st.SkipWithError("the ping-pong failed");
+        break;
+      }
+      ++done;
+    }
+  }
+  stop.store(true);
+  echo.join();
+  ::close(client);
+  ::close(server);
+  st.counters["rate_hz"] =
+      benchmark::Counter(static_cast<double>(done), benchmark::Counter::kIsRate);
+  st.SetItemsProcessed(done);
+}
+
 // The floor: a bare absolute-deadline clock_nanosleep loop at 1 kHz on the same machine, its
 // period error measured the same way (LoopStats).
 void BM_Baseline_clock_nanosleep_1kHz(benchmark::State& st) {
@@ -282,6 +347,11 @@ BENCHMARK(BM_Loopback_1kHz_v2)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 BENCHMARK(BM_Loopback_v2_handshake)->Unit(benchmark::kMicrosecond)->UseRealTime();
+BENCHMARK(BM_Baseline_udp_ping_pong)
+    ->Arg(run_ticks(60000))
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_Loopback_max_rate)
     ->Arg(run_ticks(60000))
     ->Iterations(1)

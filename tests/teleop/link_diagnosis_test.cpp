@@ -32,7 +32,9 @@ TEST_CASE("diagnose_link: up only when an obeyed state arrived, otherwise the li
       refused, {.authenticated = true, .enable_mask = 0x0F, .last_active = 0x00}, peer);
   CHECK(disobeyed.problem == tp::LinkProblem::not_obeyed);
   CHECK(disobeyed.message.find("motors 0x0F enabled, reported active 0x00") != std::string::npos);
-  CHECK(disobeyed.message.find("--max-round-trip") != std::string::npos);
+  // A v2 robot side obeys every setpoint of its session: a motor that stays inactive is its own
+  // doing (every setpoint it answered was fresh), the same words as for the 2016 wire.
+  CHECK(disobeyed.message.find("a fault or a safety stop") != std::string::npos);
   auto pinned = tp::diagnose_link(refused, {.enable_mask = 0x0F}, peer);
   CHECK(pinned.message.find("a fault or a safety stop") != std::string::npos);
   CHECK(tp::diagnose_link(window(0, 900), {}, peer).message.find("pins one console") !=
@@ -50,6 +52,14 @@ TEST_CASE("diagnose_link: up only when an obeyed state arrived, otherwise the li
         tp::LinkProblem::late_answers);
   CHECK(tp::diagnose_link(window(0, 900), {.authenticated = true, .wrong_session = 4}, peer)
             .problem == tp::LinkProblem::wrong_session);
+  // The robot side shook hands but no state came back: its grant is shorter than the round trip.
+  const auto shook =
+      tp::diagnose_link(window(0, 900), {.authenticated = true, .sessions = 3}, peer);
+  CHECK(shook.problem == tp::LinkProblem::late_answers);
+  CHECK(shook.message.find("answered the handshake (3 sessions)") != std::string::npos);
+  CHECK(shook.message.find("--max-round-trip") != std::string::npos);
+  CHECK(tp::diagnose_link(window(0, 900), {.authenticated = true}, peer)
+            .message.find("another --rig name") != std::string::npos);
   tp::LoopWindow faults = window(0, 900);
   faults.state_faults = 3;
   CHECK(tp::diagnose_link(faults, {}, peer).problem == tp::LinkProblem::implausible);

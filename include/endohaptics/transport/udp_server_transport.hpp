@@ -210,7 +210,7 @@ class UdpServerTransport {
   boost::asio::io_context io_;
   boost::asio::ip::udp::socket socket_;
   std::size_t max_drain_;
-  std::array<std::byte, detail::max_datagram_bytes> scratch_{};
+  detail::DrainScratch scratch_{};
   sockaddr_storage peer_{};
   socklen_t peer_size_ = 0;
   bool pin_ = false;         // obey one peer at a time

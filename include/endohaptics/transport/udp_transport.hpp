@@ -66,6 +66,18 @@ inline bool same_sender(const sockaddr_storage& a, const sockaddr_storage& b) no
   return false;
 }
 
+//! The buffers one drain reads into: `batch` datagrams per recvmmsg call (one system call reads
+//! whatever is queued, up to the batch: the loop's receive costs a wait and one read, not a read
+//! per datagram plus one that finds the queue empty). Part of each UDP transport (no allocation).
+struct DrainScratch {
+  static constexpr std::size_t batch = 8;  //!< datagrams per recvmmsg call
+  //! One buffer per datagram of a batch.
+  std::array<std::array<std::byte, max_datagram_bytes>, batch> data{};
+  std::array<sockaddr_storage, batch> senders{};  //!< their senders (unconnected sockets)
+  std::array<iovec, batch> iov{};                 //!< recvmmsg's vectors
+  std::array<mmsghdr, batch> messages{};          //!< recvmmsg's headers
+};
+
 //! Waits up to `timeout`, then drains `fd`, reading at most `max_drain` (>= 1) datagrams into
 //! `scratch`, and keeps in `buffer` the newest one `filter` accepts; the rest stay queued. With
 //! `from` != nullptr, that datagram's sender is written there (unconnected sockets). With `pin`
@@ -73,9 +85,8 @@ inline bool same_sender(const sockaddr_storage& a, const sockaddr_storage& b) no
 //! never offered to `filter`.
 template <typename F>
 ReceiveResult receive_newest(int fd, std::span<std::byte> buffer, std::chrono::nanoseconds timeout,
-                             sockaddr_storage* from, std::size_t max_drain,
-                             std::span<std::byte, max_datagram_bytes> scratch, F& filter,
-                             const sockaddr_storage* pin = nullptr,
+                             sockaddr_storage* from, std::size_t max_drain, DrainScratch& scratch,
+                             F& filter, const sockaddr_storage* pin = nullptr,
                              std::size_t* foreign = nullptr) noexcept {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   NewestAccepted<F> drain(buffer, filter);
@@ -94,27 +105,39 @@ ReceiveResult receive_newest(int fd, std::span<std::byte> buffer, std::chrono::n
     if (waited != TransportStatus::ok) break;  // timeout
     bool accepted = false;
     while (reads < max_drain) {
-      sockaddr_storage sender{};
-      socklen_t sender_size = sizeof(sender);
-      const ssize_t n =
-          ::recvfrom(fd, scratch.data(), scratch.size(), MSG_DONTWAIT | MSG_TRUNC,
-                     from != nullptr ? reinterpret_cast<sockaddr*>(&sender) : nullptr,  // NOLINT
-                     from != nullptr ? &sender_size : nullptr);
-      if (n < 0) {
+      const auto want = static_cast<unsigned>(std::min(max_drain - reads, DrainScratch::batch));
+      for (unsigned i = 0; i < want; ++i) {
+        scratch.iov[i] = {scratch.data[i].data(), scratch.data[i].size()};
+        msghdr& h = scratch.messages[i].msg_hdr;
+        h = msghdr{};
+        h.msg_iov = &scratch.iov[i];
+        h.msg_iovlen = 1;
+        if (from != nullptr) {
+          h.msg_name = &scratch.senders[i];
+          h.msg_namelen = sizeof(sockaddr_storage);
+        }
+      }
+      const int got =
+          ::recvmmsg(fd, scratch.messages.data(), want, MSG_DONTWAIT | MSG_TRUNC, nullptr);
+      if (got < 0) {
         if (errno == EINTR) continue;
         if (errno != EAGAIN && errno != EWOULDBLOCK && !drain.any()) none = TransportStatus::error;
         break;
       }
-      ++reads;
-      if (pin != nullptr && from != nullptr && !same_sender(*pin, sender)) {
-        if (foreign != nullptr) ++*foreign;
-        continue;
+      for (int i = 0; i < got; ++i) {
+        const auto k = static_cast<std::size_t>(i);
+        ++reads;
+        if (pin != nullptr && from != nullptr && !same_sender(*pin, scratch.senders[k])) {
+          if (foreign != nullptr) ++*foreign;
+          continue;
+        }
+        // MSG_TRUNC: msg_len is the real length, also of a datagram longer than its buffer.
+        if (drain.offer(scratch.data[k], scratch.messages[k].msg_len)) {
+          accepted = true;
+          if (from != nullptr) *from = scratch.senders[k];
+        }
       }
-      // MSG_TRUNC: n is the real length, also of a datagram longer than the scratch.
-      if (drain.offer(scratch, static_cast<std::size_t>(n))) {
-        accepted = true;
-        if (from != nullptr) *from = sender;
-      }
+      if (static_cast<unsigned>(got) < want) break;  // the queue is empty
     }
     if (accepted || reads >= max_drain || none == TransportStatus::error) break;
     if (std::chrono::steady_clock::now() >= deadline) break;
@@ -223,7 +246,7 @@ class UdpTransport {
   boost::asio::io_context io_;
   boost::asio::ip::udp::socket socket_;
   std::size_t max_drain_;
-  std::array<std::byte, detail::max_datagram_bytes> scratch_{};
+  detail::DrainScratch scratch_{};
 };
 
 static_assert(FilteringTransport<UdpTransport>);
