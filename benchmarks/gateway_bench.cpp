@@ -1,0 +1,265 @@
+// endohaptics-sbrio-gateway's price (transport::V2Gateway, docs/performance.md): one v2 exchange
+// (a sealed setpoint out, the sealed state that answers it back) on UDP loopback, console ->
+// gateway -> 2016 emulator and back, against the direct link console -> v2 emulator in the same
+// run (each exchange waits for its answer: the round trip, real time); and the gateway's CPU per
+// packet in one thread over in-memory transports, against the v2 robot side answering directly.
+#include <benchmark/benchmark.h>
+
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <endohaptics/protocol/secure_session.hpp>
+#include <endohaptics/sim/sbrio_emulator.hpp>
+#include <endohaptics/sim/simulated_rig.hpp>
+#include <endohaptics/teleop/realtime.hpp>
+#include <endohaptics/transport/in_memory_transport.hpp>
+#include <endohaptics/transport/secure_transport.hpp>
+#include <endohaptics/transport/udp_server_transport.hpp>
+#include <endohaptics/transport/udp_transport.hpp>
+#include <endohaptics/transport/v2_gateway.hpp>
+#include <optional>
+#include <thread>
+#include <type_traits>
+
+namespace gateway_bench {
+
+namespace {
+
+namespace transport = endohaptics::transport;
+namespace sim = endohaptics::sim;
+namespace protocol = endohaptics::protocol;
+using Legacy = protocol::PacketCodec<4>;
+using RobotV2 =
+    transport::SecureTransport<transport::UdpServerTransport, protocol::SecureResponder<4>>;
+using ConsoleV2 = transport::SecureTransport<transport::UdpTransport, protocol::SecureInitiator<4>>;
+
+protocol::SecureKey bench_key() {
+  std::array<std::byte, protocol::SecureKey::size> k{};
+  for (std::size_t i = 0; i < k.size(); ++i) k[i] = std::byte{static_cast<std::uint8_t>(5 * i)};
+  return protocol::SecureKey(k);
+}
+protocol::InitiatorConfig console_config() {
+  protocol::InitiatorConfig c;
+  c.rig = protocol::make_rig_id("bench");
+  return c;
+}
+protocol::ResponderConfig robot_config() {
+  protocol::ResponderConfig c;
+  c.rig = protocol::make_rig_id("bench");
+  return c;
+}
+transport::UdpServerConfig loopback_server() {
+  transport::UdpServerConfig c;
+  c.bind_address = "127.0.0.1";
+  c.port = 0;
+  return c;
+}
+Legacy::SetpointBytes setpoint_bytes() {
+  Legacy::Setpoint s;
+  s.enable_mask = 0x0F;
+  Legacy::SetpointBytes b{};
+  (void)Legacy::encode_setpoint(s, b);
+  return b;
+}
+
+// The emulated sbRIO in its own thread on 127.0.0.1: protocol v2 itself (`V2`), or the 2016
+// wire (behind the gateway).
+template <bool V2>
+class EmulatorThread {
+ public:
+  using Link = std::conditional_t<V2, RobotV2, transport::UdpServerTransport>;
+  EmulatorThread()
+      : server_(loopback_server()),
+        link_(make_link()),
+        rig_(sim::endowrist_2016_rig<4>(sim::Environment::free_space)),
+        emulator_(*link_, rig_, clock_),
+        thread_([this] {
+          (void)endohaptics::teleop::apply_realtime({.timer_slack_ns = 1});
+          while (!stop_.load(std::memory_order_relaxed)) {
+            (void)emulator_.poll(std::chrono::milliseconds(1));
+          }
+        }) {}
+  EmulatorThread(const EmulatorThread&) = delete;
+  EmulatorThread& operator=(const EmulatorThread&) = delete;
+  ~EmulatorThread() {
+    stop_.store(true);
+    thread_.join();
+  }
+  [[nodiscard]] std::uint16_t port() const { return server_.local_endpoint().port(); }
+
+ private:
+  Link* make_link() {
+    if constexpr (V2) {
+      return &v2_.emplace(server_, protocol::SecureResponder<4>(bench_key(), robot_config()));
+    } else {
+      return &server_;
+    }
+  }
+  transport::UdpServerTransport server_;
+  std::optional<RobotV2> v2_;
+  Link* link_;
+  endohaptics::SteadyClock clock_;
+  sim::SimulatedRig<4> rig_;
+  sim::SbrioEmulator<Link, sim::SimulatedRig<4>> emulator_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+// endohaptics-sbrio-gateway's loop in its own thread: v2 on 127.0.0.1, the 2016 emulator behind.
+class GatewayThread {
+ public:
+  explicit GatewayThread(std::uint16_t sbrio_port)
+      : server_(loopback_server()),
+        secure_(server_, protocol::SecureResponder<4>(bench_key(), robot_config())),
+        link_({.local_address = "127.0.0.1",
+               .remote_address = "127.0.0.1",
+               .remote_port = sbrio_port}),
+        gateway_(secure_, link_, clock_),
+        thread_([this] {
+          (void)endohaptics::teleop::apply_realtime({.timer_slack_ns = 1});
+          while (!stop_.load(std::memory_order_relaxed)) {
+            (void)gateway_.step(std::chrono::milliseconds(1));
+          }
+        }) {}
+  GatewayThread(const GatewayThread&) = delete;
+  GatewayThread& operator=(const GatewayThread&) = delete;
+  ~GatewayThread() {
+    stop_.store(true);
+    thread_.join();
+  }
+  [[nodiscard]] std::uint16_t port() const { return server_.local_endpoint().port(); }
+  [[nodiscard]] const transport::GatewayCounters& counters() const { return gateway_.counters(); }
+
+ private:
+  transport::UdpServerTransport server_;
+  RobotV2 secure_;
+  transport::UdpTransport link_;
+  endohaptics::SteadyClock clock_;
+  transport::V2Gateway<RobotV2, transport::UdpTransport> gateway_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+// Round trips of a v2 console to the robot side at `port`: each iteration one exchange (a
+// setpoint, then wait for the state that answers it). The handshake happens before timing.
+void round_trips(benchmark::State& st, std::uint16_t port) {
+  (void)endohaptics::teleop::apply_realtime({.timer_slack_ns = 1});
+  transport::UdpTransport udp(
+      {.local_address = "127.0.0.1", .remote_address = "127.0.0.1", .remote_port = port});
+  ConsoleV2 console(udp, protocol::SecureInitiator<4>(bench_key(), console_config()));
+  const auto setpoint = setpoint_bytes();
+  std::array<std::byte, 64> state{};
+  const auto exchange = [&] {
+    for (int attempt = 0; attempt < 100; ++attempt) {
+      (void)console.send(setpoint);
+      if (console.receive(state, std::chrono::milliseconds(20)).status ==
+          transport::TransportStatus::ok) {
+        return true;
+      }
+    }
+    return false;
+  };
+  if (!exchange()) {
+    st.SkipWithError("no answer from the robot side");
+    return;
+  }
+  std::int64_t retries = 0;
+  for (auto _ : st) {
+    (void)console.send(setpoint);
+    while (console.receive(state, std::chrono::milliseconds(20)).status !=
+           transport::TransportStatus::ok) {
+      ++retries;
+      (void)console.send(setpoint);
+    }
+  }
+  st.counters["resends"] = static_cast<double>(retries);
+  st.SetItemsProcessed(st.iterations());
+}
+
+void BM_Gateway_round_trip_direct_v2(benchmark::State& st) {
+  EmulatorThread<true> emulator;
+  round_trips(st, emulator.port());
+}
+
+void BM_Gateway_round_trip_via_gateway(benchmark::State& st) {
+  EmulatorThread<false> emulator;
+  GatewayThread gateway(emulator.port());
+  round_trips(st, gateway.port());
+  st.counters["relayed"] = static_cast<double>(gateway.counters().relayed);
+  // Answers later than the gateway's answer timeout (2 ms): given up, the console resends.
+  st.counters["unanswered"] = static_cast<double>(gateway.counters().unanswered);
+}
+
+// The CPU per packet, one thread, no sockets: the console's send, the robot side's work, the
+// console's receive. Direct: the v2 robot side answers itself (verify, seal); via the gateway:
+// V2Gateway::step (verify, decode, relay, take the sbRIO's answer, seal) with a 2016 sbRIO that
+// answers in its send. The difference is the gateway's own cost per packet.
+using Link = transport::InMemoryLink<128, 16>;
+using ConsoleMem = transport::SecureTransport<Link::Endpoint, protocol::SecureInitiator<4>>;
+using RobotMem = transport::SecureTransport<Link::Endpoint, protocol::SecureResponder<4>>;
+
+struct FixedState {
+  template <typename Reply>
+  void operator()(std::span<const std::byte>, Reply& reply) noexcept {
+    static const Legacy::StateBytes state = [] {
+      Legacy::StateBytes b{};
+      (void)Legacy::encode_state({}, b);
+      return b;
+    }();
+    (void)reply.send(state);
+  }
+};
+
+template <typename Step>
+void in_memory(benchmark::State& st, Link& link, ConsoleMem& console, Step robot_step) {
+  const auto setpoint = setpoint_bytes();
+  std::array<std::byte, 64> state{};
+  (void)console.send(setpoint);  // the HELLO
+  robot_step();
+  (void)console.receive(state, std::chrono::nanoseconds(0));
+  for (auto _ : st) {
+    (void)console.send(setpoint);
+    robot_step();
+    if (console.receive(state, std::chrono::nanoseconds(0)).status !=
+        transport::TransportStatus::ok) {
+      st.SkipWithError("no answer");
+      break;
+    }
+  }
+  (void)link;
+  st.SetItemsProcessed(st.iterations());
+}
+
+void BM_Gateway_cpu_direct_v2(benchmark::State& st) {
+  Link link;
+  ConsoleMem console(link.a(), protocol::SecureInitiator<4>(bench_key(), console_config()));
+  RobotMem robot(link.b(), protocol::SecureResponder<4>(bench_key(), robot_config()));
+  std::array<std::byte, 32> in{};
+  Legacy::StateBytes state{};
+  (void)Legacy::encode_state({}, state);
+  in_memory(st, link, console, [&] {
+    if (robot.receive(in, std::chrono::nanoseconds(0)).status == transport::TransportStatus::ok) {
+      (void)robot.send(state);
+    }
+  });
+}
+
+void BM_Gateway_cpu_via_gateway(benchmark::State& st) {
+  Link link;
+  ConsoleMem console(link.a(), protocol::SecureInitiator<4>(bench_key(), console_config()));
+  RobotMem robot(link.b(), protocol::SecureResponder<4>(bench_key(), robot_config()));
+  transport::RespondingTransport<FixedState> sbrio{FixedState{}};
+  endohaptics::SteadyClock clock;
+  transport::V2Gateway<RobotMem, transport::RespondingTransport<FixedState>> gateway(robot, sbrio,
+                                                                                     clock);
+  in_memory(st, link, console, [&] { (void)gateway.step(std::chrono::nanoseconds(0)); });
+}
+
+}  // namespace
+
+BENCHMARK(BM_Gateway_round_trip_direct_v2)->Unit(benchmark::kMicrosecond)->UseRealTime();
+BENCHMARK(BM_Gateway_round_trip_via_gateway)->Unit(benchmark::kMicrosecond)->UseRealTime();
+BENCHMARK(BM_Gateway_cpu_direct_v2);
+BENCHMARK(BM_Gateway_cpu_via_gateway);
+
+}  // namespace gateway_bench
