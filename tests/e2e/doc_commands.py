@@ -23,6 +23,7 @@ Prints "PASS: ..." or "FAIL: ...".
 """
 import os
 import re
+import shutil
 import signal
 import socket
 import stat
@@ -266,6 +267,7 @@ echo "./run $1: a subcommand of ./run (not run here)"
         emulator.communicate(timeout=10)
     print(f"PASS: {ran} shell blocks of {', '.join(docs)} ran and exited 0, {tables} option "
           f"tables match --help; not run: {'; '.join(skipped) if skipped else 'none'}")
+    shutil.rmtree(work, ignore_errors=True)  # kept after a failure, for its files
 
 
 if __name__ == "__main__":

@@ -22,6 +22,7 @@ import csv
 import os
 import re
 import select
+import shutil
 import signal
 import socket
 import struct
@@ -259,6 +260,7 @@ def main():
           f"{gw_stop_s:.2f} s")
     print(relay_line.strip())
     print(v2_line.strip())
+    shutil.rmtree(work, ignore_errors=True)  # kept after a failure, for its logs
 
 
 if __name__ == "__main__":
