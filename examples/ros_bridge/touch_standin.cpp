@@ -12,6 +12,7 @@
 #include <endohaptics/core/clock.hpp>
 #include <endohaptics/sim/scripted_operator.hpp>
 #include <limits>
+#include <optional>
 
 #include "../cli_numbers.hpp"
 #include "../teleop_bridge/touch_frame.hpp"
@@ -52,7 +53,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--duration", duration, "s (0: until SIGINT)")
       ->check(examples::number_in(0.0, 1e7));
-  app.add_option("--stop-after", stop_after, "s: stop publishing the stylus then (0: never)")
+  app.add_option("--stop-after", stop_after,
+                 "s after the first subscriber connected: stop publishing the stylus then (0: "
+                 "never)")
       ->check(examples::number_in(0.0, 1e7));
   app.add_option(
          "--bad-every", bad_every,
@@ -130,10 +133,16 @@ int main(int argc, char** argv) {
     fmt::print("standin: {} at {} Hz, ROS master {}, this node {}\n", mode, rate,
                ros::master::getURI(), ros::network::getHost());
     std::fflush(stdout);
+    // --stop-after counts from the first subscriber (the bridge may take a while to connect on
+    // a loaded machine: the operator's motion is what is timed, not the stand-in's start).
+    const ros::Publisher& stylus_pub = crtk ? pose_pub : tf_pub;
+    std::optional<std::chrono::nanoseconds> heard_at;
     while (!g_stop.load() && ros::ok()) {
       const auto now = clock.now();
       const double t = std::chrono::duration<double>(now - start).count();
       if (duration > 0 && t >= duration) break;
+      if (!heard_at && stylus_pub.getNumSubscribers() > 0) heard_at = now;
+      const double moving = heard_at ? std::chrono::duration<double>(now - *heard_at).count() : 0.0;
       Eigen::Vector3d f_touch;
       if (inbox.latest.read(f_touch)) {
         max_force = std::max(max_force, f_touch.norm());
@@ -141,7 +150,7 @@ int main(int argc, char** argv) {
       }
       endohaptics::teleop::StylusSample s;
       (void)stylus.read(s);
-      if (stop_after <= 0 || t < stop_after) {
+      if (stop_after <= 0 || moving < stop_after) {
         const ros::Time stamp = ros::Time::now();
         ++published;
         const bool make_bad =

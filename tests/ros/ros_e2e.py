@@ -270,11 +270,13 @@ def case_drop_in(work):
     sbrio, key, _ = start_emulator(work, env, extra=["--duration", "10"])
     standin_log = os.path.join(work, "standin.log")
     standin = start([os.path.join(BIN, "endohaptics-ros-touch-standin"), "--mode", "phantom-omni",
-                     "--stop-after", "2.0", "--duration", "4"], env, standin_log)
+                     "--stop-after", "2.0", "--duration", "6"], env, standin_log)
     if not wait_for(standin_log, r"standin: phantom-omni"):
         fail("the stand-in did not start: " + open(standin_log).read())
     tick = os.path.join(work, "tick.csv")
-    code, out = run(bridge_args(sbrio, key, duration=3.0,
+    # 4 s: the stylus moves for 2 s from the bridge's subscription (late on a loaded machine),
+    # then the release is watched.
+    code, out = run(bridge_args(sbrio, key, duration=4.0,
                                 extra=["--input", "phantom-omni", "--input-timeout", "100",
                                        "--log", tick]), env)
     standin.wait(timeout=20)
@@ -382,7 +384,8 @@ def case_three_hosts(work):
 def case_alloc(work):
     port = start_roscore(work)
     env = ros_env(work, "127.0.0.1", port, "127.0.0.1")
-    start([os.path.join(BIN, "endohaptics-ros-touch-standin"), "--duration", "7"], env,
+    # Long enough for a loaded machine (the test stops it): the alloc check waits for its stylus.
+    start([os.path.join(BIN, "endohaptics-ros-touch-standin"), "--duration", "40"], env,
           os.path.join(work, "standin.log"))
     hz = start(["rostopic", "hz", "/EW/measured_js", "--tcpnodelay"], env,
                os.path.join(work, "hz.log"))
