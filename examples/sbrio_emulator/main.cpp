@@ -308,10 +308,6 @@ int main(int argc, char** argv) {
     if (wire == "2016" && app.count("--rig") > 0) {
       throw endohaptics::Error("--rig applies to protocol v2; --protocol 2016 has no session");
     }
-    if (key_paths.size() > protocol::KeyRing::max_keys) {
-      throw endohaptics::Error("--key: at most 2 keys (the key in use and its successor), got " +
-                               std::to_string(key_paths.size()));
-    }
     if (wire == "2016" && max_round_trip_ms > 0) {
       throw endohaptics::Error(
           "--max-round-trip applies to protocol v2 (session binding); --protocol 2016 has none");
@@ -359,13 +355,8 @@ int main(int argc, char** argv) {
                                    ? ms(max_round_trip_ms)
                                    : config.watchdog_timeout + ms(delay_ms) + ms(jitter_ms);
       session.expiry = config.watchdog_timeout;  // a silent console's session ends with the motors
-      protocol::KeyRing keys;
       std::string ids;
-      for (const auto& path : key_paths) {
-        const protocol::SecureKey key = protocol::load_key_file(path);
-        keys.add(key);
-        ids += (ids.empty() ? "" : ", ") + path + " (id " + protocol::to_hex(key.id()) + ")";
-      }
+      const protocol::KeyRing keys = protocol::load_key_ring(key_paths, &ids);
       secure.emplace(delayed, protocol::SecureResponder<4>(keys, session));
       fmt::print(
           "sbrio-emulator: protocol v2: rig '{}', keys {}; answers only a fresh handshake; round "

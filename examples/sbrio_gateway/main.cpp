@@ -104,10 +104,6 @@ int main(int argc, char** argv) {
           "--key FILE is required (the key the console holds; make one with endohaptics-bridge "
           "--generate-key FILE)");
     }
-    if (key_paths.size() > protocol::KeyRing::max_keys) {
-      throw endohaptics::Error("--key: at most 2 keys (the key in use and its successor), got " +
-                               std::to_string(key_paths.size()));
-    }
     const auto [listen_host, listen_port] = parse_endpoint(listen, "--listen", true);
     const auto [sbrio_host, sbrio_port] = parse_endpoint(sbrio, "--sbrio", false);
     transport::GatewayConfig gateway_config;
@@ -118,13 +114,8 @@ int main(int argc, char** argv) {
     session.max_round_trip =
         max_round_trip_ms > 0 ? from_ms(max_round_trip_ms) : gateway_config.watchdog;
     session.expiry = gateway_config.watchdog;  // a silent console's session ends with the motors
-    protocol::KeyRing keys;
     std::string ids;
-    for (const auto& path : key_paths) {
-      const protocol::SecureKey key = protocol::load_key_file(path);
-      keys.add(key);
-      ids += (ids.empty() ? "" : ", ") + path + " (id " + protocol::to_hex(key.id()) + ")";
-    }
+    const protocol::KeyRing keys = protocol::load_key_ring(key_paths, &ids);
 
     transport::UdpServerConfig network_config;
     network_config.bind_address = listen_host;

@@ -199,4 +199,24 @@ TEST_CASE("key file: owned by the running user, in a directory only its owner ma
   CHECK_NOTHROW((void)load_key_file(path));
 }
 
+TEST_CASE("key ring: one or two key files, each named with its id, no more") {
+  TempDir dir;
+  const std::string a = dir.file("a.key"), b = dir.file("b.key"), c = dir.file("c.key");
+  generate_key_file(a);
+  generate_key_file(b);
+  generate_key_file(c);
+  std::string said;
+  const auto ring = endohaptics::protocol::load_key_ring({a, b}, &said);
+  CHECK(ring.size() == 2);
+  const auto id = load_key_file(a).id();
+  CHECK(ring.find(id).has_value());
+  CHECK(said.find(a + " (id " + endohaptics::protocol::to_hex(id) + ")") == 0);
+  CHECK_THROWS_WITH_AS((void)endohaptics::protocol::load_key_ring({a, b, c}),
+                       doctest::Contains("got 3"), Error);
+  CHECK_THROWS_WITH_AS((void)endohaptics::protocol::load_key_ring({}), doctest::Contains("got 0"),
+                       Error);
+  CHECK_THROWS_WITH_AS((void)endohaptics::protocol::load_key_ring({a, a}),
+                       doctest::Contains("there already"), Error);
+}
+
 }  // namespace protocol_key_file_test

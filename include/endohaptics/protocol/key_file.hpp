@@ -20,9 +20,11 @@
 #include <span>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/core/regular_file.hpp"
+#include "endohaptics/protocol/key_ring.hpp"
 #include "endohaptics/protocol/secure_codec.hpp"
 
 namespace endohaptics::protocol {
@@ -171,6 +173,28 @@ inline SecureKey load_key_file(const std::string& path) {
   char more = 0;
   (void)file.read(&more, 1);  // a byte beyond 32: the limit refuses it
   return key_from_bytes(std::span<const std::byte>(buffer.bytes.data(), got), path);
+}
+
+//! The key ring of the key files `paths`: one, or two while a key is changed over (the key in
+//! use and its successor), each read with load_key_file. With `description`, writes there
+//! "PATH (id HEX), ..." for a program's first lines. Throws Error.
+inline KeyRing load_key_ring(const std::vector<std::string>& paths,
+                             std::string* description = nullptr) {
+  if (paths.empty() || paths.size() > KeyRing::max_keys) {
+    ENDOHAPTICS_THROW(
+        Error("key files: one, or two while a key is changed over (the key in use "
+              "and its successor), got " +
+              std::to_string(paths.size())));
+  }
+  KeyRing ring;
+  std::string text;
+  for (const auto& path : paths) {
+    const SecureKey key = load_key_file(path);
+    ring.add(key);
+    text += (text.empty() ? "" : ", ") + path + " (id " + to_hex(key.id()) + ")";
+  }
+  if (description != nullptr) *description = text;
+  return ring;
 }
 
 }  // namespace endohaptics::protocol
