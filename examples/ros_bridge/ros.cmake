@@ -88,7 +88,7 @@ if(ENDOHAPTICS_BUILD_TESTS)
     add_test(NAME "ros: ${case}"
       COMMAND "${ENDOHAPTICS_ROS_PYTHON}" "${PROJECT_SOURCE_DIR}/tests/ros/ros_e2e.py"
         "$<TARGET_FILE_DIR:endohaptics-ros-bridge>" "${PROJECT_SOURCE_DIR}" ${case})
-    set_tests_properties("ros: ${case}" PROPERTIES LABELS ros TIMEOUT 90 RUN_SERIAL TRUE
+    set_tests_properties("ros: ${case}" PROPERTIES LABELS "ros;quiet" TIMEOUT 90 RUN_SERIAL TRUE
       PASS_REGULAR_EXPRESSION "PASS:" FAIL_REGULAR_EXPRESSION "FAIL:")
   endforeach()
 endif()
