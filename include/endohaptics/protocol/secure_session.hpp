@@ -297,7 +297,6 @@ class SecureInitiator {
       return;
     }
     window_.accept(v.header.sequence);
-    if (v.header.ack > highest_ack_) highest_ack_ = v.header.ack;
     last_state_at_ = now;
     if (previous_valid_) {  // the new session answers: nothing of the old one is taken any more
       previous_valid_ = false;
@@ -413,7 +412,6 @@ class SecureInitiator {
     session_ = session_id_of(nonce_);
     peer_session_ = session_id_of(w.robot_nonce);
     sent_ = 0;
-    highest_ack_ = 0;
     window_.reset();
     granted_ = std::chrono::microseconds(w.max_round_trip_us);
     established_ = true;
@@ -434,7 +432,6 @@ class SecureInitiator {
   std::uint64_t session_ = 0;
   std::uint64_t peer_session_ = 0;
   std::uint64_t sent_ = 0;
-  std::uint64_t highest_ack_ = 0;
   ReplayWindow window_{};
   std::chrono::nanoseconds established_at_{0};
   std::chrono::nanoseconds last_state_at_{0};
