@@ -27,6 +27,7 @@
 #include "endohaptics/model/static_map.hpp"
 #include "endohaptics/workflow/error_context.hpp"
 #include "endohaptics/workflow/joint_models.hpp"
+#include "endohaptics/workflow/method.hpp"
 #include "endohaptics/workflow/model_comparison.hpp"
 #include "endohaptics/workflow/prepared_log.hpp"
 #include "endohaptics/workflow/static_gain_fit.hpp"
@@ -43,7 +44,8 @@ using namespace endohaptics::identification;  // the workflow composes the ident
 
 //! One candidate model and its per-file scores on the identification logs.
 struct CandidateModel {
-  std::string method;                   //!< "moesp", "n4sid", "cva" or "static" (+ " + dead zone")
+  std::string method;                   //!< display name: to_string(kind) (+ " + dead zone")
+  Method kind = Method::moesp;          //!< the fit that made it: a subspace method or static_gain
   files::ModelFile model;               //!< with names, units, provenance (notes empty)
   SubspaceModel linear;                 //!< the identified linear block (singular values, ...)
   std::vector<FileComparison> files{};  //!< per identification log, scored as options.scoring
@@ -97,7 +99,7 @@ time_constant_limit(double max_time_constant, const std::vector<PreparedLog>& fi
 
 //! Why a candidate must not be chosen, or "" when it may: unstable (spectral radius >= 1) or
 //! near-integrating (slowest time constant > limit.seconds; the message names limit.source).
-//! The static baseline (method "static...", A = I, B = 0: a constant, not a mode) is exempt.
+//! The static baseline (kind static_gain, A = I, B = 0: a constant, not a mode) is exempt.
 [[nodiscard]] ENDOHAPTICS_DECL std::string refusal(const CandidateModel& c,
                                                    const TimeConstantLimit& limit);
 

@@ -38,7 +38,7 @@ ENDOHAPTICS_DECL TimeConstantLimit time_constant_limit(double max_time_constant,
 }
 
 ENDOHAPTICS_DECL std::string refusal(const CandidateModel& c, const TimeConstantLimit& limit) {
-  if (c.method.starts_with("static")) return {};
+  if (c.kind == Method::static_gain) return {};
   if (!(c.spectral_radius < 1.0)) {
     return "unstable (spectral radius " + detail::format_number(c.spectral_radius) + ")";
   }
@@ -152,19 +152,21 @@ ENDOHAPTICS_DECL WorkflowResult identify_logs(const std::vector<PreparedLog>& fi
     return maps;
   };
   // Fits the linear block on the mapped data and scores the candidate causally.
-  const auto evaluate = [&](const std::string& method, const SubspaceOptions& opts,
+  const auto evaluate = [&](Method kind, const SubspaceOptions& opts,
                             const std::vector<StaticMap>& maps) {
     ++result.evaluations;
+    const std::string method(to_string(kind));
     std::vector<DataSet> mapped;
     mapped.reserve(data.size());
     for (const DataSet& d : data) mapped.push_back({apply_maps(maps, d.u), d.y});
-    SubspaceModel linear = method.starts_with("static")
+    SubspaceModel linear = kind == Method::static_gain
                                ? fit_static_gain(std::span<const DataSet>(mapped), ts)
                                : identify(std::span<const DataSet>(mapped), opts);
     files::ModelProvenance p;
     p.method = method;
     p.files = files;
     CandidateModel c{.method = method,
+                     .kind = kind,
                      .model = files::make_model_file(linear, inputs, outputs, p),
                      .linear = std::move(linear)};
     if (any_map) {
@@ -193,7 +195,7 @@ ENDOHAPTICS_DECL WorkflowResult identify_logs(const std::vector<PreparedLog>& fi
   // last failure is kept for the message if no candidate fits at all.
   std::string last_failure;
   const auto try_evaluate =
-      [&](const std::string& method, const SubspaceOptions& opts,
+      [&](Method method, const SubspaceOptions& opts,
           const std::vector<StaticMap>& maps) -> std::optional<CandidateModel> {
 #if defined(__cpp_exceptions)
     try {
@@ -208,7 +210,7 @@ ENDOHAPTICS_DECL WorkflowResult identify_logs(const std::vector<PreparedLog>& fi
   };
   // The best dead zones for one method: a grid over each fitted input's range, then golden-
   // section steps around the best grid point; one input after the other (coordinate search).
-  const auto search_deadzones = [&](const std::string& method, const SubspaceOptions& opts) {
+  const auto search_deadzones = [&](Method method, const SubspaceOptions& opts) {
     std::vector<double> widths(nu, 0.0);
     std::optional<CandidateModel> best = try_evaluate(method, opts, maps_for(widths));
     if (!any_fit) {
@@ -262,7 +264,7 @@ ENDOHAPTICS_DECL WorkflowResult identify_logs(const std::vector<PreparedLog>& fi
     const std::string method(to_string(w));
     // One of several weightings may fail (e.g. a model so unstable that the B, D, x0
     // regression overflows): record it and go on with the others.
-    const auto attempt = [&] { result.candidates.push_back(search_deadzones(method, so)); };
+    const auto attempt = [&] { result.candidates.push_back(search_deadzones(method_of(w), so)); };
 #if defined(__cpp_exceptions)
     if (tries > 1) {
       try {
@@ -303,7 +305,7 @@ ENDOHAPTICS_DECL WorkflowResult identify_logs(const std::vector<PreparedLog>& fi
 #if defined(__cpp_exceptions)
       try {
 #endif
-        CandidateModel c = evaluate(base.method, opts, maps);
+        CandidateModel c = evaluate(base.kind, opts, maps);
         result.order_search.push_back({n, c.mean_fit, c.spectral_radius, c.refused});
         by_order.push_back(std::move(c));
 #if defined(__cpp_exceptions)
@@ -330,7 +332,9 @@ ENDOHAPTICS_DECL WorkflowResult identify_logs(const std::vector<PreparedLog>& fi
   }
   // The static baseline as a candidate of its own (with the same dead-zone search).
   if (options.static_gain) {
-    const auto attempt = [&] { result.candidates.push_back(search_deadzones("static", so)); };
+    const auto attempt = [&] {
+      result.candidates.push_back(search_deadzones(Method::static_gain, so));
+    };
 #if defined(__cpp_exceptions)
     if (tries > 1) {
       try {
@@ -381,7 +385,7 @@ ENDOHAPTICS_DECL ModelChoice choose_family(
     const CandidateModel& c = subspace->chosen();
     subspace_name = c.method;
     fixed.candidates.clear();
-    fixed.static_gain = c.method.starts_with("static");
+    fixed.static_gain = c.kind == Method::static_gain;
     if (!fixed.static_gain) fixed.candidates = {c.linear.weighting};
     fixed.order = fixed.static_gain ? 0 : c.linear.order;
     fixed.search_order = false;
