@@ -14,8 +14,8 @@
 //! and `model/impl/dense_numerics.ipp` and `estimation/impl/dare.ipp`, compiled once each,
 //! instantiate them (explicit instantiations only: no header includes them). This project's unit
 //! tests and sanitized benchmarks build that way (many translation units use them); its programs do
-//! not (only the bridge does: compiling them apart cost more than it saved, docs/development.md,
-//! step 13).
+//! not (only the bridge does: compiling them apart cost more than it saved,
+//! docs/history/build-times.md, step 13).
 #pragma once
 
 #if defined(ENDOHAPTICS_SEPARATE_COMPILATION)
