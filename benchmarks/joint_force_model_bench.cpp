@@ -2,7 +2,7 @@
 // the stall-hold model (estimation/stall_hold.hpp), the push-load observer
 // (estimation/push_load_observer.hpp) and the bidirectional load observer
 // (estimation/bidirectional_load_observer.hpp) side by side with today's clamp model, the
-// 2016 yaw Hammerstein-Wiener preset run open loop (ClampModel2016). Issue 15's budget: <= 200 ns
+// 2016 yaw Hammerstein-Wiener preset run open loop (ClampModel2016). The budget: <= 200 ns
 // per joint step.
 #include <benchmark/benchmark.h>
 

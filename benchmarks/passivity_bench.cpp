@@ -1,4 +1,4 @@
-// The passivity layer's cost per tick (issue 17, goal <= 50 ns): the TeleopLoop tick over an
+// The passivity layer's cost per tick (budget <= 50 ns): the TeleopLoop tick over an
 // in-memory canned sbRIO with PassivityMode off and tdpa side by side (same parts, same inputs),
 // and the TimeDomainPassivity calls of one tick alone. docs/performance.md quotes the difference.
 #include <benchmark/benchmark.h>

@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
-# Issue 14, items 4 and 5: every program's numbers parse whole and inside their stated range or
+# Strict command lines (docs/safety.md): every program's numbers parse whole and inside their stated range or
 # the program exits non-zero naming the option; a run whose result is not finite, or whose output
 # could not be written (/dev/full), exits non-zero with a message. Each case failed before.
 # Usage: cli_strict.sh BIN_DIR numbers|results|outputs|keys|inputs   (prints PASS: ... on success)
-# keys: protocol v2 key files and --protocol 2016 (issue 16).
-# inputs: every file a program reads is a regular file within a stated size (issue 30, finding 5).
+# keys: protocol v2 key files and --protocol 2016 (docs/protocol.md).
+# inputs: every file a program reads is a regular file within a stated size (docs/safety.md).
 set -euo pipefail
 bin=$1
 scenario=$2
@@ -131,7 +131,7 @@ case $scenario in
     echo "PASS: every unwritable output exits non-zero naming it"
     ;;
   keys)
-    # Protocol v2 key files (issue 16): written 0600 from the random source, never overwritten,
+    # Protocol v2 key files: written 0600 from the random source, never overwritten,
     # never printed; refused when group or others may read them, or of the wrong length.
     for prog in "$bridge" "$emulator"; do
       name=$(basename "$prog")
@@ -164,7 +164,7 @@ case $scenario in
     echo "PASS: key files: generated 0600, never overwritten or printed; group-readable, short and missing keys refused; 2016 warns"
     ;;
   inputs)
-    # Issue 30, finding 5: a FIFO, a device or a directory given as any input file is refused at
+    # A FIFO, a device or a directory given as any input file is refused at
     # once, naming the file (before: a FIFO blocked every program for ever, SIGTERM did not end the
     # bridge; /dev/zero as a log ended in std::bad_alloc naming no file), and so is a file above
     # its reader's limit (sparse files: nothing is read).

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Protocol v2 under delay: does the robot obey, and does the bridge say so? (issue 30, finding 1)
+"""Protocol v2 under delay: does the robot obey, and does the bridge say so? (docs/safety.md)
 
     delay_sweep.py BIN_DIR [DELAY_MS ...] [--report]
 

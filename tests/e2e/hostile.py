@@ -1,11 +1,11 @@
 #!/usr/bin/env python3
-"""Hostile-input suite (issue 14): the release programs against a fake sbRIO and a fake bridge.
+"""Hostile-input suite (docs/safety.md): the release programs against a fake sbRIO and a fake bridge.
 
     hostile.py BIN_DIR CASE      run one case, assert, print "PASS: ..." and its table row
     hostile.py BIN_DIR all       run every case (a table for docs/safety.md)
     hostile.py BIN_DIR CASE --report   print the row without asserting (for "before" tables)
 
-The suite is about the 2016 wire (issue 14): both programs run with --protocol 2016 here;
+The suite is about the 2016 wire: both programs run with --protocol 2016 here;
 protocol v2 has its own attack suite (tests/e2e/attack_v2.py). Bridge cases: a fake sbRIO (this
 script, UDP on 127.0.0.1) answers endohaptics-bridge's setpoints with hostile state packets;
 every setpoint that reaches the wire and every row of the bridge's tick log is checked against

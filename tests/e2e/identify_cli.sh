@@ -1,10 +1,9 @@
 #!/usr/bin/env bash
 # Command-line tests of endohaptics-identify and endohaptics-replay on a synthetic CSV from a
-# known 2nd-order, 2-input system, their causal scoring (issue 15) and their error handling.
+# known 2nd-order, 2-input system, their causal scoring and their error handling.
 # Usage: identify_cli.sh BIN_DIR recover|errors|plot|joint   (each prints PASS: ... on success)
-# joint: the joint force models of issue 15 (--method stall_hold, push_load_observer,
-# bidirectional_load_observer) on
-# synthetic clamp hits: chosen by the inner cross-validation, written as kind "stall_hold",
+# joint: the joint force models (--method stall_hold, push_load_observer,
+# bidirectional_load_observer) on synthetic clamp hits: chosen by the inner cross-validation, written as kind "stall_hold",
 # replayed causally, --x0 oracle refused.
 set -euo pipefail
 bin=$1

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Link status that tells the truth, and whom a 2016 robot side obeys (issue 30, findings 1, 4, 7).
+"""Link status that tells the truth, and whom a 2016 robot side obeys (docs/safety.md).
 
     link_truth.py BIN_DIR CASE
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Issue 30, finding 2: file names and labels never reach gnuplot as code. endohaptics-replay
-# --plot and endohaptics-force-report --plot-dir are run on files named like the issue's
+# File names and labels never reach gnuplot as code (docs/safety.md). endohaptics-replay
+# --plot and endohaptics-force-report --plot-dir are run on files named like the one that once did:
 # `run';system "touch INJECTED";print '.csv`, with labels and signal names that break quoted
 # strings and lines; no INJECTED file may appear, the PNGs must be written (exit 0). A plot that
 # was asked for and cannot be drawn (no gnuplot on PATH, a gnuplot that fails) exits non-zero

@@ -1,8 +1,8 @@
-// Issue 30, findings 3 and 5: one bounded JSON reader whose limits are the parser's own (no second
-// lexer to disagree with it), and file readers that read only regular files, within a stated size,
-// line by line. Every case here failed before: "//\r" + 300,000 '[' took 1.67 GB (std::bad_alloc,
-// or the OOM killer without a memory limit), 20,000 nested objects crashed with a 2 MB stack,
-// /dev/zero as a log ended in std::bad_alloc naming no file, a FIFO blocked for ever.
+// Hostile files (docs/safety.md): one bounded JSON reader whose limits are the parser's own (no
+// second lexer to disagree with it), and file readers that read only regular files, within a stated
+// size, line by line. Every case here failed before: "//\r" + 300,000 '[' took 1.67 GB
+// (std::bad_alloc, or the OOM killer without a memory limit), 20,000 nested objects crashed with a
+// 2 MB stack, /dev/zero as a log ended in std::bad_alloc naming no file, a FIFO blocked for ever.
 #include <doctest/doctest.h>
 #include <fcntl.h>
 #include <pthread.h>

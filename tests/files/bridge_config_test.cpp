@@ -462,7 +462,7 @@ TEST_CASE("estimator.clamp_model of a lower order runs in the bridge's 6 states,
                         "[-1e6, 1e6]") != std::string::npos);
 }
 
-TEST_CASE("safety-relevant values have physical bounds (issue 14's field cases)") {
+TEST_CASE("safety-relevant values have physical bounds (docs/safety.md, configuration bounds)") {
   // Before: each of these was accepted and switched a safety function off.
   CHECK(error_of(R"({"safety": {"max_consecutive_misses": 2147483647}})") ==
         "bridge.json: safety.max_consecutive_misses: must be an integer in [0, 1000], got "

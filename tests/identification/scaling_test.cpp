@@ -10,7 +10,7 @@
 #include "endohaptics/identification/subspace.hpp"
 #include "test_support.hpp"
 
-// Issue 14, item 5: identification whose result does not depend on the data's units. Before the
+// Identification whose result does not depend on the data's units. Before the
 // fix, inputs scaled by 1e150 gave a 10.9 % fit (99.9 % unscaled) and fit metrics of data of
 // 1e155 overflowed to NaN.
 namespace identification_scaling_test {

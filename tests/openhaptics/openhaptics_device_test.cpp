@@ -115,10 +115,10 @@ TEST_CASE("units and axes: Touch mm (x right, y up, z to the operator) read in t
 }
 
 TEST_CASE("the rest pose read through the adapter maps to mid-range setpoints") {
-  // Issue 14: with the 2016 frame passed through ((x, -z, y) / 1000, no origin shift) the stylus
-  // straight ahead gave theta = 0: roll pinned at its -1.028 rad limit (and clamp 1 at 0.682).
-  // The rest pose (kinematics::rest_position: straight ahead, r = 0.130015 m, z = 0.137405 m)
-  // has the joint angles q2 = 1.154162 rad, absolute forearm angle q2 + q3 = 0.606876 rad (see
+  // The 2016 rig's mistake: with the 2016 frame passed through ((x, -z, y) / 1000, no origin shift)
+  // the stylus straight ahead gave theta = 0: roll pinned at its -1.028 rad limit (and clamp 1 at
+  // 0.682). The rest pose (kinematics::rest_position: straight ahead, r = 0.130015 m, z = 0.137405
+  // m) has the joint angles q2 = 1.154162 rad, absolute forearm angle q2 + q3 = 0.606876 rad (see
   // tests/kinematics/denavit_hartenberg_test.cpp). The published HD-frame kinematics of the
   // Phantom (x = -sin q1 (l1 cos q2 + l2 sin q3), y = l1 sin q2 - l2 cos q3 + l2,
   // z = -l1 + cos q1 (l1 cos q2 + l2 sin q3), l1 = l2 = 133.35 mm, q3 absolute) put the stylus

@@ -126,7 +126,7 @@ TEST_CASE("key file: error messages never contain the key") {
 }
 
 TEST_CASE("key file: a FIFO, a device or a symbolic link is refused at once, never read") {
-  // Before (issue 30, finding 5): a FIFO as --key blocked the bridge in open() for ever.
+  // Before this check a FIFO as --key blocked the bridge in open() for ever.
   TempDir dir;
   const std::string fifo = dir.file("pipe.key");
   REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);

@@ -1,4 +1,4 @@
-// The ROS bridge's loop allocates nothing on its thread while ROS traffic flows (issue 35): a
+// The ROS bridge's loop allocates nothing on its thread while ROS traffic flows (docs/ros.md): a
 // TeleopLoop with the ROS stylus (RosStylus, fed by a subscription) and the publishing observer
 // (RosPublisher) over an in-memory sbRIO, paced at 1 kHz; every heap allocation of the loop
 // thread is counted (tests/alloc_counter.hpp) over 2000 ticks while a stylus stand-in publishes at

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""endohaptics-ros-bridge end to end on ROS 1 (issue 35, docs/ros.md).
+"""endohaptics-ros-bridge end to end on ROS 1 (docs/ros.md).
 
     ros_e2e.py BIN_DIR SOURCE_DIR CASE
 

@@ -1,4 +1,4 @@
-// The force points the right way (issue 15 item 6): the whole chain — a contact in the simulated
+// The force points the right way: the whole chain — a contact in the simulated
 // rig, the sbRIO emulator (reporting the current with the 2016 rig's sign), the loop, the force
 // estimator with its default settings, CylindricalMapper::map_force — renders a stylus force that
 // opposes the operator's motion into the contact, for each joint. The chain's signs are under

@@ -1,8 +1,8 @@
 // The closed loop with the operator in it (sim::ClosedLoop): the arm of table 5.1 presses clamp 1
 // into a contact through the real TeleopLoop over a delayed, lossy network and holds. The sweep
-// of issue 17: round trip {0, 20, 50, 100, 200} ms x loss {0, 10 %} x {soft tissue, stiff stop},
-// without passivity (the observer only: the loop renders exactly what it would with it off) and
-// with TDPA. docs/passivity.md prints the same table (endohaptics-passivity-sweep --table).
+// of docs/passivity.md: round trip {0, 20, 50, 100, 200} ms x loss {0, 10 %} x {soft tissue, stiff
+// stop}, without passivity (the observer only: the loop renders exactly what it would with it off)
+// and with TDPA. docs/passivity.md prints the same table (endohaptics-passivity-sweep --table).
 #include "alloc_counter.hpp"  // first: counts every heap allocation of this executable
 
 #include <doctest/doctest.h>

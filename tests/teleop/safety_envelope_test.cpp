@@ -1,4 +1,4 @@
-// The safety envelope (issue 14): whatever the robot reports, every setpoint lies inside the
+// The safety envelope (docs/safety.md): whatever the robot reports, every setpoint lies inside the
 // joint range, every stylus force inside the device's limit, and an implausible state is a fault
 // that is counted and never followed. Property tests drive the loop with random and adversarial
 // state streams and check the envelope on every tick.

@@ -13,7 +13,7 @@
 #include "endohaptics/workflow/workflow.hpp"
 #include "test_support.hpp"
 
-// Issue 14, items 4 and 5: strict command lines and no false success. Every case below failed
+// Strict command lines and no false success (docs/safety.md). Every case below failed
 // before the fix (the lax parse, the silent truncation, the unchecked write, the -Inf score).
 namespace workflow_command_line_test {
 

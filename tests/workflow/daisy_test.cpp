@@ -1,4 +1,4 @@
-// Generic identification on the shared DaISy benchmarks (issue 32, item 4): identify's csv
+// Generic identification on the shared DaISy benchmarks: identify's csv
 // defaults with --order auto and nothing else, scored with the oracle initial state as the
 // reference tools score, against their published fits (../shared/data/daisy/README.md).
 #include <doctest/doctest.h>
@@ -152,7 +152,7 @@ TEST_CASE("DaISy: identify's csv defaults with --order auto reach the reference 
     const wf::LogSelection sel = csv_selection({"u"}, {"y"});
     const Identified id = identify_like_cli(daisy("dryer.csv"), sel);
     const wf::CandidateModel& c = id.result.chosen();
-    // The regression of issue 32: every candidate was refused as near-integrating (25 s > 2 s).
+    // The regression: every candidate used to be refused as near-integrating (25 s > 2 s).
     CHECK(c.refused.empty());
     // Published (../shared/data/daisy/README.md, SLICOT-Reference): singular values 69.8841,
     // 14.9963, 3.6675, 1.9677, 0.3000, 0.2078, 0.1651 (15 block rows) -> n = 4; eigenvalues of A
@@ -181,7 +181,7 @@ TEST_CASE("DaISy: identify's csv defaults with --order auto reach the reference 
   SUBCASE("CD_player_arm, whole record: no published fit, the regression and the causal loss") {
     const wf::LogSelection sel = csv_selection({"u1", "u2"}, {"y1", "y2"});
     const Identified id = identify_like_cli(daisy("CD_player_arm.csv"), sel);
-    // Issue 32: refused before as near-integrating (its slowest mode ~100 s > 2 s).
+    // Used to be refused as near-integrating (its slowest mode ~100 s > 2 s).
     CHECK(id.result.chosen().refused.empty());
     CHECK(id.result.chosen().time_constant > 2.0);
     report_causal_loss(

@@ -18,9 +18,9 @@
 
 #include "test_support.hpp"
 
-// Issue 30, finding 2: a log named `run';system "touch INJECTED";print '.csv` ran `touch` through
-// the plots of endohaptics-replay and endohaptics-force-report, which spliced paths and labels into
-// gnuplot commands. Here no label, path or number reaches gnuplot as code.
+// Hostile file names (docs/safety.md): a log named `run';system "touch INJECTED";print '.csv` ran
+// `touch` through the plots of endohaptics-replay and endohaptics-force-report, which spliced paths
+// and labels into gnuplot commands. Here no label, path or number reaches gnuplot as code.
 namespace workflow_gnuplot_test {
 
 using endohaptics::test::message_of;

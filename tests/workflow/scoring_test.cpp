@@ -1,5 +1,6 @@
-// Causal scoring (issue 15): the x0 modes, the warm-up, the delay metric, the causal preparation
-// of a log for scoring, the format defaults, and the UMN logs through the workflow.
+// Causal scoring (docs/identification_results.md): the x0 modes, the warm-up, the delay metric, the
+// causal preparation of a log for scoring, the format defaults, and the UMN logs through the
+// workflow.
 #include <doctest/doctest.h>
 
 #include <cmath>

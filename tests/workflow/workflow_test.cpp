@@ -331,8 +331,9 @@ TEST_CASE("best_candidate: highest mean fit among the admissible, refusal names 
     c.refused = wf::refusal(c, 2.0);
     return c;
   };
-  // Issue 15: order 1, spectral radius 0.99987 at 10 ms, an integrator (time constant 77 s) whose
-  // level came from the fitted initial state. A clamp-hits fold chose a model like c[1] once.
+  // A model once chosen for real: order 1, spectral radius 0.99987 at 10 ms, an integrator (time
+  // constant 77 s) whose level came from the fitted initial state. A clamp-hits fold chose a model
+  // like c[1] once.
   std::vector<wf::CandidateModel> c{scored(60.0, 0.97, 0.02), scored(73.0, 1.0001, 0.02),
                                     scored(65.0, 0.99, 0.02), scored(90.0, 0.99987, 0.01)};
   CHECK(c[1].refused.starts_with("unstable (spectral radius 1.0001"));
