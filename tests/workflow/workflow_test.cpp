@@ -461,12 +461,12 @@ TEST_CASE("real log: clamp-hits-01 on the 0.02 s grid" *
 
 TEST_CASE("real logs: a weighting that fails is skipped by --method best, not fatal" *
           doctest::skip(!endohaptics::test::has_shared_data("endowrist-2016"))) {
-  // Found in the clamp-hits study: on files 01, 02, 03, 06 at 0.02 s, 5 Hz low-pass, median
-  // output offset, current -> force with a fitted dead zone. Over 2 x 15 block rows the 5 Hz
-  // low-pass leaves the future inputs nearly collinear with the past data, and N4SID's oblique
-  // projection is ~6e6 times the outputs (amplified noise): identify refuses it, naming why
-  // (fit_hammerstein_wiener's validation call). It used to return a model with a pole at 2.6,
-  // whose B, D, x0 regression then overflowed.
+  // Found in the clamp-hits study (docs/history/clamp-hits-oracle-study.md): on files 01, 02, 03,
+  // 06 at 0.02 s, 5 Hz low-pass, median output offset, current -> force with a fitted dead zone.
+  // Over 2 x 15 block rows the 5 Hz low-pass leaves the future inputs nearly collinear with the
+  // past data, and N4SID's oblique projection is ~6e6 times the outputs (amplified noise): identify
+  // refuses it, naming why (fit_hammerstein_wiener's validation call). It used to return a model
+  // with a pole at 2.6, whose B, D, x0 regression then overflowed.
   wf::LogSelection sel;
   sel.inputs = {"current"};
   sel.outputs = {"force"};
