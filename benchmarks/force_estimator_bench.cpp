@@ -39,7 +39,7 @@ void run(benchmark::State& st, Estimator& estimator) {
   typename Estimator::Forces forces = Estimator::Forces::Zero();
   std::size_t k = 0;
   for (auto _ : st) {
-    const est::ForceStatus status = estimator.step(in[k], forces);
+    const est::NumericStatus status = estimator.step(in[k], forces);
     benchmark::DoNotOptimize(status);
     benchmark::DoNotOptimize(forces);
     k = k + 1 == in.size() ? 0 : k + 1;

@@ -79,7 +79,7 @@ void BM_HammersteinWiener_update(benchmark::State& st) {
   Eigen::Matrix<double, 1, 1> y;
   std::size_t k = 0;
   for (auto _ : st) {
-    const m::StepStatus status = model.update(inputs[k], y);
+    const m::NumericStatus status = model.update(inputs[k], y);
     benchmark::DoNotOptimize(status);
     benchmark::DoNotOptimize(y);
     k = (k + 1) % sweep_length;

@@ -74,8 +74,8 @@ void BM_SteadyStateKalman_update(benchmark::State& st) {
   std::size_t i = 0;
   int bad = 0;
   for (auto _ : st) {
-    bad += filter.update(stream.z[i], stream.u[i]) != endohaptics::estimation::KalmanStatus::ok;
-    bad += filter.predict(stream.u[i]) != endohaptics::estimation::KalmanStatus::ok;
+    bad += filter.update(stream.z[i], stream.u[i]) != endohaptics::estimation::NumericStatus::ok;
+    bad += filter.predict(stream.u[i]) != endohaptics::estimation::NumericStatus::ok;
     benchmark::DoNotOptimize(filter.state());
     i = (i + 1) % Stream::size;
   }

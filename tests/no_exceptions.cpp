@@ -53,7 +53,7 @@ int main() {
     joints.velocity = amplitude * (omega * std::cos(omega * t));
     joints.current = current * std::sin(omega * t);
     joints.setpoint = joints.position + Eigen::Vector4d::Constant(0.01);
-    if (force_estimator.step(joints, forces) != est::ForceStatus::ok) return 1;
+    if (force_estimator.step(joints, forces) != est::NumericStatus::ok) return 1;
     if (!forces.allFinite()) return 1;
     largest_force = std::max(largest_force, forces.cwiseAbs().maxCoeff());
   }
@@ -69,7 +69,7 @@ int main() {
     const double t = 1e-3 * i;
     const est::JointSignals<double> s{0.5 * std::sin(omega * t), 0.0,
                                       0.1 + 0.05 * std::cos(omega * t), 0.0};
-    if (observer.advance(s) != endohaptics::model::StepStatus::ok) return 1;
+    if (observer.advance(s) != endohaptics::model::NumericStatus::ok) return 1;
     if (!std::isfinite(observer.force(s))) return 1;
   }
 

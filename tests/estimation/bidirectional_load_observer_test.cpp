@@ -11,7 +11,7 @@
 namespace estimation_bidirectional_load_observer_test {
 
 namespace est = endohaptics::estimation;
-using endohaptics::model::StepStatus;
+using endohaptics::model::NumericStatus;
 using endohaptics::test::allocations_during;
 using endohaptics::test::message_of;
 using Observer = est::BidirectionalLoadObserver<double>;
@@ -51,7 +51,7 @@ double drive(Observer& m, double load, double friction, double seconds, unsigned
     const double i =
         (v > 0 ? g_f * load + o_f + friction : g_b * load + o_b - friction) + noise(rng);
     const est::JointSignals<double> s{q, v, i, 0.0};
-    REQUIRE(m.advance(s) == StepStatus::ok);
+    REQUIRE(m.advance(s) == NumericStatus::ok);
     y = m.force(s);
   }
   return y;
@@ -86,7 +86,7 @@ TEST_CASE("bidirectional observer: at rest nothing is learnt, the output's hyste
   p.output_shape_per_load[0] = 0.1;  // the narrowest, per load unit
   Observer m(p);
   const est::JointSignals<double> rest{0.2, 0.0, 0.03, 0.0};
-  for (int k = 0; k < 100; ++k) REQUIRE(m.advance(rest) == StepStatus::ok);
+  for (int k = 0; k < 100; ++k) REQUIRE(m.advance(rest) == NumericStatus::ok);
   CHECK(m.regime() == 0.0);
   CHECK(m.load_estimate() == 50.0);
   CHECK(m.stop_values().isZero(0.0));
@@ -94,7 +94,7 @@ TEST_CASE("bidirectional observer: at rest nothing is learnt, the output's hyste
   // Moving forward by 0.3 rad: every operator started at -1 and moved up; the output adds
   // e0 + a_8 s_8 + b_1 L s_1 at the current load estimate.
   for (int k = 1; k <= 300; ++k) {
-    REQUIRE(m.advance({0.2 + 0.001 * k, 1.0, 0.07 + g_f * 50.0, 0.0}) == StepStatus::ok);
+    REQUIRE(m.advance({0.2 + 0.001 * k, 1.0, 0.07 + g_f * 50.0, 0.0}) == NumericStatus::ok);
   }
   const auto s = m.stop_values();
   CHECK(s[0] == doctest::Approx(1.0));
@@ -105,22 +105,22 @@ TEST_CASE("bidirectional observer: at rest nothing is learnt, the output's hyste
 
 TEST_CASE("bidirectional observer: bad input leaves the state, no allocation per step") {
   Observer m(parameters());
-  REQUIRE(m.advance({0.0, 0.0, 0.1, 0.0}) == StepStatus::ok);
+  REQUIRE(m.advance({0.0, 0.0, 0.1, 0.0}) == NumericStatus::ok);
   const auto before = m.state();
-  CHECK(m.advance({std::nan(""), 0.0, 0.1, 0.0}) == StepStatus::non_finite_input);
-  CHECK(m.advance({0.0, 0.0, INFINITY, 0.0}) == StepStatus::non_finite_input);
+  CHECK(m.advance({std::nan(""), 0.0, 0.1, 0.0}) == NumericStatus::non_finite_input);
+  CHECK(m.advance({0.0, 0.0, INFINITY, 0.0}) == NumericStatus::non_finite_input);
   CHECK(m.state() == before);
   // A step whose result overflows is refused whole (non_finite_result), not half applied: load and
   // friction at 1e308 make the innovation -Inf on the first forward step.
   for (int k = 1; k <= 100; ++k) {  // moving forward at 1 rad/s: the regime is forward
-    REQUIRE(m.advance({1e-3 * k, 1.0, 0.2, 0.0}) == StepStatus::ok);
+    REQUIRE(m.advance({1e-3 * k, 1.0, 0.2, 0.0}) == NumericStatus::ok);
   }
   REQUIRE(m.regime() == 1.0);
   auto huge = m.state();
   huge[Observer::load] = 1e308;
   huge[Observer::friction] = 1e308;
   m.reset(huge);
-  CHECK(m.advance({0.101, 1.0, 0.2, 0.0}) == StepStatus::non_finite_result);
+  CHECK(m.advance({0.101, 1.0, 0.2, 0.0}) == NumericStatus::non_finite_result);
   CHECK(m.state() == huge);
   m.reset();
   CHECK(m.load_estimate() == 50.0);
@@ -129,7 +129,7 @@ TEST_CASE("bidirectional observer: bad input leaves the state, no allocation per
   const long allocations = allocations_during([&] {
     for (int k = 0; k < 10000; ++k) {
       const double q = 0.5 * std::sin(1e-3 * k);
-      steps += m.advance({q, 0.0, 0.05 * std::cos(1e-3 * k), 0.0}) == StepStatus::ok ? 1 : 0;
+      steps += m.advance({q, 0.0, 0.05 * std::cos(1e-3 * k), 0.0}) == NumericStatus::ok ? 1 : 0;
       (void)m.force({q, 0.0, 0.0, 0.0});
     }
   });
@@ -179,7 +179,7 @@ TEST_CASE("bidirectional observer: float") {
   p.backward_gain = 0.7e-3F;
   p.initial_load = 10.0F;
   est::BidirectionalLoadObserver<float> m(p);
-  CHECK(m.advance({0.0F, 0.0F, 0.1F, 0.0F}) == StepStatus::ok);
+  CHECK(m.advance({0.0F, 0.0F, 0.1F, 0.0F}) == NumericStatus::ok);
   CHECK(m.force({0.0F, 0.0F, 0.1F, 0.0F}) == doctest::Approx(10.0F));
 }
 

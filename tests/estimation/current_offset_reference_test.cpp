@@ -12,7 +12,7 @@
 namespace estimation_current_offset_reference_test {
 
 namespace est = endohaptics::estimation;
-using endohaptics::model::StepStatus;
+using endohaptics::model::NumericStatus;
 using endohaptics::test::allocations_during;
 using endohaptics::test::message_of;
 
@@ -32,7 +32,7 @@ TEST_CASE("current offset reference: a session's measurement offset is moved to 
       const double u = 0.05 * std::sin(0.01 * k);
       const double true_current = -2.06 * u - 0.005;  // as the training sessions would read it
       const double measured = true_current - 0.015 + noise(rng);
-      all_ok = all_ok && r.advance(measured, u) == StepStatus::ok;
+      all_ok = all_ok && r.advance(measured, u) == NumericStatus::ok;
       last_error = r.corrected() - true_current;
     }
   });
@@ -46,18 +46,18 @@ TEST_CASE("current offset reference: a session's measurement offset is moved to 
 
 TEST_CASE("current offset reference: non-finite input, bounds, reset") {
   est::CurrentOffsetReference<double> r({-2.0, 0.01});
-  REQUIRE(r.advance(0.1, 0.02) == StepStatus::ok);
+  REQUIRE(r.advance(0.1, 0.02) == NumericStatus::ok);
   const auto before = r.state();
   const double corrected = r.corrected();
-  CHECK(r.advance(std::nan(""), 0.0) == StepStatus::non_finite_input);
-  CHECK(r.advance(0.1, std::numeric_limits<double>::infinity()) == StepStatus::non_finite_input);
+  CHECK(r.advance(std::nan(""), 0.0) == NumericStatus::non_finite_input);
+  CHECK(r.advance(0.1, std::numeric_limits<double>::infinity()) == NumericStatus::non_finite_input);
   CHECK(r.state() == before);
   CHECK(r.corrected() == corrected);
   // The first sample: the running offset is that sample's, the corrected current the reference.
   CHECK(r.offset() == doctest::Approx(0.1 + 2.0 * 0.02));
   CHECK(corrected == doctest::Approx(0.1 - (0.14 - 0.01)));
   // Finite but overflowing: refused, state untouched.
-  CHECK(r.advance(1e308, -1e308) == StepStatus::non_finite_result);
+  CHECK(r.advance(1e308, -1e308) == NumericStatus::non_finite_result);
   CHECK(r.state() == before);
   r.reset();
   CHECK(r.state().isZero());

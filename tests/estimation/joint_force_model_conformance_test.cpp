@@ -22,7 +22,7 @@
 namespace estimation_joint_force_model_conformance_test {
 
 namespace est = endohaptics::estimation;
-using endohaptics::model::StepStatus;
+using endohaptics::model::NumericStatus;
 
 // The bridge's clamp model type (files::ClampForceModel), holding an observer.
 using AnyClamp =
@@ -135,10 +135,10 @@ TEST_CASE_TEMPLATE("joint force models: a non-finite signal is refused, the stat
       const typename M::State before = m.state();
       est::JointSignals<S> x = s.back();
       (which == 0 ? x.position : which == 1 ? x.velocity : x.current) = bad;
-      const StepStatus status = m.advance(x);
+      const NumericStatus status = m.advance(x);
       // A signal the model does not read may pass; one it reads is refused, all or nothing.
-      CHECK((status == StepStatus::ok || status == StepStatus::non_finite_input));
-      if (status != StepStatus::ok) CHECK(m.state() == before);
+      CHECK((status == NumericStatus::ok || status == NumericStatus::non_finite_input));
+      if (status != NumericStatus::ok) CHECK(m.state() == before);
       CHECK(m.state().allFinite());
       CHECK(std::isfinite(m.force(s.back())));
       m.reset(before);
@@ -183,7 +183,7 @@ TEST_CASE_TEMPLATE("joint force models: 10,000 steps allocate nothing", M,
   bool ok = true;
   const long allocations = endohaptics::test::allocations_during([&] {
     for (const auto& x : s) {
-      ok = ok && m.advance(x) == StepStatus::ok;
+      ok = ok && m.advance(x) == NumericStatus::ok;
       sum += m.force(x);
       sum += m.state()[0];
     }

@@ -26,7 +26,7 @@ TEST_CASE("rate stepper: reset returns each model to its own start state") {
   for (int i = 0; i < 200; ++i) {
     const double t = 0.001 * i;
     REQUIRE(stepper.tick({0.3 * t, 0.3, 0.1 + 0.5 * t, 0.0}, force) ==
-            endohaptics::model::StepStatus::ok);
+            endohaptics::model::NumericStatus::ok);
   }
   REQUIRE(stepper.snapshot().state != fresh.state());
   stepper.reset();
@@ -40,7 +40,7 @@ TEST_CASE("rate stepper: reset returns each model to its own start state") {
   est::detail::force::RateStepper<est::StallHold<double>, est::detail::force::RateMode::decimate>
       held(est::StallHold<double>(h), 0.001, "clamp");
   for (int i = 0; i < 50; ++i)
-    REQUIRE(held.tick({0.0, 0.0, 0.5, 0.0}, force) == endohaptics::model::StepStatus::ok);
+    REQUIRE(held.tick({0.0, 0.0, 0.5, 0.0}, force) == endohaptics::model::NumericStatus::ok);
   held.reset();
   CHECK(held.snapshot().state.isZero());
 }

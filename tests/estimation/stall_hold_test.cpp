@@ -38,16 +38,16 @@ TEST_CASE("stall-hold: follows the current while moving, holds it while stalled"
   est::StallHold<double> m(params());
   static_assert(est::JointForceModel<est::StallHold<double>>);
   // Moving into the object: current -0.97 A -> held -(0.97 - 0.2), force 8 x that.
-  REQUIRE(m.advance(signals(-0.97, 0.07)) == endohaptics::model::StepStatus::ok);
+  REQUIRE(m.advance(signals(-0.97, 0.07)) == endohaptics::model::NumericStatus::ok);
   CHECK(m.force(signals(-0.97, 0.07)) == doctest::Approx(8.0 * -0.77));
   // Stalled: the current relaxes to -0.05 A, the force stays (tendon stiction holds it).
-  REQUIRE(m.advance(signals(-0.05, 0.0)) == endohaptics::model::StepStatus::ok);
+  REQUIRE(m.advance(signals(-0.05, 0.0)) == endohaptics::model::NumericStatus::ok);
   CHECK(m.force(signals(-0.05, 0.0)) == doctest::Approx(8.0 * -0.77));
   // Moving back out: the current is inside the dead zone, the force goes.
-  REQUIRE(m.advance(signals(0.1, -0.07)) == endohaptics::model::StepStatus::ok);
+  REQUIRE(m.advance(signals(0.1, -0.07)) == endohaptics::model::NumericStatus::ok);
   CHECK(m.force(signals(0.1, -0.07)) == 0.0);
   // negative side: positive current beyond the dead zone gives no force.
-  REQUIRE(m.advance(signals(0.9, -0.07)) == endohaptics::model::StepStatus::ok);
+  REQUIRE(m.advance(signals(0.9, -0.07)) == endohaptics::model::NumericStatus::ok);
   CHECK(m.force(signals(0.9, -0.07)) == 0.0);
 }
 
@@ -63,12 +63,12 @@ TEST_CASE("stall-hold: sides, lags, the state, non-finite input") {
   auto p = params();
   p.output_time_constant = 0.3;
   est::StallHold<double> m(p);
-  REQUIRE(m.advance(signals(-1.2, 0.1)) == endohaptics::model::StepStatus::ok);
+  REQUIRE(m.advance(signals(-1.2, 0.1)) == endohaptics::model::NumericStatus::ok);
   CHECK(m.state()[1] == doctest::Approx(-1.0));
   CHECK(m.state()[2] == doctest::Approx(-1.0 * 0.01 / 0.31));
   const auto before = m.state();
   CHECK(m.advance(signals(std::numeric_limits<double>::quiet_NaN(), 0.1)) ==
-        endohaptics::model::StepStatus::non_finite_input);
+        endohaptics::model::NumericStatus::non_finite_input);
   CHECK(m.state() == before);  // untouched
   m.reset();
   CHECK(m.state().isZero());

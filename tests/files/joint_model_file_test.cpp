@@ -468,7 +468,7 @@ TEST_CASE("bridge: a model file of each kind configures the clamps and runs in t
         in.velocity[2] = t < 1.0 ? 0.1 : 0.0;
         in.position[2] += 1e-3 * in.velocity[2];
         in.current[2] = t < 1.0 ? -0.8 * t : -0.8 * std::exp(-(t - 1.0) / 0.2);
-        ok = ok && estimator.step(in, out) == est::ForceStatus::ok;
+        ok = ok && estimator.step(in, out) == est::NumericStatus::ok;
       }
     });
     CHECK(ok);

@@ -136,8 +136,8 @@ TEST_CASE("a loaded yaw Hammerstein-Wiener model drives OpenLoop and the ForceEs
   for (int k = 0; k < 200; ++k) {
     const est::JointSignals<double> s{0.0, 1.5 * std::sin(0.03 * k), 0.5 * std::sin(0.02 * k), 0.0};
     REQUIRE(from_file.force(s) == from_preset.force(s));
-    REQUIRE(from_file.advance(s) == model::StepStatus::ok);
-    REQUIRE(from_preset.advance(s) == model::StepStatus::ok);
+    REQUIRE(from_file.advance(s) == model::NumericStatus::ok);
+    REQUIRE(from_preset.advance(s) == model::NumericStatus::ok);
   }
   CHECK(from_file.force({0.0, 0.5, 0.6, 0.0}) != 0.0);
 
@@ -154,8 +154,8 @@ TEST_CASE("a loaded yaw Hammerstein-Wiener model drives OpenLoop and the ForceEs
   for (int k = 0; k < 400; ++k) {
     in.current = Eigen::Vector4d::Constant(0.8 * std::sin(0.004 * k));
     in.velocity = Eigen::Vector4d::Constant(std::cos(0.004 * k));
-    REQUIRE(with_file.step(in, f_file) == est::ForceStatus::ok);
-    REQUIRE(defaults.step(in, f_default) == est::ForceStatus::ok);
+    REQUIRE(with_file.step(in, f_file) == est::NumericStatus::ok);
+    REQUIRE(defaults.step(in, f_default) == est::NumericStatus::ok);
     REQUIRE(f_file == f_default);
     largest = std::max(largest, std::abs(f_file[2]));
   }

@@ -24,7 +24,7 @@ using endohaptics::kinematics::DhChain;
 using endohaptics::kinematics::DhRow;
 using endohaptics::kinematics::geomagic_touch_chain;
 using endohaptics::kinematics::JointKind;
-using endohaptics::kinematics::KinematicsStatus;
+using endohaptics::kinematics::NumericStatus;
 using endohaptics::kinematics::TouchGeometry;
 using endohaptics::test::allocations_during;
 
@@ -293,7 +293,7 @@ TEST_CASE("da Vinci hand preset (table D.2): hand-computed poses") {
   // The stationary point: both rotations leave the origin of frame 2 at the origin.
   Hand::Frames frames;
   q << 0.4, -0.7, 0.08;
-  REQUIRE(hand.forward(q, frames) == KinematicsStatus::ok);
+  REQUIRE(hand.forward(q, frames) == NumericStatus::ok);
   CHECK(frames[0].translation().norm() < 1e-15);
   CHECK(frames[1].translation().norm() < 1e-15);
   CHECK(frames[2].translation().norm() == doctest::Approx(0.08).epsilon(1e-12));
@@ -327,7 +327,7 @@ TEST_CASE_TEMPLATE("composition equals the product of single links and rotations
     REQUIRE((T.matrix() - product.matrix()).cwiseAbs().maxCoeff() <= tol);
 
     typename Chain::Frames frames;
-    REQUIRE(chain.forward(q, frames) == KinematicsStatus::ok);
+    REQUIRE(chain.forward(q, frames) == NumericStatus::ok);
     REQUIRE((frames[N - 1].matrix() - T.matrix()).cwiseAbs().maxCoeff() <= tol);
     for (int i = 0; i < N; ++i) {
       const auto R = frames[static_cast<std::size_t>(i)].rotation();
@@ -358,14 +358,12 @@ TEST_CASE("non-finite joint values are refused and leave the outputs untouched")
       Touch::Frames frames;
       frames.fill(sentinel);
       CAPTURE(j);
-      CHECK(touch.forward(q, end) == KinematicsStatus::non_finite);
+      CHECK(touch.forward(q, end) == NumericStatus::non_finite_input);
       CHECK(end.matrix() == sentinel.matrix());
-      CHECK(touch.forward(q, frames) == KinematicsStatus::non_finite);
+      CHECK(touch.forward(q, frames) == NumericStatus::non_finite_input);
       for (const auto& f : frames) CHECK(f.matrix() == sentinel.matrix());
     }
   }
-  CHECK(to_string(KinematicsStatus::non_finite) == "non-finite joint value");
-  CHECK(to_string(KinematicsStatus::ok) == "ok");
 }
 
 TEST_CASE("non-finite DH parameters are a configuration error naming row and field") {
@@ -397,8 +395,8 @@ TEST_CASE("forward kinematics allocates nothing over 10000 ticks") {
   const long allocations = allocations_during([&] {
     for (int tick = 0; tick < 10000; ++tick) {
       q[tick % 6] += 1e-4;
-      if (touch.forward(q, frames) != KinematicsStatus::ok) sink += 1;
-      if (hand.forward(qh, end) != KinematicsStatus::ok) sink += 1;
+      if (touch.forward(q, frames) != NumericStatus::ok) sink += 1;
+      if (hand.forward(qh, end) != NumericStatus::ok) sink += 1;
       sink += frames[5].translation().x() + end.translation().z();
     }
   });

@@ -16,8 +16,8 @@ namespace {
 using endohaptics::Error;
 using endohaptics::model::FrictionModel;
 using endohaptics::model::FrictionOptions;
-using endohaptics::model::FrictionStatus;
 using endohaptics::model::JointFriction;
+using endohaptics::model::NumericStatus;
 using endohaptics::test::allocations_during;
 namespace friction_2016 = endohaptics::model::friction_2016;
 
@@ -64,7 +64,7 @@ TEST_CASE_TEMPLATE("levels: Ks at standstill, Kc + F_mu |omega| when sliding (eq
   V level;
   for (const S w : {S(0), S(0.01), S(-0.01), S(0.5), S(-2)}) {  // 0.01 = threshold: standstill
     velocity.setConstant(w);
-    REQUIRE(model.breakaway_level(velocity, level) == FrictionStatus::ok);
+    REQUIRE(model.breakaway_level(velocity, level) == NumericStatus::ok);
     for (int j = 0; j < Model::joints; ++j) {
       CAPTURE(j);
       CAPTURE(w);
@@ -76,7 +76,7 @@ TEST_CASE_TEMPLATE("levels: Ks at standstill, Kc + F_mu |omega| when sliding (eq
   }
   // Joint 0: Ks 0.2, Kc 0.15, F_mu 0.05 -> at 2 rad/s the level is 0.15 + 0.1 = 0.25 A.
   velocity.setConstant(S(2));
-  REQUIRE(model.breakaway_level(velocity, level) == FrictionStatus::ok);
+  REQUIRE(model.breakaway_level(velocity, level) == NumericStatus::ok);
   CHECK(level[0] == doctest::Approx(S(0.25)).epsilon(tol));
 }
 
@@ -90,12 +90,12 @@ TEST_CASE_TEMPLATE("compensate: friction opposes motion, static friction is a de
   // Sliding at +-1 rad/s with joint 0 constants: friction current = +-(0.15 + 0.05) A.
   velocity.setConstant(S(1));
   current.setConstant(S(0.5));
-  REQUIRE(model.compensate(current, velocity, friction, external) == FrictionStatus::ok);
+  REQUIRE(model.compensate(current, velocity, friction, external) == NumericStatus::ok);
   CHECK(friction[0] == doctest::Approx(S(0.2)));
   CHECK(external[0] == doctest::Approx(S(0.3)));
   velocity.setConstant(S(-1));
   current.setConstant(S(-0.5));
-  REQUIRE(model.compensate(current, velocity, friction, external) == FrictionStatus::ok);
+  REQUIRE(model.compensate(current, velocity, friction, external) == NumericStatus::ok);
   CHECK(friction[0] == doctest::Approx(S(-0.2)));
   CHECK(external[0] == doctest::Approx(S(-0.3)));
 
@@ -103,7 +103,7 @@ TEST_CASE_TEMPLATE("compensate: friction opposes motion, static friction is a de
   velocity.setZero();
   for (const S i : {S(0.1), S(-0.15), S(0.35), S(-0.5)}) {
     current.setConstant(i);
-    REQUIRE(model.compensate(current, velocity, friction, external) == FrictionStatus::ok);
+    REQUIRE(model.compensate(current, velocity, friction, external) == NumericStatus::ok);
     CAPTURE(i);
     const S expected = std::abs(i) <= S(0.2) ? S(0) : i - std::copysign(S(0.2), i);
     CHECK(external[0] == doctest::Approx(expected));
@@ -117,8 +117,7 @@ TEST_CASE_TEMPLATE("compensate: friction opposes motion, static friction is a de
   current.setConstant(S(0.5));
   velocity.setConstant(S(1));
   velocity[Model::joints - 1] = std::numeric_limits<S>::quiet_NaN();
-  CHECK(model.compensate(current, velocity, friction, external) ==
-        FrictionStatus::non_finite_input);
+  CHECK(model.compensate(current, velocity, friction, external) == NumericStatus::non_finite_input);
   CHECK(friction[Model::joints - 1] == S(0));
   CHECK(external[Model::joints - 1] == S(0));
   if constexpr (Model::joints > 1) CHECK(external[0] == doctest::Approx(S(0.3)));
@@ -140,7 +139,7 @@ TEST_CASE_TEMPLATE("gate (5.2.3): opens above the level, closes below release_fr
   for (std::size_t k = 0; k < std::size(currents); ++k) {
     V current = V::Zero();
     current[0] = static_cast<S>(currents[k]);
-    REQUIRE(model.update(current, velocity, estimate, feedback) == FrictionStatus::ok);
+    REQUIRE(model.update(current, velocity, estimate, feedback) == NumericStatus::ok);
     CAPTURE(k);
     CHECK(model.gate_open()[0] == open[k]);
     CHECK(feedback[0] == (open[k] ? S(3.5) : S(0)));
@@ -150,12 +149,12 @@ TEST_CASE_TEMPLATE("gate (5.2.3): opens above the level, closes below release_fr
   // Sliding lowers the level to Kc + F_mu |omega| = 0.15 + 0.05 * 0.2 = 0.16 A: 0.18 A opens.
   model.reset();
   V current = V::Constant(S(0.18));
-  REQUIRE(model.update(current, V::Constant(S(0.2)), estimate, feedback) == FrictionStatus::ok);
+  REQUIRE(model.update(current, V::Constant(S(0.2)), estimate, feedback) == NumericStatus::ok);
   CHECK(model.gate_open()[0]);
   CHECK(feedback[0] == S(3.5));
   // The same current at standstill would not have opened it (Ks = 0.2 A).
   model.reset();
-  REQUIRE(model.update(current, velocity, estimate, feedback) == FrictionStatus::ok);
+  REQUIRE(model.update(current, velocity, estimate, feedback) == NumericStatus::ok);
   CHECK_FALSE(model.gate_open()[0]);
 }
 
@@ -166,7 +165,7 @@ TEST_CASE_TEMPLATE("gate: NaN closes that joint's gate and zeroes its feedback o
   Model model = make_model<Model>();
   V feedback;
   const V estimate = V::Constant(S(2));
-  REQUIRE(model.update(V::Constant(S(5)), V::Zero(), estimate, feedback) == FrictionStatus::ok);
+  REQUIRE(model.update(V::Constant(S(5)), V::Zero(), estimate, feedback) == NumericStatus::ok);
   for (int j = 0; j < Model::joints; ++j) REQUIRE(model.gate_open()[static_cast<std::size_t>(j)]);
 
   const S bad = std::numeric_limits<S>::quiet_NaN();
@@ -179,9 +178,9 @@ TEST_CASE_TEMPLATE("gate: NaN closes that joint's gate and zeroes its feedback o
     if (field == 0) current[last] = bad;
     if (field == 1) velocity[last] = inf;
     if (field == 2) est[last] = bad;
-    REQUIRE(model.update(V::Constant(S(5)), V::Zero(), estimate, feedback) == FrictionStatus::ok);
+    REQUIRE(model.update(V::Constant(S(5)), V::Zero(), estimate, feedback) == NumericStatus::ok);
     CAPTURE(field);
-    CHECK(model.update(current, velocity, est, feedback) == FrictionStatus::non_finite_input);
+    CHECK(model.update(current, velocity, est, feedback) == NumericStatus::non_finite_input);
     CHECK_FALSE(model.gate_open()[static_cast<std::size_t>(last)]);
     CHECK(feedback[last] == S(0));
     for (int j = 0; j < last; ++j) {
@@ -205,9 +204,9 @@ TEST_CASE("hysteresis stops the chatter of the 2016 gate on noisy current") {
   for (int k = 0; k < 2000; ++k) {
     const Model::Vector current = Model::Vector::Constant(0.21 + noise(rng));
     REQUIRE(chatty.update(current, Model::Vector::Zero(), Model::Vector::Ones(), feedback) ==
-            FrictionStatus::ok);
+            NumericStatus::ok);
     REQUIRE(damped.update(current, Model::Vector::Zero(), Model::Vector::Ones(), feedback) ==
-            FrictionStatus::ok);
+            NumericStatus::ok);
     toggles_chatty += chatty.gate_open()[0] != was_chatty;
     toggles_damped += damped.gate_open()[0] != was_damped;
     was_chatty = chatty.gate_open()[0];
@@ -253,9 +252,9 @@ TEST_CASE(
         velocity[j] = 0.05 * u(rng);
       }
       if (k % 100 == 0) velocity[1] = not_a_number;
-      statuses_ok += model.update(current, velocity, current, feedback) == FrictionStatus::ok;
-      statuses_ok += model.compensate(current, velocity, friction, external) == FrictionStatus::ok;
-      statuses_ok += model.breakaway_level(velocity, level) == FrictionStatus::ok;
+      statuses_ok += model.update(current, velocity, current, feedback) == NumericStatus::ok;
+      statuses_ok += model.compensate(current, velocity, friction, external) == NumericStatus::ok;
+      statuses_ok += model.breakaway_level(velocity, level) == NumericStatus::ok;
     }
   });
   CHECK(allocations == 0);

@@ -17,10 +17,10 @@ namespace {
 using endohaptics::model::Deadzone;
 using endohaptics::model::HammersteinWiener;
 using endohaptics::model::Identity;
+using endohaptics::model::NumericStatus;
 using endohaptics::model::PerChannel;
 using endohaptics::model::Saturation;
 using endohaptics::model::StateSpace;
-using endohaptics::model::StepStatus;
 using endohaptics::test::allocations_during;
 namespace m = endohaptics::model;
 
@@ -90,17 +90,17 @@ TEST_CASE("NaN input: update refuses it untouched, step propagates it without UB
   const Eigen::Vector2d good{0.5, 0.1};
   const Eigen::Vector2d nan_current{std::numeric_limits<double>::quiet_NaN(), 0.1};
   Eigen::Matrix<double, 1, 1> y{42.0};
-  REQUIRE(hw.update(good, y) == StepStatus::ok);
+  REQUIRE(hw.update(good, y) == NumericStatus::ok);
   const auto state = hw.state();
   const double y_good = y[0];
   CHECK(y_good != 42.0);
 
   Eigen::Matrix<double, 1, 1> untouched{42.0};
-  CHECK(hw.update(nan_current, untouched) == StepStatus::non_finite_input);
+  CHECK(hw.update(nan_current, untouched) == NumericStatus::non_finite_input);
   CHECK(untouched[0] == 42.0);
   CHECK(hw.state() == state);
   CHECK(hw.update(Eigen::Vector2d{0.1, std::numeric_limits<double>::infinity()}, untouched) ==
-        StepStatus::non_finite_input);
+        NumericStatus::non_finite_input);
 
   // step does not check: the dead zone passes NaN on, the state becomes NaN.
   CHECK(std::isfinite(hw.step(good)[0]));
@@ -125,7 +125,7 @@ TEST_CASE("no heap allocation in 10,000 ticks (operator new counter and EIGEN_RU
       sink += hw.step(u)[0];
       sink += linear.step(u)[0] * 1e-6;
       sink += roll.step(u.head<1>())[0];
-      if (hw.update(u, y) == StepStatus::ok) sink += y[0];
+      if (hw.update(u, y) == NumericStatus::ok) sink += y[0];
       sink += combined.step(Eigen::Vector4d{u[0], u[1], u[0], u[1]})[1] * 1e-6;
     }
   });

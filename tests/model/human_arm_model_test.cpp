@@ -25,7 +25,7 @@ using endohaptics::model::human_arm_impedance;
 using endohaptics::model::HumanArm3;
 using endohaptics::model::HumanArmModel;
 using endohaptics::model::HumanArmParameters;
-using endohaptics::model::HumanArmStatus;
+using endohaptics::model::NumericStatus;
 using endohaptics::test::allocations_during;
 using cd = std::complex<double>;
 
@@ -163,7 +163,7 @@ TEST_CASE_TEMPLATE("a force step settles to the static compliance", Scalar, doub
   const double tol = std::is_same_v<Scalar, float> ? 1e-5 : 1e-12;
   Scalar x = 0, v = 0;
   for (int k = 0; k <= 10000; ++k) {  // 10 s; slowest time constant 1 / 2.705 s = 0.37 s
-    REQUIRE(arm.apply_force(Scalar(1), x, v) == HumanArmStatus::ok);
+    REQUIRE(arm.apply_force(Scalar(1), x, v) == NumericStatus::ok);
     for (std::size_t i = 0; i < scipy_steps.size(); ++i) {
       if (k == scipy_steps[i]) {
         CAPTURE(k);
@@ -179,7 +179,7 @@ TEST_CASE_TEMPLATE("a force step settles to the static compliance", Scalar, doub
         doctest::Approx(1.0 / 375.0).epsilon(tol * 100));
   // A 2 N step doubles everything (linearity), from rest.
   arm.reset();
-  for (int k = 0; k <= 10000; ++k) REQUIRE(arm.apply_force(Scalar(2), x, v) == HumanArmStatus::ok);
+  for (int k = 0; k <= 10000; ++k) REQUIRE(arm.apply_force(Scalar(2), x, v) == NumericStatus::ok);
   CHECK(static_cast<double>(x) == doctest::Approx(2 * compliance).epsilon(tol * 100));
 }
 
@@ -204,8 +204,8 @@ TEST_CASE("the two directions agree: imposing the motion a force produced recove
     const double f = 1.0 + 2.0 * std::sin(2 * std::numbers::pi * t) +
                      0.5 * std::sin(2 * std::numbers::pi * 7.0 * t);
     double x = 0, v = 0, recovered = 0;
-    REQUIRE(forward.apply_force(f, x, v) == HumanArmStatus::ok);
-    REQUIRE(backward.impose_motion(x, v, recovered) == HumanArmStatus::ok);
+    REQUIRE(forward.apply_force(f, x, v) == NumericStatus::ok);
+    REQUIRE(backward.impose_motion(x, v, recovered) == NumericStatus::ok);
     worst = std::max(worst, std::abs(recovered - f));
   }
   MESSAGE("largest force mismatch over 5 s at 1 kHz: " << worst << " N (peak force 3.5 N)");
@@ -215,8 +215,8 @@ TEST_CASE("the two directions agree: imposing the motion a force produced recove
   HumanArmModel<> a(ts), b(ts);
   double x = 0, v = 0, recovered = 0;
   for (int k = 0; k < 10000; ++k) {
-    REQUIRE(a.apply_force(1.5, x, v) == HumanArmStatus::ok);
-    REQUIRE(b.impose_motion(x, v, recovered) == HumanArmStatus::ok);
+    REQUIRE(a.apply_force(1.5, x, v) == NumericStatus::ok);
+    REQUIRE(b.impose_motion(x, v, recovered) == NumericStatus::ok);
   }
   CHECK(recovered == doctest::Approx(1.5).epsilon(1e-9));
 }
@@ -226,11 +226,11 @@ TEST_CASE("one model switches causality on the same hand state") {
   HumanArmModel<> reference(ts), switching(ts);
   double x = 0, v = 0, f = 0;
   for (int k = 0; k < 300; ++k) {
-    REQUIRE(reference.apply_force(1.0, x, v) == HumanArmStatus::ok);
-    REQUIRE(switching.apply_force(1.0, x, v) == HumanArmStatus::ok);
+    REQUIRE(reference.apply_force(1.0, x, v) == NumericStatus::ok);
+    REQUIRE(switching.apply_force(1.0, x, v) == NumericStatus::ok);
   }
   // Hold the stylus where the force left it: the hand keeps moving, the force changes.
-  REQUIRE(switching.impose_motion(x, 0.0, f) == HumanArmStatus::ok);
+  REQUIRE(switching.impose_motion(x, 0.0, f) == NumericStatus::ok);
   CHECK(switching.hand_position() == doctest::Approx(reference.hand_position()).epsilon(1e-3));
   // The force at the switch is the force on the hand through the spring and damper (eq. 5.1):
   // with the stylus stopped, v_m = 0.
@@ -238,11 +238,11 @@ TEST_CASE("one model switches causality on the same hand state") {
       48.8 * (x - reference.hand_position()) + 4.5 * (0.0 - reference.hand_velocity());
   CHECK(f == doctest::Approx(expected).epsilon(1e-3));
   // Held long enough, the hand settles against the held stylus: x_h = k1 x_m / (k1 + k2).
-  for (int k = 0; k < 10000; ++k) REQUIRE(switching.impose_motion(x, 0.0, f) == HumanArmStatus::ok);
+  for (int k = 0; k < 10000; ++k) REQUIRE(switching.impose_motion(x, 0.0, f) == NumericStatus::ok);
   CHECK(switching.hand_position() == doctest::Approx(48.8 * x / 423.8).epsilon(1e-9));
   CHECK(f == doctest::Approx(48.8 * 375.0 / 423.8 * x).epsilon(1e-9));
   // Back to admittance with zero force: the arm relaxes to the origin.
-  for (int k = 0; k < 10000; ++k) REQUIRE(switching.apply_force(0.0, x, v) == HumanArmStatus::ok);
+  for (int k = 0; k < 10000; ++k) REQUIRE(switching.apply_force(0.0, x, v) == NumericStatus::ok);
   CHECK(std::abs(x) < 1e-9);
   CHECK(std::abs(switching.hand_position()) < 1e-9);
 }
@@ -250,27 +250,26 @@ TEST_CASE("one model switches causality on the same hand state") {
 TEST_CASE("non-finite inputs are replaced and reported, the state stays finite") {
   HumanArmModel<> arm(1e-3);
   double x = 0, v = 0, f = 0;
-  for (int k = 0; k < 100; ++k) REQUIRE(arm.apply_force(1.0, x, v) == HumanArmStatus::ok);
+  for (int k = 0; k < 100; ++k) REQUIRE(arm.apply_force(1.0, x, v) == NumericStatus::ok);
   HumanArmModel<> zero_force = arm;  // the same arm, fed 0 N instead of NaN
   double x0 = 0, v0 = 0;
   CHECK(arm.apply_force(std::numeric_limits<double>::quiet_NaN(), x, v) ==
-        HumanArmStatus::non_finite_input);
-  REQUIRE(zero_force.apply_force(0.0, x0, v0) == HumanArmStatus::ok);
+        NumericStatus::non_finite_input);
+  REQUIRE(zero_force.apply_force(0.0, x0, v0) == NumericStatus::ok);
   CHECK(x == x0);
   CHECK(v == v0);
   CHECK(arm.admittance().state().allFinite());
 
   const double held = x;
   CHECK(arm.impose_motion(std::numeric_limits<double>::infinity(), 0.1, f) ==
-        HumanArmStatus::non_finite_input);
+        NumericStatus::non_finite_input);
   CHECK(std::isfinite(f));
   CHECK(arm.impedance().state().allFinite());
-  REQUIRE(arm.impose_motion(0.01, 0.0, f) == HumanArmStatus::ok);
+  REQUIRE(arm.impose_motion(0.01, 0.0, f) == NumericStatus::ok);
   CHECK(arm.impose_motion(std::numeric_limits<double>::quiet_NaN(), 0.0, f) ==
-        HumanArmStatus::non_finite_input);
+        NumericStatus::non_finite_input);
   CHECK(std::isfinite(f));
   CHECK(held != 0.0);
-  CHECK(to_string(HumanArmStatus::non_finite_input) == "non-finite force or motion replaced");
 }
 
 TEST_CASE("parameters and sample time are validated, naming the culprit") {
@@ -303,9 +302,9 @@ TEST_CASE("HumanArm3: three independent axes, each equal to the scalar model") {
   double x = 0, vx = 0, y = 0, vy = 0;
   for (int k = 0; k < 2000; ++k) {
     const Eigen::Vector3d f(1.0, 1.0, -0.5 * std::sin(0.01 * k));
-    REQUIRE(arm.apply_force(f, position, velocity) == HumanArmStatus::ok);
-    REQUIRE(x_axis.apply_force(f[0], x, vx) == HumanArmStatus::ok);
-    REQUIRE(y_axis.apply_force(f[1], y, vy) == HumanArmStatus::ok);
+    REQUIRE(arm.apply_force(f, position, velocity) == NumericStatus::ok);
+    REQUIRE(x_axis.apply_force(f[0], x, vx) == NumericStatus::ok);
+    REQUIRE(y_axis.apply_force(f[1], y, vy) == NumericStatus::ok);
     REQUIRE(position[0] == x);
     REQUIRE(velocity[0] == vx);
     REQUIRE(position[1] == y);
@@ -314,12 +313,12 @@ TEST_CASE("HumanArm3: three independent axes, each equal to the scalar model") {
   CHECK(arm.axis(1).parameters() == stiff);
 
   Eigen::Vector3d bad_force(0.0, std::numeric_limits<double>::quiet_NaN(), 0.0);
-  CHECK(arm.apply_force(bad_force, position, velocity) == HumanArmStatus::non_finite_input);
+  CHECK(arm.apply_force(bad_force, position, velocity) == NumericStatus::non_finite_input);
   CHECK(position.allFinite());
-  REQUIRE(arm.impose_motion(position, Eigen::Vector3d::Zero(), force) == HumanArmStatus::ok);
+  REQUIRE(arm.impose_motion(position, Eigen::Vector3d::Zero(), force) == NumericStatus::ok);
   CHECK(force.allFinite());
   arm.reset();
-  REQUIRE(arm.apply_force(Eigen::Vector3d::Zero(), position, velocity) == HumanArmStatus::ok);
+  REQUIRE(arm.apply_force(Eigen::Vector3d::Zero(), position, velocity) == NumericStatus::ok);
   CHECK(position == Eigen::Vector3d::Zero());
 }
 
@@ -334,11 +333,11 @@ TEST_CASE(
     for (int k = 0; k < 10000; ++k) {
       const Eigen::Vector3d applied = Eigen::Vector3d::Constant(std::sin(0.001 * k));
       if (k % 2 == 0) {
-        ok += arm.apply_force(applied, position, velocity) == HumanArmStatus::ok;
-        ok += single.apply_force(static_cast<float>(applied[0]), x, v) == HumanArmStatus::ok;
+        ok += arm.apply_force(applied, position, velocity) == NumericStatus::ok;
+        ok += single.apply_force(static_cast<float>(applied[0]), x, v) == NumericStatus::ok;
       } else {
-        ok += arm.impose_motion(position, velocity, force) == HumanArmStatus::ok;
-        ok += single.impose_motion(x, v, f) == HumanArmStatus::ok;
+        ok += arm.impose_motion(position, velocity, force) == NumericStatus::ok;
+        ok += single.impose_motion(x, v, f) == NumericStatus::ok;
       }
     }
   });

@@ -26,8 +26,8 @@ using endohaptics::model::ContinuousStateSpace;
 using endohaptics::model::discretize_tustin;
 using endohaptics::model::discretize_zoh;
 using endohaptics::model::DynamicStateSpace;
+using endohaptics::model::NumericStatus;
 using endohaptics::model::StateSpace;
-using endohaptics::model::StepStatus;
 using endohaptics::test::allocations_during;
 
 // Entry-wise |actual - expected| <= tol, reporting the entry that fails.
@@ -76,6 +76,15 @@ Msd msd() {
 //   A=[[0,1],[-4,-0.4]]; B=[[0],[1]]; C=[[1,0]]; D=[[0]]
 //   scipy.signal.cont2discrete((A,B,C,D), 0.1, method='zoh' | 'bilinear')
 // printed with np.set_printoptions(precision=17, floatmode='unique').
+TEST_CASE("NumericStatus: one outcome for every numeric step, one name each for logs") {
+  using endohaptics::NumericStatus;
+  CHECK(to_string(NumericStatus::ok) == "ok");
+  CHECK(to_string(NumericStatus::non_finite_input) == "non-finite input");
+  CHECK(to_string(NumericStatus::non_finite_measurement) == "non-finite measurement");
+  CHECK(to_string(NumericStatus::non_finite_result) == "non-finite result");
+  CHECK(to_string(static_cast<NumericStatus>(200)) == "unknown");
+}
+
 TEST_CASE("discretize_zoh matches scipy cont2discrete 'zoh' (mass-spring-damper, Ts = 0.1 s)") {
   const auto d = discretize_zoh(msd(), 0.1);
   check_close(d.A(),
@@ -312,7 +321,7 @@ TEST_CASE_TEMPLATE("step, output, simulate and update follow eq. 4.2 entry by en
     SS copy = model;
     const auto u = random_matrix<typename SS::Input>(rng);
     typename SS::Output y = SS::Output::Constant(Scalar(7));
-    REQUIRE(model.update(u, y) == StepStatus::ok);
+    REQUIRE(model.update(u, y) == NumericStatus::ok);
     check_close(y, copy.step(u), 0.0);
     check_close(model.state(), copy.state(), 0.0);
     if constexpr (nu > 0) {
@@ -320,7 +329,7 @@ TEST_CASE_TEMPLATE("step, output, simulate and update follow eq. 4.2 entry by en
       bad[nu - 1] = std::numeric_limits<Scalar>::quiet_NaN();
       const typename SS::State before = model.state();
       typename SS::Output untouched = SS::Output::Constant(Scalar(7));
-      CHECK(model.update(bad, untouched) == StepStatus::non_finite_input);
+      CHECK(model.update(bad, untouched) == NumericStatus::non_finite_input);
       CHECK(model.state() == before);
       CHECK(untouched == SS::Output::Constant(Scalar(7)));
       // step() does not check: NaN reaches the state (documented), reset recovers.
@@ -336,7 +345,7 @@ TEST_CASE_TEMPLATE("step, output, simulate and update follow eq. 4.2 entry by en
            SS::MatrixC::Identity(), SS::MatrixD::Zero(), Scalar_(1));
     big.reset(SS::State::Constant(Scalar_(4)));
     typename SS::Output y = SS::Output::Zero();
-    CHECK(big.update(SS::Input::Zero(), y) == StepStatus::non_finite_result);
+    CHECK(big.update(SS::Input::Zero(), y) == NumericStatus::non_finite_result);
     CHECK(big.state() == SS::State::Constant(Scalar_(4)));
   }
 }
@@ -524,9 +533,9 @@ TEST_CASE(
   VectorXd y(2);
   const VectorXd before = model.state();
   CHECK(model.update(VectorXd{{std::nan(""), 0.0}}, y) ==
-        endohaptics::model::StepStatus::non_finite_input);
+        endohaptics::model::NumericStatus::non_finite_input);
   CHECK(model.state() == before);
-  CHECK(model.update(VectorXd{{0.5, 0.5}}, y) == endohaptics::model::StepStatus::ok);
+  CHECK(model.update(VectorXd{{0.5, 0.5}}, y) == endohaptics::model::NumericStatus::ok);
   check_close(y, fixed.step(Eigen::Vector2d{0.5, 0.5}), 1e-14);
 
   // scipy's dc gain; the same eigenvalues (one dynamic solver serves both forms).
@@ -656,7 +665,7 @@ TEST_CASE(
     for (int k = 0; k < 10000; ++k) {
       const Eigen::Vector2d u{std::sin(0.01 * k), std::cos(0.01 * k)};
       sink += fixed.step(u)[0];
-      if (fixed.update(u, y) == endohaptics::model::StepStatus::ok) sink += y[1];
+      if (fixed.update(u, y) == endohaptics::model::NumericStatus::ok) sink += y[1];
     }
   });
   CHECK(std::isfinite(sink));

@@ -66,9 +66,9 @@ double by_hand(const files::ModelFile& file, Observer observer, const Eigen::Mat
   double position = 0.0, largest = 0.0;
   for (Eigen::Index k = 0; k < u.rows(); ++k) {
     position += u(k, 1) * 0.001;
-    REQUIRE(reference.advance(u(k, 0), u(k, 2)) == endohaptics::model::StepStatus::ok);
+    REQUIRE(reference.advance(u(k, 0), u(k, 2)) == endohaptics::model::NumericStatus::ok);
     const est::JointSignals<double> s{position, u(k, 1), reference.corrected(), 0.0};
-    REQUIRE(observer.advance(s) == endohaptics::model::StepStatus::ok);
+    REQUIRE(observer.advance(s) == endohaptics::model::NumericStatus::ok);
     largest = std::max(largest, std::fabs(observer.force(s) - y[k]));
   }
   return largest;

@@ -189,13 +189,13 @@ TEST_CASE("push-load observer: the fit recovers the push-regime current model") 
 TEST_CASE("push-load observer: filters start at the first sample, allocation-free state") {
   est::PushLoadObserver<double> m;
   const est::JointSignals<double> s{0.2, 0.0, 0.1, 0.0};
-  REQUIRE(m.advance(s) == endohaptics::model::StepStatus::ok);
+  REQUIRE(m.advance(s) == endohaptics::model::NumericStatus::ok);
   CHECK(m.filtered_current() == doctest::Approx(0.1));  // steady state of the first sample
   CHECK(m.filtered_velocity() == doctest::Approx(0.0));
   CHECK(m.regime() == 0.0);
   const auto before = m.state();
   CHECK(m.advance({std::nan(""), 0.0, 0.1, 0.0}) ==
-        endohaptics::model::StepStatus::non_finite_input);
+        endohaptics::model::NumericStatus::non_finite_input);
   CHECK(m.state() == before);
   est::PushLoadObserverParameters<double> p;
   p.push_sign = 0.5;

@@ -61,8 +61,8 @@ class AnyJointForceModel {
   [[nodiscard]] ScalarType force(const Signals& s) const noexcept {
     return visit([&s](const auto& m) noexcept { return m.force(s); });
   }
-  //! One model period (the held model's StepStatus; all-or-nothing).
-  [[nodiscard]] model::StepStatus advance(const Signals& s) noexcept {
+  //! One model period (the held model's NumericStatus; all-or-nothing).
+  [[nodiscard]] model::NumericStatus advance(const Signals& s) noexcept {
     return visit([&s](auto& m) noexcept { return m.advance(s); });
   }
   //! The held model's state, padded with zeros.

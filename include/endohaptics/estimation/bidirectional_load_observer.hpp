@@ -183,10 +183,10 @@ class BidirectionalLoadObserver {
     return l + p_.output_offset + p_.output_shape.dot(s) + l * p_.output_shape_per_load.dot(s);
   }
 
-  //! One sample_time. Non-finite signals: state untouched, StepStatus::non_finite_input.
-  model::StepStatus advance(const Signals& sig) noexcept {
+  //! One sample_time. Non-finite signals: state untouched, NumericStatus::non_finite_input.
+  model::NumericStatus advance(const Signals& sig) noexcept {
     if (!std::isfinite(sig.current) || !std::isfinite(sig.position)) {
-      return model::StepStatus::non_finite_input;
+      return model::NumericStatus::non_finite_input;
     }
     State x = x_;
     // The shared front end on x[current_z1 .. direction], started flag x[started].
@@ -230,11 +230,11 @@ class BidirectionalLoadObserver {
       x[p_lf] -= k0 * ph1;
       x[p_ff] = std::fmax(x[p_ff] - k1 * ph1, Scalar(0));
     }
-    if (!x.allFinite()) return model::StepStatus::non_finite_result;
+    if (!x.allFinite()) return model::NumericStatus::non_finite_result;
     x_ = x;
     last_filtered_current_ = i_f;
     last_filtered_velocity_ = v;
-    return model::StepStatus::ok;
+    return model::NumericStatus::ok;
   }
 
   [[nodiscard]] const State& state() const noexcept { return x_; }  //!< see State

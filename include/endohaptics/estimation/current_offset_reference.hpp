@@ -54,19 +54,20 @@ class CurrentOffsetReference {
   [[nodiscard]] const Parameters& parameters() const noexcept { return p_; }  //!< as given
 
   //! One sample: the measured current `current` (A) and the command `command`. Non-finite input:
-  //! state untouched, StepStatus::non_finite_input (corrected() then still gives the last value).
-  [[nodiscard]] model::StepStatus advance(Scalar current, Scalar command) noexcept {
+  //! state untouched, NumericStatus::non_finite_input (corrected() then still gives the last
+  //! value).
+  [[nodiscard]] model::NumericStatus advance(Scalar current, Scalar command) noexcept {
     if (!std::isfinite(current) || !std::isfinite(command)) {
-      return model::StepStatus::non_finite_input;
+      return model::NumericStatus::non_finite_input;
     }
     State x = x_;
     x[1] += Scalar(1);
     x[0] += (current - p_.command_gain * command - x[0]) / x[1];
     const Scalar corrected = current - (x[0] - p_.reference_offset);
-    if (!x.allFinite() || !std::isfinite(corrected)) return model::StepStatus::non_finite_result;
+    if (!x.allFinite() || !std::isfinite(corrected)) return model::NumericStatus::non_finite_result;
     x_ = x;
     corrected_ = corrected;
-    return model::StepStatus::ok;
+    return model::NumericStatus::ok;
   }
   //! The last sample's current referred to the training offset, A.
   [[nodiscard]] Scalar corrected() const noexcept { return corrected_; }

@@ -19,6 +19,7 @@
 #include <utility>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/core/numeric_status.hpp"
 #include "endohaptics/core/parameter.hpp"
 #include "endohaptics/estimation/force_models_2016.hpp"
 #include "endohaptics/estimation/joint_force_model.hpp"
@@ -36,26 +37,10 @@ namespace endohaptics::estimation {
 
 using protocol::Motor;
 
-//! Outcome of `ForceEstimator::step`. On anything but `ok` the output and all internal state
-//! (model states, decimation windows, friction gates) are left untouched.
-enum class ForceStatus : std::uint8_t {
-  ok = 0,             //!< forces written
-  non_finite_input,   //!< NaN or +-Inf in position, velocity, current or setpoint
-  non_finite_result,  //!< finite input, but a model produced NaN/Inf (diverging model, overflow)
-};
-
-//! Human-readable name of a status, for logs.
-[[nodiscard]] constexpr std::string_view to_string(ForceStatus status) noexcept {
-  switch (status) {
-    case ForceStatus::ok:
-      return "ok";
-    case ForceStatus::non_finite_input:
-      return "non-finite joint state";
-    case ForceStatus::non_finite_result:
-      return "non-finite force model result";
-  }
-  return "unknown status";
-}
+//! `ForceEstimator::step` returns `NumericStatus` (core/numeric_status.hpp); on anything but `ok`
+//! the output and all internal state (model states, decimation windows, friction gates) are left
+//! untouched.
+using endohaptics::NumericStatus;
 
 //! What the estimator reads each tick for the 4 EndoWrist motors, in motor order.
 template <typename Scalar = double>
@@ -190,10 +175,10 @@ class ForceEstimator {
   //! One loop tick. Writes the estimated external force per tool joint into `forces` (roll N m,
   //! pitch and clamps N; along each joint's positive setpoint) and returns ok; otherwise leaves
   //! `forces` and all internal state untouched. Precondition: called every `loop_period`.
-  [[nodiscard]] ForceStatus step(const Input& input, Forces& forces) noexcept {
+  [[nodiscard]] NumericStatus step(const Input& input, Forces& forces) noexcept {
     if (!input.position.allFinite() || !input.velocity.allFinite() || !input.current.allFinite() ||
         !input.setpoint.allFinite()) {
-      return ForceStatus::non_finite_input;
+      return NumericStatus::non_finite_input;
     }
     std::array<JointSignals<ScalarType>, 4> signals;
     Forces current;
@@ -210,14 +195,14 @@ class ForceEstimator {
     Forces raw;
     const bool ok = [&]<std::size_t... J>(std::index_sequence<J...>) {
       return ((std::get<J>(steppers_).tick(signals[J], raw[static_cast<int>(J)]) ==
-               model::StepStatus::ok) &&
+               model::NumericStatus::ok) &&
               ...);
     }
     (std::make_index_sequence<4>{});
     if (ok) raw = raw.cwiseProduct(gain_);
     if (!ok || !raw.allFinite()) {
       restore(saved);
-      return ForceStatus::non_finite_result;
+      return NumericStatus::non_finite_result;
     }
 
     Forces gated;
@@ -228,7 +213,7 @@ class ForceEstimator {
       const auto js = static_cast<std::size_t>(j);
       forces[j] = saturation_[js].apply(deadzone_[js].apply(gated[j]));
     }
-    return ForceStatus::ok;
+    return NumericStatus::ok;
   }
 
   //! The interface of JointForceEstimator (TeleopLoop): one `step` on the decoded sbRIO
@@ -244,12 +229,12 @@ class ForceEstimator {
     input.setpoint = setpoint.template cast<ScalarType>();
     Forces tool;
     last_status_ = step(input, tool);
-    if (last_status_ != ForceStatus::ok) return false;
+    if (last_status_ != NumericStatus::ok) return false;
     force = in_motor_order(tool).template cast<double>();
     return true;
   }
   //! Status of the last `estimate` call (ok before any).
-  [[nodiscard]] ForceStatus last_status() const noexcept { return last_status_; }
+  [[nodiscard]] NumericStatus last_status() const noexcept { return last_status_; }
 
   //! `forces` (tool-joint order, as `step` writes it) in motor order, e.g. for
   //! CylindricalMapper::map_force with the same motor_order.
@@ -341,7 +326,7 @@ class ForceEstimator {
   Forces gain_;
   Forces raw_ = Forces::Zero();
   std::array<int, 4> tool_joint_of_motor_{};
-  ForceStatus last_status_ = ForceStatus::ok;
+  NumericStatus last_status_ = NumericStatus::ok;
 };
 
 //! The 2016 estimator (appendix C models, table 5.2 gates) with rate policy `Rate`.

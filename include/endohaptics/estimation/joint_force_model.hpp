@@ -59,7 +59,7 @@ concept JointForceModel = requires(M& m, const M& cm,
   { cm.force(signals) }
   noexcept->std::same_as<typename M::ScalarType>;
   { m.advance(signals) }
-  noexcept->std::same_as<model::StepStatus>;
+  noexcept->std::same_as<model::NumericStatus>;
   { cm.state() }
   noexcept->std::convertible_to<const typename M::State&>;
   { m.reset(x) }

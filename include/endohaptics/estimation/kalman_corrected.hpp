@@ -118,19 +118,19 @@ class KalmanCorrected {
     return y;
   }
   //! Measurement update with `s`, then time update; all-or-nothing.
-  [[nodiscard]] model::StepStatus advance(const Signals& s) noexcept {
+  [[nodiscard]] model::NumericStatus advance(const Signals& s) noexcept {
     const State saved = filter_.state();
     const Input u = input(s);
-    if (filter_.update(measurement(s), u) != KalmanStatus::ok ||
-        filter_.predict(u) != KalmanStatus::ok) {
+    if (filter_.update(measurement(s), u) != NumericStatus::ok ||
+        filter_.predict(u) != NumericStatus::ok) {
       filter_.reset(saved);
-      return model::StepStatus::non_finite_input;
+      return model::NumericStatus::non_finite_input;
     }
     if (!filter_.state().allFinite()) {
       filter_.reset(saved);
-      return model::StepStatus::non_finite_result;
+      return model::NumericStatus::non_finite_result;
     }
-    return model::StepStatus::ok;
+    return model::NumericStatus::ok;
   }
   [[nodiscard]] const State& state() const noexcept { return filter_.state(); }  //!< estimate
   void reset(const State& x = State::Zero()) noexcept { filter_.reset(x); }      //!< sets estimate

@@ -74,8 +74,8 @@ class OpenLoop {
   [[nodiscard]] ScalarType force(const Signals& s) const noexcept {
     return model_.output(input(s))[0];
   }
-  //! One model period with input from `s`; all-or-nothing (model::StepStatus).
-  [[nodiscard]] model::StepStatus advance(const Signals& s) noexcept {
+  //! One model period with input from `s`; all-or-nothing (model::NumericStatus).
+  [[nodiscard]] model::NumericStatus advance(const Signals& s) noexcept {
     typename Model::Output y;
     return model_.update(input(s), y);
   }

@@ -123,10 +123,10 @@ class PushLoadObserver {
     return x_[6] + g * (p_.output_offset + p_.output_slope * x_[6]);
   }
 
-  //! One sample_time. Non-finite signals: state untouched, StepStatus::non_finite_input.
-  model::StepStatus advance(const Signals& s) noexcept {
+  //! One sample_time. Non-finite signals: state untouched, NumericStatus::non_finite_input.
+  model::NumericStatus advance(const Signals& s) noexcept {
     if (!std::isfinite(s.current) || !std::isfinite(s.position)) {
-      return model::StepStatus::non_finite_input;
+      return model::NumericStatus::non_finite_input;
     }
     State x = x_;
     // The shared front end on x[0..5] (filters, previous position, direction), started flag x[9];
@@ -155,11 +155,11 @@ class PushLoadObserver {
       x[6] += k * (i_f - c * x[6] - p_.current_offset - p_.current_per_velocity * v);
       x[7] *= Scalar(1) - k * c;
     }
-    if (!x.allFinite()) return model::StepStatus::non_finite_result;
+    if (!x.allFinite()) return model::NumericStatus::non_finite_result;
     x_ = x;
     last_filtered_current_ = i_f;
     last_filtered_velocity_ = v;
-    return model::StepStatus::ok;
+    return model::NumericStatus::ok;
   }
 
   [[nodiscard]] const State& state() const noexcept { return x_; }  //!< see State

@@ -63,18 +63,18 @@ requires(Mode != RateMode::resample || ResamplableJointForceModel<M>) class Rate
   //! model period ends with this tick (decimation: with the mean of the window's signals).
   //! A memoryless model is never advanced (its state cannot reach the output). On anything but
   //! ok the caller restores a snapshot.
-  [[nodiscard]] model::StepStatus tick(const Signals& s, Scalar& force) noexcept {
+  [[nodiscard]] model::NumericStatus tick(const Signals& s, Scalar& force) noexcept {
     force = model_.force(s);
-    if (memoryless_) return model::StepStatus::ok;
+    if (memoryless_) return model::NumericStatus::ok;
     if constexpr (Mode == RateMode::decimate) {
       if (ratio_ > 1) {
         sum_ = sum_ + s;
         // Huge finite signals can overflow the window sum: refuse the tick, never keep an Inf.
         if (!std::isfinite(sum_.position) || !std::isfinite(sum_.velocity) ||
             !std::isfinite(sum_.current) || !std::isfinite(sum_.setpoint)) {
-          return model::StepStatus::non_finite_result;
+          return model::NumericStatus::non_finite_result;
         }
-        if (++count_ < ratio_) return model::StepStatus::ok;
+        if (++count_ < ratio_) return model::NumericStatus::ok;
         const Scalar inv = Scalar(1) / static_cast<Scalar>(ratio_);
         const Signals mean{sum_.position * inv, sum_.velocity * inv, sum_.current * inv,
                            sum_.setpoint * inv};
@@ -211,7 +211,7 @@ concept RatePolicyFor = JointForceModel<M> &&
     requires(typename Rate::template Stepper<M>& stepper,
              const JointSignals<typename M::ScalarType>& s, typename M::ScalarType& force) {
   { stepper.tick(s, force) }
-  noexcept->std::same_as<model::StepStatus>;
+  noexcept->std::same_as<model::NumericStatus>;
   { stepper.snapshot() }
   noexcept;
   { stepper.reset() }

@@ -13,13 +13,13 @@
 
 namespace endohaptics::estimation {
 
-//! What simulate did: every sample (StepStatus::ok, sample -1), or the first sample whose
+//! What simulate did: every sample (NumericStatus::ok, sample -1), or the first sample whose
 //! advance() failed and its status (the outputs from it on are not written).
 struct SimulationResult {
-  model::StepStatus status = model::StepStatus::ok;  //!< the failing step's status, or ok
-  Eigen::Index sample = -1;                          //!< the failing sample, or -1
+  model::NumericStatus status = model::NumericStatus::ok;  //!< the failing step's status, or ok
+  Eigen::Index sample = -1;                                //!< the failing sample, or -1
   //! True when every sample ran.
-  [[nodiscard]] bool ok() const noexcept { return status == model::StepStatus::ok; }
+  [[nodiscard]] bool ok() const noexcept { return status == model::NumericStatus::ok; }
 };
 
 //! Runs `model` from its current state over `y.size()` samples: for each k, s = signals(k), then
@@ -34,8 +34,8 @@ requires std::invocable<SignalsAt&, Eigen::Index>
         y) noexcept(noexcept(signals(Eigen::Index{}))) {
   for (Eigen::Index k = 0; k < y.size(); ++k) {
     const JointSignals<typename M::ScalarType> s = signals(k);
-    const model::StepStatus status = model.advance(s);
-    if (status != model::StepStatus::ok) return {status, k};
+    const model::NumericStatus status = model.advance(s);
+    if (status != model::NumericStatus::ok) return {status, k};
     y[k] = model.force(s);
   }
   return {};

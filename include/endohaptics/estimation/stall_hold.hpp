@@ -96,18 +96,18 @@ class StallHold {
   [[nodiscard]] Scalar force(const Signals&) const noexcept { return p_.gain * x_[2]; }
 
   //! One sample_time: filters the velocity, updates the held value while the joint moves, lags
-  //! it. Non-finite signals: state untouched, StepStatus::non_finite_input.
-  model::StepStatus advance(const Signals& s) noexcept {
+  //! it. Non-finite signals: state untouched, NumericStatus::non_finite_input.
+  model::NumericStatus advance(const Signals& s) noexcept {
     if (!std::isfinite(s.current) || !std::isfinite(s.velocity)) {
-      return model::StepStatus::non_finite_input;
+      return model::NumericStatus::non_finite_input;
     }
     State next = x_;
     next[0] += alpha_v_ * (s.velocity - next[0]);
     if (std::fabs(next[0]) > p_.velocity_threshold) next[1] = beyond_deadzone(s.current);
     next[2] += alpha_o_ * (next[1] - next[2]);
-    if (!next.allFinite()) return model::StepStatus::non_finite_result;
+    if (!next.allFinite()) return model::NumericStatus::non_finite_result;
     x_ = next;
-    return model::StepStatus::ok;
+    return model::NumericStatus::ok;
   }
 
   [[nodiscard]] const State& state() const noexcept { return x_; }  //!< (velocity, held, lagged)

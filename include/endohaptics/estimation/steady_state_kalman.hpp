@@ -12,29 +12,14 @@
 #include <type_traits>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/core/numeric_status.hpp"
 #include "endohaptics/estimation/dare.hpp"
 
 namespace endohaptics::estimation {
 
-//! Outcome of `predict` and `update`. On anything but `ok` the estimate is left untouched.
-enum class KalmanStatus : std::uint8_t {
-  ok = 0,
-  non_finite_measurement,  //!< z holds NaN or +-Inf
-  non_finite_input,        //!< u holds NaN or +-Inf
-};
-
-//! Human-readable name of a status, for logs.
-[[nodiscard]] constexpr std::string_view to_string(KalmanStatus status) noexcept {
-  switch (status) {
-    case KalmanStatus::ok:
-      return "ok";
-    case KalmanStatus::non_finite_measurement:
-      return "non-finite measurement";
-    case KalmanStatus::non_finite_input:
-      return "non-finite input";
-  }
-  return "unknown status";
-}
+//! `predict` and `update` return `NumericStatus` (core/numeric_status.hpp); on anything but `ok`
+//! the estimate is left untouched.
+using endohaptics::NumericStatus;
 
 namespace detail {
 template <typename Model, int Rows, int Cols>
@@ -130,30 +115,30 @@ class SteadyStateKalman {
   }
 
   //! Time update x <- A x + B u. Returns non_finite_input (estimate unchanged) on NaN/Inf in u.
-  [[nodiscard]] KalmanStatus predict(const Input& u) noexcept {
+  [[nodiscard]] NumericStatus predict(const Input& u) noexcept {
     if constexpr (inputs > 0) {
-      if (!u.allFinite()) return KalmanStatus::non_finite_input;
+      if (!u.allFinite()) return NumericStatus::non_finite_input;
       State next = A_ * x_;
       next.noalias() += B_ * u;
       x_ = next;
     } else {
       x_ = (A_ * x_).eval();
     }
-    return KalmanStatus::ok;
+    return NumericStatus::ok;
   }
 
   //! Measurement update x <- x + M (z - Cm x - Dm u), u the input of this sample. Returns
   //! non_finite_measurement or non_finite_input (estimate unchanged) on NaN/Inf.
-  [[nodiscard]] KalmanStatus update(const Measurement& z, const Input& u) noexcept {
-    if (!z.allFinite()) return KalmanStatus::non_finite_measurement;
+  [[nodiscard]] NumericStatus update(const Measurement& z, const Input& u) noexcept {
+    if (!z.allFinite()) return NumericStatus::non_finite_measurement;
     Measurement innovation = z;
     innovation.noalias() -= C_meas_ * x_;
     if constexpr (inputs > 0) {
-      if (!u.allFinite()) return KalmanStatus::non_finite_input;
+      if (!u.allFinite()) return NumericStatus::non_finite_input;
       innovation.noalias() -= D_meas_ * u;
     }
     x_.noalias() += gain_ * innovation;
-    return KalmanStatus::ok;
+    return NumericStatus::ok;
   }
 
   //! Current estimate: x(k|k) after `update`, x(k+1|k) after `predict`.

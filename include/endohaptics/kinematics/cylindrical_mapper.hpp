@@ -24,6 +24,7 @@
 #include <string_view>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/core/numeric_status.hpp"
 #include "endohaptics/core/parameter.hpp"
 #include "endohaptics/protocol/motor_order.hpp"
 
@@ -31,22 +32,9 @@ namespace endohaptics::kinematics {
 
 using protocol::Motor;
 
-//! Outcome of a mapping. On anything but `ok` the caller's output is left untouched.
-enum class MapperStatus : std::uint8_t {
-  ok = 0,
-  non_finite,  //!< NaN or +-Inf in the input (or an overflow to one while mapping)
-};
-
-//! Human-readable name of a status, for logs.
-[[nodiscard]] constexpr std::string_view to_string(MapperStatus status) noexcept {
-  switch (status) {
-    case MapperStatus::ok:
-      return "ok";
-    case MapperStatus::non_finite:
-      return "non-finite value";
-  }
-  return "unknown status";
-}
+//! A mapping returns `NumericStatus` (core/numeric_status.hpp); on anything but `ok` the caller's
+//! output is left untouched.
+using endohaptics::NumericStatus;
 
 //! Cylindrical coordinates of the stylus (figure 5.14).
 template <typename Scalar = double>
@@ -59,13 +47,13 @@ struct Cylindrical {
 //! What `map_position` did.
 template <typename Scalar = double>
 struct [[nodiscard]] PositionResult {
-  MapperStatus status = MapperStatus::ok;  //!< ok, or why the mapping was refused
-  std::uint8_t clamped_mask = 0;           //!< bit j: tool joint j was limited to its range
-  bool theta_held = false;                 //!< r <= min_radius: theta is the last valid one
-  Cylindrical<Scalar> coordinates{};       //!< the (theta, r, z) used; meaningful only when ok
+  NumericStatus status = NumericStatus::ok;  //!< ok, or why the mapping was refused
+  std::uint8_t clamped_mask = 0;             //!< bit j: tool joint j was limited to its range
+  bool theta_held = false;                   //!< r <= min_radius: theta is the last valid one
+  Cylindrical<Scalar> coordinates{};         //!< the (theta, r, z) used; meaningful only when ok
 
   //! True when `status` is ok (setpoints written).
-  [[nodiscard]] constexpr bool ok() const noexcept { return status == MapperStatus::ok; }
+  [[nodiscard]] constexpr bool ok() const noexcept { return status == NumericStatus::ok; }
   //! True when `joint` was limited to its range.
   [[nodiscard]] constexpr bool clamped(Motor joint) const noexcept {
     return ((clamped_mask >> static_cast<unsigned>(joint)) & 1u) != 0;
@@ -74,14 +62,14 @@ struct [[nodiscard]] PositionResult {
 
 //! What `map_force` did.
 struct [[nodiscard]] ForceResult {
-  MapperStatus status = MapperStatus::ok;  //!< ok, or why the mapping was refused
+  NumericStatus status = NumericStatus::ok;  //!< ok, or why the mapping was refused
   //! Bit k: channel k (0 clamp/radial, 1 roll/tangential, 2 pitch/vertical) was limited to
   //! `channel_limit[k]` (sign kept).
   std::uint8_t channel_limited_mask = 0;
   bool limited = false;  //!< the force was then scaled down to `force_limit` (direction kept)
 
   //! True when `status` is ok (force written).
-  [[nodiscard]] constexpr bool ok() const noexcept { return status == MapperStatus::ok; }
+  [[nodiscard]] constexpr bool ok() const noexcept { return status == NumericStatus::ok; }
 };
 
 //! Configuration of eq. 5.9 and 5.8. Defaults: the 2016 rig (docs/models/cylindrical_mapper.md
@@ -194,7 +182,7 @@ class CylindricalMapper {
   PositionResult<Scalar> map_position(const Vector3& position, MotorVector& setpoint) noexcept {
     PositionResult<Scalar> result;
     if (!position.allFinite()) {
-      result.status = MapperStatus::non_finite;
+      result.status = NumericStatus::non_finite_input;
       return result;
     }
     const Scalar r = std::hypot(position.x(), position.y());
@@ -212,7 +200,7 @@ class CylindricalMapper {
     for (std::size_t j = 0; j < p.size(); ++j) {
       const auto i = static_cast<Eigen::Index>(j);
       if (std::isnan(p[j])) {  // only 0 * inf (huge input with a zero scale) gets here
-        result.status = MapperStatus::non_finite;
+        result.status = NumericStatus::non_finite_input;
         return result;
       }
       if (p[j] < config_.lower[i]) {
@@ -240,7 +228,7 @@ class CylindricalMapper {
                         Vector3& stylus_force) const noexcept {
     ForceResult result;
     if (!motor_force.allFinite() || !std::isfinite(theta)) {
-      result.status = MapperStatus::non_finite;
+      result.status = NumericStatus::non_finite_input;
       return result;
     }
     const Scalar f_roll = motor_force[motor_of(Motor::roll)];
@@ -267,7 +255,7 @@ class CylindricalMapper {
     const Scalar c = std::cos(theta);
     Vector3 force(clamp * s + roll * c, clamp * c - roll * s, pitch);
     if (!force.allFinite()) {
-      result.status = MapperStatus::non_finite;
+      result.status = NumericStatus::non_finite_input;
       return result;
     }
     const Scalar magnitude = force.stableNorm();

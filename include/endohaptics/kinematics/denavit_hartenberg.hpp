@@ -15,6 +15,7 @@
 #include <string_view>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/core/numeric_status.hpp"
 
 namespace endohaptics::kinematics {
 
@@ -24,22 +25,9 @@ enum class JointKind : std::uint8_t {
   prismatic,  //!< d_i = d + q (m)
 };
 
-//! Outcome of a forward-kinematics call. On anything but `ok` the output is left untouched.
-enum class KinematicsStatus : std::uint8_t {
-  ok = 0,
-  non_finite,  //!< NaN or +-Inf in the joint vector
-};
-
-//! Human-readable name of a status, for logs.
-[[nodiscard]] constexpr std::string_view to_string(KinematicsStatus status) noexcept {
-  switch (status) {
-    case KinematicsStatus::ok:
-      return "ok";
-    case KinematicsStatus::non_finite:
-      return "non-finite joint value";
-  }
-  return "unknown status";
-}
+//! Forward kinematics returns `NumericStatus` (core/numeric_status.hpp); on anything but `ok` the
+//! output is left untouched.
+using endohaptics::NumericStatus;
 
 //! One row of a DH table in the convention of eq. D.1 (standard DH).
 template <typename Scalar = double>
@@ -107,20 +95,20 @@ class DhChain {
   }
 
   //! T_0^N(q) into `end`; `end` is untouched unless the result is ok.
-  [[nodiscard]] KinematicsStatus forward(const JointVector& q, Transform& end) const noexcept {
-    if (!q.allFinite()) return KinematicsStatus::non_finite;
+  [[nodiscard]] NumericStatus forward(const JointVector& q, Transform& end) const noexcept {
+    if (!q.allFinite()) return NumericStatus::non_finite_input;
     end = forward(q);
-    return KinematicsStatus::ok;
+    return NumericStatus::ok;
   }
 
   //! All frames T_0^1 ... T_0^N into `frames`; untouched unless the result is ok.
-  [[nodiscard]] KinematicsStatus forward(const JointVector& q, Frames& frames) const noexcept {
-    if (!q.allFinite()) return KinematicsStatus::non_finite;
+  [[nodiscard]] NumericStatus forward(const JointVector& q, Frames& frames) const noexcept {
+    if (!q.allFinite()) return NumericStatus::non_finite_input;
     frames[0] = link_transform(rows_[0], q[0]);
     for (std::size_t i = 1; i < frames.size(); ++i) {
       frames[i] = frames[i - 1] * link_transform(rows_[i], q[static_cast<Eigen::Index>(i)]);
     }
-    return KinematicsStatus::ok;
+    return NumericStatus::ok;
   }
 
  private:

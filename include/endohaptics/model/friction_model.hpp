@@ -17,25 +17,13 @@
 #include <type_traits>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/core/numeric_status.hpp"
 
 namespace endohaptics::model {
 
-//! Outcome of a per-tick friction call. Joints with bad data are handled, never skipped silently.
-enum class FrictionStatus : std::uint8_t {
-  ok = 0,
-  non_finite_input,  //!< NaN/Inf on some joint: its gate is closed and its outputs are 0
-};
-
-//! Human-readable name of a status, for logs.
-[[nodiscard]] constexpr std::string_view to_string(FrictionStatus status) noexcept {
-  switch (status) {
-    case FrictionStatus::ok:
-      return "ok";
-    case FrictionStatus::non_finite_input:
-      return "non-finite current, velocity or estimate";
-  }
-  return "unknown status";
-}
+//! A per-tick friction call returns `NumericStatus` (core/numeric_status.hpp): a joint with a
+//! non-finite current, velocity or estimate has its gate closed and its outputs 0, never skipped.
+using endohaptics::NumericStatus;
 
 //! Friction constants of one joint, all >= 0 (signs: docs/models/friction_model.md).
 template <typename Scalar = double>
@@ -152,13 +140,13 @@ class FrictionModel {
 
   //! |current| friction can absorb at `velocity`: Ks at standstill, Kc + F_mu |omega| when
   //! sliding. A non-finite velocity gives level 0 for that joint and `non_finite_input`.
-  [[nodiscard]] FrictionStatus breakaway_level(const Vector& velocity,
-                                               Vector& level) const noexcept {
-    FrictionStatus status = FrictionStatus::ok;
+  [[nodiscard]] NumericStatus breakaway_level(const Vector& velocity,
+                                              Vector& level) const noexcept {
+    NumericStatus status = NumericStatus::ok;
     for (int j = 0; j < N; ++j) {
       if (!std::isfinite(velocity[j])) {
         level[j] = 0;
-        status = FrictionStatus::non_finite_input;
+        status = NumericStatus::non_finite_input;
         continue;
       }
       level[j] = level_of(j, velocity[j]);
@@ -170,16 +158,16 @@ class FrictionModel {
   //! sliding; at standstill the static friction balances the applied current up to +-Ks.
   //! `external` = current - friction, the part left for external forces. Non-finite inputs give
   //! 0 on both outputs for that joint and `non_finite_input`.
-  [[nodiscard]] FrictionStatus compensate(const Vector& current, const Vector& velocity,
-                                          Vector& friction, Vector& external) const noexcept {
-    FrictionStatus status = FrictionStatus::ok;
+  [[nodiscard]] NumericStatus compensate(const Vector& current, const Vector& velocity,
+                                         Vector& friction, Vector& external) const noexcept {
+    NumericStatus status = NumericStatus::ok;
     for (int j = 0; j < N; ++j) {
       const Scalar i = current[j];
       const Scalar w = velocity[j];
       if (!std::isfinite(i) || !std::isfinite(w)) {
         friction[j] = 0;
         external[j] = 0;
-        status = FrictionStatus::non_finite_input;
+        status = NumericStatus::non_finite_input;
         continue;
       }
       const Joint& c = joints_[static_cast<std::size_t>(j)];
@@ -199,16 +187,16 @@ class FrictionModel {
   //! one closes when |current| < release_fraction * level(velocity); `feedback` = estimate where
   //! open, else 0. A joint with a non-finite current, velocity or estimate is closed, its
   //! feedback is 0 and the result is `non_finite_input`; the other joints are unaffected.
-  [[nodiscard]] FrictionStatus update(const Vector& current, const Vector& velocity,
-                                      const Vector& estimate, Vector& feedback) noexcept {
-    FrictionStatus status = FrictionStatus::ok;
+  [[nodiscard]] NumericStatus update(const Vector& current, const Vector& velocity,
+                                     const Vector& estimate, Vector& feedback) noexcept {
+    NumericStatus status = NumericStatus::ok;
     for (int j = 0; j < N; ++j) {
       const auto js = static_cast<std::size_t>(j);
       if (!std::isfinite(current[j]) || !std::isfinite(velocity[j]) ||
           !std::isfinite(estimate[j])) {
         open_[js] = false;
         feedback[j] = 0;
-        status = FrictionStatus::non_finite_input;
+        status = NumericStatus::non_finite_input;
         continue;
       }
       const Scalar magnitude = std::abs(current[j]);

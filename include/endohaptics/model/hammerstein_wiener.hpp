@@ -32,7 +32,7 @@ concept LinearBlock = requires(L& linear, const L& clinear, const typename L::In
   { linear.step(u) }
   noexcept->std::same_as<typename L::Output>;
   { linear.update(u, y) }
-  noexcept->std::same_as<StepStatus>;
+  noexcept->std::same_as<NumericStatus>;
   { clinear.output(u) }
   noexcept->std::same_as<typename L::Output>;
   { linear.reset(x) }
@@ -102,11 +102,11 @@ class HammersteinWiener {
 
   //! Checked tick: refuses a non-finite input (before f) or a non-finite linear result; on
   //! anything but `ok` the state and `y` are untouched.
-  [[nodiscard]] StepStatus update(const Input& u, Output& y) noexcept {
-    if (!detail::all_finite(u)) return StepStatus::non_finite_input;
+  [[nodiscard]] NumericStatus update(const Input& u, Output& y) noexcept {
+    if (!detail::all_finite(u)) return NumericStatus::non_finite_input;
     Output linear_y;
-    const StepStatus status = linear_.update(input_nl_.apply(u), linear_y);
-    if (status == StepStatus::ok) y = output_nl_.apply(linear_y);
+    const NumericStatus status = linear_.update(input_nl_.apply(u), linear_y);
+    if (status == NumericStatus::ok) y = output_nl_.apply(linear_y);
     return status;
   }
 

@@ -16,6 +16,7 @@
 #include <type_traits>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/core/numeric_status.hpp"
 #include "endohaptics/model/state_space.hpp"
 
 namespace endohaptics::model {
@@ -92,23 +93,9 @@ template <typename Scalar>
   return CSS(A, B, C, D);
 }
 
-//! Outcome of a tick.
-enum class HumanArmStatus : std::uint8_t {
-  ok = 0,
-  non_finite_input,  //!< NaN/Inf input replaced (force by 0 N; motion by the last valid
-                     //!< position at rest); the state stays finite
-};
-
-//! Human-readable name of a status, for logs.
-[[nodiscard]] constexpr std::string_view to_string(HumanArmStatus status) noexcept {
-  switch (status) {
-    case HumanArmStatus::ok:
-      return "ok";
-    case HumanArmStatus::non_finite_input:
-      return "non-finite force or motion replaced";
-  }
-  return "unknown status";
-}
+//! A tick returns `NumericStatus` (core/numeric_status.hpp); a non-finite force or motion is
+//! replaced (force by 0 N, motion by the last valid position at rest) and the state stays finite.
+using endohaptics::NumericStatus;
 
 //! One axis of the figure 5.3 arm, discretised (zero-order hold) at the loop sample time. Both
 //! causalities act on the same hand state (x_h, v_h), so a simulation may switch between them
@@ -158,12 +145,12 @@ class HumanArmModel {
 
   //! Admittance tick: the device pushes the hand with `force` (N, held over the tick); writes the
   //! stylus `position` (m) and `velocity` (m/s) at this tick, then advances one sample.
-  [[nodiscard]] HumanArmStatus apply_force(Scalar force, Scalar& position,
-                                           Scalar& velocity) noexcept {
-    HumanArmStatus status = HumanArmStatus::ok;
+  [[nodiscard]] NumericStatus apply_force(Scalar force, Scalar& position,
+                                          Scalar& velocity) noexcept {
+    NumericStatus status = NumericStatus::ok;
     if (!std::isfinite(force)) {
       force = Scalar(0);
-      status = HumanArmStatus::non_finite_input;
+      status = NumericStatus::non_finite_input;
     }
     if (!admittance_active_) {
       // Coming from impedance ticks: the stylus went on from the last imposed motion (held).
@@ -182,13 +169,13 @@ class HumanArmModel {
 
   //! Impedance tick: the device imposes the stylus `position` (m) and `velocity` (m/s), held
   //! over the tick; writes the force F_h (N) it exerts on the hand at this tick, then advances.
-  [[nodiscard]] HumanArmStatus impose_motion(Scalar position, Scalar velocity,
-                                             Scalar& force) noexcept {
-    HumanArmStatus status = HumanArmStatus::ok;
+  [[nodiscard]] NumericStatus impose_motion(Scalar position, Scalar velocity,
+                                            Scalar& force) noexcept {
+    NumericStatus status = NumericStatus::ok;
     if (!std::isfinite(position) || !std::isfinite(velocity)) {
       position = admittance_active_ ? admittance_.state()[0] : last_position_;
       velocity = Scalar(0);
-      status = HumanArmStatus::non_finite_input;
+      status = NumericStatus::non_finite_input;
     }
     if (admittance_active_) {
       impedance_.reset(admittance_.state().template tail<2>());
@@ -247,26 +234,26 @@ class HumanArm3 {
 
   //! Admittance tick on every axis: force (N) in, stylus position (m) and velocity (m/s) out.
   //! Returns `non_finite_input` if any axis replaced a non-finite force.
-  [[nodiscard]] HumanArmStatus apply_force(const Vector& force, Vector& position,
-                                           Vector& velocity) noexcept {
-    HumanArmStatus status = HumanArmStatus::ok;
+  [[nodiscard]] NumericStatus apply_force(const Vector& force, Vector& position,
+                                          Vector& velocity) noexcept {
+    NumericStatus status = NumericStatus::ok;
     for (int i = 0; i < 3; ++i) {
       if (axes_[static_cast<std::size_t>(i)].apply_force(force[i], position[i], velocity[i]) !=
-          HumanArmStatus::ok) {
-        status = HumanArmStatus::non_finite_input;
+          NumericStatus::ok) {
+        status = NumericStatus::non_finite_input;
       }
     }
     return status;
   }
 
   //! Impedance tick on every axis: stylus position (m) and velocity (m/s) in, force (N) out.
-  [[nodiscard]] HumanArmStatus impose_motion(const Vector& position, const Vector& velocity,
-                                             Vector& force) noexcept {
-    HumanArmStatus status = HumanArmStatus::ok;
+  [[nodiscard]] NumericStatus impose_motion(const Vector& position, const Vector& velocity,
+                                            Vector& force) noexcept {
+    NumericStatus status = NumericStatus::ok;
     for (int i = 0; i < 3; ++i) {
       if (axes_[static_cast<std::size_t>(i)].impose_motion(position[i], velocity[i], force[i]) !=
-          HumanArmStatus::ok) {
-        status = HumanArmStatus::non_finite_input;
+          NumericStatus::ok) {
+        status = NumericStatus::non_finite_input;
       }
     }
     return status;

@@ -17,6 +17,7 @@
 #include <type_traits>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/core/numeric_status.hpp"
 #include "endohaptics/model/dense_numerics.hpp"
 
 namespace endohaptics::model {
@@ -61,25 +62,9 @@ bool same_sample_time(Scalar a, Scalar b) noexcept {
 
 }  // namespace detail
 
-//! Outcome of a checked tick (`update`). On anything but `ok` state and output are untouched.
-enum class StepStatus : std::uint8_t {
-  ok = 0,
-  non_finite_input,   //!< NaN or +-Inf in the input vector
-  non_finite_result,  //!< finite input, but the output or next state overflowed (diverging model)
-};
-
-//! Human-readable name of a status, for logs.
-[[nodiscard]] constexpr std::string_view to_string(StepStatus status) noexcept {
-  switch (status) {
-    case StepStatus::ok:
-      return "ok";
-    case StepStatus::non_finite_input:
-      return "non-finite input";
-    case StepStatus::non_finite_result:
-      return "non-finite output or state";
-  }
-  return "unknown status";
-}
+//! A checked tick (`update`) returns `NumericStatus` (core/numeric_status.hpp); on anything but
+//! `ok` state and output are untouched.
+using endohaptics::NumericStatus;
 
 namespace detail {
 
@@ -221,17 +206,17 @@ class StateSpace {
   //! Checked tick: like `step`, but refuses a non-finite input or result. Writes y(k) into `y`
   //! and advances only on `ok`; otherwise state and `y` are untouched.
   //! Precondition: u has `input_size()` entries.
-  [[nodiscard]] StepStatus update(const Input& u, Output& y) noexcept {
-    if (!detail::all_finite(u)) return StepStatus::non_finite_input;
+  [[nodiscard]] NumericStatus update(const Input& u, Output& y) noexcept {
+    if (!detail::all_finite(u)) return NumericStatus::non_finite_input;
     const Output y_now = output(u);
     State next = A_ * x_;
     if constexpr (Nu != 0) next.noalias() += B_ * u;
     if (!detail::all_finite(y_now) || !detail::all_finite(next)) {
-      return StepStatus::non_finite_result;
+      return NumericStatus::non_finite_result;
     }
     y = y_now;
     x_ = next;
-    return StepStatus::ok;
+    return NumericStatus::ok;
   }
 
   //! Steps once per input column from the current state (like scipy.signal.dlsim) and returns

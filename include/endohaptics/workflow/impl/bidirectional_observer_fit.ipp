@@ -143,7 +143,7 @@ ENDOHAPTICS_DECL BidirectionalObserverFit fit_bidirectional_load_observer(
                                    Eigen::MatrixXd(d.current.size(), N), 0.0};
     for (Eigen::Index k = 0; k < d.current.size(); ++k) {
       const estimation::JointSignals<double> s{d.position[k], 0.0, d.current[k], 0.0};
-      if (m.advance(s) != model::StepStatus::ok) {
+      if (m.advance(s) != model::NumericStatus::ok) {
         ENDOHAPTICS_THROW(Error("fit_bidirectional_load_observer: non-finite signal at sample " +
                                 std::to_string(k)));
       }

@@ -22,7 +22,7 @@ ENDOHAPTICS_DECL Eigen::VectorXd referred_current(const LoadObserverData& d,
   estimation::CurrentOffsetReference<double> r(*reference);
   Eigen::VectorXd out(d.current.size());
   for (Eigen::Index k = 0; k < d.current.size(); ++k) {
-    if (r.advance(d.current[k], d.command[k]) != model::StepStatus::ok) {
+    if (r.advance(d.current[k], d.command[k]) != model::NumericStatus::ok) {
       ENDOHAPTICS_THROW(Error(std::string(where) + ": non-finite current or command at sample " +
                               std::to_string(k)));
     }
@@ -129,7 +129,7 @@ fit_push_load_observer(std::span<const LoadObserverData> measured,
     const double w = 1.0 / static_cast<double>(d.current.size() - skip);
     for (Eigen::Index k = 0; k < d.current.size(); ++k) {
       const estimation::JointSignals<double> s{d.position[k], 0.0, d.current[k], 0.0};
-      if (m.advance(s) != model::StepStatus::ok) {
+      if (m.advance(s) != model::NumericStatus::ok) {
         ENDOHAPTICS_THROW(
             Error("fit_push_load_observer: non-finite signal at sample " + std::to_string(k)));
       }
@@ -224,7 +224,7 @@ fit_push_load_observer(std::span<const LoadObserverData> measured,
       estimation::PushLoadObserver<double> m(r);
       for (Eigen::Index k = 0; k < d.current.size(); ++k) {
         const estimation::JointSignals<double> s{d.position[k], 0.0, d.current[k], 0.0};
-        if (m.advance(s) != model::StepStatus::ok) {
+        if (m.advance(s) != model::NumericStatus::ok) {
           return std::pair{r, std::numeric_limits<double>::infinity()};
         }
         if (k < skip) continue;
