@@ -365,6 +365,7 @@ TEST_CASE("static gain baseline: y = D u + c by least squares, c as a constant s
                                                  {{"u1", ""}, {"u2", ""}}, {{"y", ""}}, options);
   const files::ModelFile& model = r.chosen().model;
   CHECK(r.chosen().method == "static");
+  CHECK(r.chosen().kind == wf::Method::static_gain);
   CHECK(model.state_space.D()(0, 0) == doctest::Approx(2.0));
   CHECK(model.state_space.D()(0, 1) == doctest::Approx(-1.0));
   CHECK(model.state_space.state()[0] == doctest::Approx(0.5));
@@ -381,6 +382,7 @@ TEST_CASE("static gain baseline: y = D u + c by least squares, c as a constant s
   const wf::WorkflowResult dz = wf::identify_logs(logs, for_scoring(logs, sel),
                                                   {{"u1", ""}, {"u2", ""}}, {{"y", ""}}, options);
   CHECK(dz.chosen().method == "static + dead zone");
+  CHECK(dz.chosen().kind == wf::Method::static_gain);
   CHECK(dz.chosen().model.input_nonlinearity[0].upper < 1e-3);
   CHECK(dz.chosen().mean_fit > 99.9);
 }

@@ -1,0 +1,183 @@
+#include "endohaptics/workflow/identify_request.hpp"
+
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "endohaptics/workflow/replay_request.hpp"
+#include "test_support.hpp"
+
+namespace workflow_identify_request_test {
+
+using endohaptics::test::message_of;
+using endohaptics::test::TempDir;
+using endohaptics::test::write_text;
+
+namespace {
+
+namespace wf = endohaptics::workflow;
+namespace files = endohaptics::files;
+using wf::Method;
+
+// y(k+1) = 0.8 y(k) + 0.2 u(k) + 0.05 u(k-1), u random levels held 1..10 samples of 10 ms:
+// a first-order lag a static map cannot follow. "time,u,y" CSV, full precision.
+std::string lag_csv(int rows, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> level(-1.0, 1.0);
+  std::uniform_int_distribution<int> hold(1, 10);
+  std::ostringstream out;
+  out.precision(17);
+  out << "time,u,y\n";
+  double y = 0.0, u = 0.0, u_prev = 0.0;
+  int left = 0;
+  for (int k = 0; k < rows; ++k) {
+    if (left-- == 0) {
+      u = level(rng);
+      left = hold(rng);
+    }
+    out << 0.01 * k << ',' << u << ',' << y << '\n';
+    y = 0.8 * y + 0.2 * u + 0.05 * u_prev;
+    u_prev = u;
+  }
+  return out.str();
+}
+
+wf::IdentifyRequest lag_request(const TempDir& dir) {
+  write_text(dir.path() / "a.csv", lag_csv(600, 1));
+  write_text(dir.path() / "b.csv", lag_csv(600, 2));
+  wf::IdentifyRequest q;
+  q.logs = {(dir.path() / "a.csv").string(), (dir.path() / "b.csv").string()};
+  q.format = "csv";
+  q.inputs = {"u"};
+  q.outputs = {"y"};
+  q.method = "moesp,static";
+  q.max_order = 3;
+  return q;
+}
+
+}  // namespace
+
+TEST_CASE("identify methods: one name table, --method lists, the subspace and joint kinds") {
+  for (const wf::MethodName& m : wf::method_names) {
+    CHECK(wf::to_string(m.method) == m.name);
+    CHECK(wf::parse_methods(m.name) == std::vector<Method>{m.method});
+  }
+  CHECK(wf::parse_methods("best,static,stall_hold") ==
+        std::vector<Method>{Method::n4sid, Method::moesp, Method::cva, Method::static_gain,
+                            Method::stall_hold});
+  CHECK(wf::weighting_of(Method::cva) == endohaptics::identification::Weighting::cva);
+  CHECK_FALSE(wf::weighting_of(Method::static_gain).has_value());
+  CHECK(wf::method_of(endohaptics::identification::Weighting::n4sid) == Method::n4sid);
+  CHECK(wf::joint_kind_of(Method::push_load_observer) == files::ModelKind::push_load_observer);
+  CHECK_FALSE(wf::joint_kind_of(Method::moesp).has_value());
+  const std::string bad = message_of([] { (void)wf::parse_methods("moesp,mosep"); });
+  CHECK(bad.find("--method moesp,mosep: unknown method \"mosep\"") == 0);
+  CHECK(bad.find("bidirectional_load_observer") != std::string::npos);
+  CHECK(message_of([] { (void)wf::parse_methods("moesp,"); }).find("unknown method \"\"") !=
+        std::string::npos);
+}
+
+TEST_CASE("run_identify: a request on two logs of a first-order lag -> a report and its model") {
+  const TempDir dir;
+  const wf::IdentifyRequest q = lag_request(dir);
+  std::vector<std::string> events;
+  const wf::IdentifyReport r = wf::run_identify(
+      q,
+      {.text = [&](const std::string& s) { events.push_back("text " + s.substr(0, 4)); },
+       .prepared =
+           [&](const wf::IdentifyProgress& p) {
+             events.push_back("prepared " + std::to_string(p.fit_logs.size()));
+           },
+       .subspace_fitted =
+           [&](const wf::IdentifyProgress& p) {
+             events.push_back("subspace " + std::to_string(p.subspace_result().candidates.size()));
+           }});
+  // Progress in the order it is made: each log's summary, the grids, the subspace family.
+  CHECK(events == std::vector<std::string>{"text " + q.logs[0].substr(0, 4),
+                                           "text " + q.logs[1].substr(0, 4), "prepared 2",
+                                           "subspace 2"});
+  // Resolved: the csv format has no defaults but the order (auto) and the median step as Ts.
+  CHECK(r.selection.format == files::LogFormat::csv);
+  CHECK(r.sample_time == doctest::Approx(0.01));
+  CHECK(r.options.order == 0);
+  CHECK(r.options.candidates == std::vector{endohaptics::identification::Weighting::moesp});
+  CHECK(r.options.static_gain);
+  CHECK(r.joint_kinds.empty());
+  // The candidates carry their method as a type; the lag beats the static map.
+  const wf::WorkflowResult& s = r.subspace_result();
+  REQUIRE(s.candidates.size() == 2);
+  CHECK(s.candidates[0].kind == Method::moesp);
+  CHECK(s.candidates[1].kind == Method::static_gain);
+  CHECK(s.chosen().kind == Method::moesp);
+  CHECK(s.candidates[0].mean_fit > s.candidates[1].mean_fit + 10.0);
+  CHECK(r.choice.family == "moesp");
+  CHECK_FALSE(r.joint_chosen());
+  CHECK(r.choice.model.state_space.state_size() >= 1);
+  REQUIRE(r.choice.files.size() == 2);
+  REQUIRE(r.oracle.size() == 2);
+  CHECK(r.mean_fit > 95.0);
+  CHECK(r.mean_fit ==
+        doctest::Approx(0.5 * (r.choice.files[0].mean_fit() + r.choice.files[1].mean_fit())));
+  CHECK(r.mean_rmse < 0.05);
+  CHECK_NOTHROW(wf::check_scores(r));
+  const std::string& notes = r.model.provenance.notes;
+  CHECK(notes.find("preprocessing: lowpass_hz=0") == 0);
+  CHECK(notes.find("x0 steady, warm-up 0.5 s") != std::string::npos);
+  CHECK(notes.find("chosen: moesp\ntool: endohaptics-identify") != std::string::npos);
+
+  // The model it wrote, replayed on the same logs: the same causal scores (run_replay takes the
+  // preprocessing the model file records).
+  const auto model_path = dir.path() / "model.json";
+  files::save_model(model_path, r.model);
+  wf::ReplayRequest replay;
+  replay.model = model_path.string();
+  replay.logs = q.logs;
+  replay.format = "csv";
+  int scored = 0;
+  const wf::ReplayReport rr = wf::run_replay(
+      replay, {.scored = [&](const wf::ReplayReport&, const wf::FileComparison&) { ++scored; }});
+  CHECK(scored == 2);
+  CHECK(rr.causal());
+  CHECK(rr.recorded);
+  CHECK(rr.selection.inputs == std::vector<std::string>{"u"});
+  CHECK(rr.mean_fit == doctest::Approx(r.mean_fit).epsilon(1e-9));
+  CHECK(rr.mean_rmse == doctest::Approx(r.mean_rmse).epsilon(1e-9));
+}
+
+TEST_CASE("run_identify and run_replay: bad requests name the option") {
+  const TempDir dir;
+  wf::IdentifyRequest q = lag_request(dir);
+  q.x0 = "oracle";
+  CHECK(message_of([&] { (void)wf::run_identify(q); }).starts_with("--x0 must be steady or zero"));
+  q = lag_request(dir);
+  q.method = "stall_hold";  // a joint model needs (current, velocity)
+  CHECK(message_of([&] {
+          (void)wf::run_identify(q);
+        }).starts_with("--method stall_hold: joint models need 1 output"));
+  q = lag_request(dir);
+  q.inputs.clear();
+  CHECK(message_of([&] { (void)wf::run_identify(q); }) ==
+        "--format csv needs --input and --output column names");
+  q = lag_request(dir);
+  q.order = "0";
+  CHECK(message_of([&] { (void)wf::run_identify(q); }).find("--order") != std::string::npos);
+
+  wf::ReplayRequest replay;
+  replay.model = "preset:yaw2016";
+  replay.logs = q.logs;
+  replay.format = "csv";
+  replay.inputs = {"u"};  // the preset takes current and velocity
+  CHECK(message_of([&] {
+          (void)wf::run_replay(replay);
+        }).starts_with("preset:yaw2016 has 2 input(s) (current, velocity) and 1 output(s)"));
+  replay.inputs = {"u", "u"};
+  replay.outputs = {"y"};
+  replay.offset = "mean";  // whole-file offsets are for the oracle score only
+  CHECK(message_of([&] { (void)wf::run_replay(replay); }).starts_with("--offset, --input-offset"));
+}
+
+}  // namespace workflow_identify_request_test
