@@ -370,7 +370,7 @@ TEST_CASE("magnitude limit scales the force and keeps its direction") {
 }
 
 TEST_CASE("per-channel limits: one wrong joint estimate cannot crowd out the others") {
-  // Issue 14: the worksheet saw a spurious ~10 N pitch estimate. With only the shared 2.5 N cap,
+  // The worksheet saw a spurious ~10 N pitch estimate. With only the shared 2.5 N cap,
   // (clamp 1, pitch 10) N scales to 2.5 / sqrt(101) = 0.249 of itself: the clamp feedback the
   // operator needs drops to 0.25 N. Limited per channel first (1.4 N), nothing is shared-scaled.
   Mapper mapper;

@@ -191,7 +191,7 @@ TEST_CASE("Geomagic Touch preset: single joints at 90 degrees worked out by hand
 }
 
 TEST_CASE("Touch preset: the rest pose maps to mid-range setpoints through the default chain") {
-  // Issue 14: frame 0 must be the mapper's frame (origin on the waist axis at the desk, x towards
+  // Frame 0 must be the mapper's frame (origin on the waist axis at the desk, x towards
   // the operator, z up). Rest pose = stylus straight ahead where the 2016 eq. 5.9 puts pitch and
   // clamps mid-range: r = 0.7 / 5.384 = 0.130015 m, z = 0.54 / 3.93 = 0.137405 m; the gimbal
   // centre is then z - d1 = 0.012405 m above the shoulder (d1 = 0.125 m, URDF). Joint angles by

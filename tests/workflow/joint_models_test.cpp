@@ -1,4 +1,4 @@
-// The joint force models in the identify/replay workflow (issue 15): simulation and causal
+// The joint force models in the identify/replay workflow: simulation and causal
 // scoring of model files of kind stall_hold / push_load_observer / bidirectional_load_observer,
 // their fit from prepared logs,
 // the family choice by inner cross-validation, and the formats' defaults.
