@@ -13,6 +13,8 @@
 
 #include "endohaptics/estimation/any_joint_force_model.hpp"
 #include "endohaptics/estimation/bidirectional_load_observer.hpp"
+#include "endohaptics/estimation/clamp_2016_as_run.hpp"
+#include "endohaptics/estimation/clamp_presets.hpp"
 #include "endohaptics/estimation/force_models_2016.hpp"
 #include "endohaptics/estimation/joint_force_model.hpp"
 #include "endohaptics/estimation/push_load_observer.hpp"
@@ -24,7 +26,7 @@ namespace estimation_joint_force_model_conformance_test {
 namespace est = endohaptics::estimation;
 using endohaptics::model::NumericStatus;
 
-// The bridge's clamp model type (files::ClampForceModel), holding an observer.
+// The bridge's clamp model type (estimation::ClampForceModel), holding an observer.
 using AnyClamp =
     est::AnyJointForceModel<est::ClampModel2016<double>, est::StallHold<double>,
                             est::PushLoadObserver<double>, est::BidirectionalLoadObserver<double>>;
@@ -80,6 +82,20 @@ struct Factory<est::RollModel2016<double>> {
   static est::RollModel2016<double> make() { return est::models_2016<double>().roll; }
 };
 template <>
+struct Factory<est::Clamp2016AsRun<double>> {
+  static est::Clamp2016AsRun<double> make() { return est::Clamp2016AsRun<double>(); }
+};
+template <>
+struct Factory<est::Clamp2016AsRun<float>> {
+  static est::Clamp2016AsRun<float> make() { return est::Clamp2016AsRun<float>(); }
+};
+template <>
+struct Factory<est::PresetClampModel> {
+  static est::PresetClampModel make() {
+    return est::preset_force_models(est::ClampPreset::clamp2016_as_run).clamp1;
+  }
+};
+template <>
 struct Factory<AnyClamp> {
   static AnyClamp make() {
     return AnyClamp(Factory<est::BidirectionalLoadObserver<double>>::make());
@@ -119,7 +135,8 @@ std::vector<typename M::ScalarType> run(
 #define ENDOHAPTICS_JOINT_FORCE_MODELS                                          \
   est::StallHold<double>, est::StallHold<float>, est::PushLoadObserver<double>, \
       est::BidirectionalLoadObserver<double>, est::ClampModel2016<double>,      \
-      est::RollModel2016<double>, AnyClamp
+      est::RollModel2016<double>, AnyClamp, est::Clamp2016AsRun<double>,        \
+      est::Clamp2016AsRun<float>, est::PresetClampModel
 
 TEST_CASE_TEMPLATE("joint force models: a non-finite signal is refused, the state untouched", M,
                    ENDOHAPTICS_JOINT_FORCE_MODELS) {
