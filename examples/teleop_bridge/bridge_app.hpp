@@ -27,6 +27,7 @@
 #include <endohaptics/teleop/tick_recorder.hpp>
 #include <endohaptics/transport/secure_transport.hpp>
 #include <endohaptics/transport/udp_transport.hpp>
+#include <endohaptics/workflow/bridge_assembly.hpp>
 #include <endohaptics/workflow/command_line.hpp>
 #include <memory>
 #include <optional>
@@ -104,18 +105,23 @@ inline tp::LinkEvidence evidence(bool v2, const protocol::SecureCounters& c, std
 }
 
 // Ranges of the numeric options (stated in --help; examples::number_in refuses the rest).
-constexpr double min_rate_hz = 1.0;
-constexpr double max_rate_hz = 100000.0;
+constexpr double min_rate_hz = endohaptics::workflow::bridge_min_rate_hz;
+constexpr double max_rate_hz = endohaptics::workflow::bridge_max_rate_hz;
 constexpr double max_duration_s = 1e7;  // ~116 days; 0 runs until SIGINT
 // Setpoints a v2 answer may lag: what the session layer can look back over (16 s at 1 kHz).
 constexpr int max_answer_lag = static_cast<int>(protocol::packet_history) - 1;
 
-// The longest an answer may take on this link: --max-answer-lag + 1 periods, plus the activation
-// allowance. It bounds the wait for a motor to report active, and it is the round trip a v2
-// console asks the robot side to grant (a setpoint older than that is never obeyed).
+// The longest an answer may take on this link (workflow::bridge_answer_allowance).
 inline double answer_allowance_s(const Options& opt, double tick_s) {
-  return static_cast<double>(opt.max_answer_lag + 1) * tick_s +
-         tp::SafetyConfig{}.activation_timeout;
+  return endohaptics::workflow::bridge_answer_allowance(opt.max_answer_lag, tick_s);
+}
+
+// The loop's settings from the options (workflow/bridge_assembly.hpp assembles the loop).
+inline endohaptics::workflow::BridgeLoopSettings loop_settings(const Options& opt) {
+  return {.rate = opt.rate,
+          .tdpa = opt.passivity == "tdpa",
+          .passivity_round_trip_ms = opt.passivity_round_trip,
+          .max_answer_lag = opt.max_answer_lag};
 }
 
 inline std::pair<std::string, std::uint16_t> parse_endpoint(const std::string& s,
@@ -144,58 +150,11 @@ int run_loop(Transport& transport, Device& device, endohaptics::SteadyClock& clo
              const Options& opt, const files::BridgeConfig& cfg, const std::string& host,
              std::uint16_t port, Observer& observer) {
   // The 2016 models run at their own rates (rate::Decimate) on a 1 kHz grid; PacedEstimator
-  // keeps that grid whatever the loop rate (--rate max) and through lost packets.
-  // The clamp model file may be of any kind the library runs (files::ClampForceModel).
-  const files::BridgeForceModels models = files::bridge_force_models(cfg);
-  auto settings = files::bridge_estimator_settings(cfg, models);
-  settings.loop_period = 1e-3;
-  files::BridgeForceEstimator estimator(models, settings);
-  est::PacedEstimator paced(estimator, clock, std::chrono::milliseconds(1));
-  endohaptics::kinematics::CylindricalMapper<> mapper(cfg.mapping);
-
-  tp::TeleopLoopConfig loop_config = cfg.loop;  // safety and receive timeout from --config
-  if (opt.rate == "max") {
-    loop_config.period = nanoseconds(0);
-  } else {
-    const double hz =
-        endohaptics::workflow::parse_number(opt.rate, "--rate", min_rate_hz, max_rate_hz);
-    // A lost link reaches the safe state after max_consecutive_misses + 1 missed periods, within
-    // TeleopLoopConfig::max_watchdog_time: that bounds the rate from below.
-    const double watchdog_s =
-        std::chrono::duration<double>(tp::TeleopLoopConfig::max_watchdog_time).count();
-    const double slowest =
-        static_cast<double>(loop_config.safety.max_consecutive_misses + 1) / watchdog_s;
-    if (hz < slowest) {
-      throw endohaptics::Error(fmt::format(
-          "--rate {}: at this rate {} missed periods (safety.max_consecutive_misses + 1) take "
-          "{:.0f} ms, longer than the {:.0f} ms a lost link may take to reach the safe state; use "
-          "--rate {} or more, or a lower safety.max_consecutive_misses",
-          opt.rate, loop_config.safety.max_consecutive_misses + 1,
-          1e3 * (loop_config.safety.max_consecutive_misses + 1) / hz, 1e3 * watchdog_s,
-          std::ceil(slowest)));
-    }
-    loop_config.period = nanoseconds(static_cast<std::int64_t>(1e9 / hz + 0.5));
-  }
-  // A motor enabled must be reported active within the activation timeout, or the robot is
-  // not obeying; on a link whose answers lag (--max-answer-lag) that includes the round trip.
-  const double tick_s =
-      std::chrono::duration<double>(loop_config.period.count() > 0 ? loop_config.period
-                                                                   : std::chrono::milliseconds(1))
-          .count();
-  loop_config.safety.activation_timeout =
-      std::min(tp::SafetyBounds::max_activation_timeout,
-               std::max(loop_config.safety.activation_timeout, answer_allowance_s(opt, tick_s)));
-  if (opt.passivity == "tdpa") {  // the robot port is booked one round trip late, in ticks
-    loop_config.passivity.mode = tp::PassivityMode::tdpa;
-    const double period_ms =
-        std::chrono::duration<double, std::milli>(loop_config.max_tick_dt()).count();
-    loop_config.passivity.round_trip_ticks =
-        static_cast<int>(std::lround(opt.passivity_round_trip / period_ms));
-    // Book only the joint force the mapping renders unclipped, so the observer's operator port
-    // is the force felt.
-    loop_config.passivity.force_limit = mapper.unclipped_joint_force();
-  }
-  tp::TeleopLoop loop(transport, device, paced, mapper, clock, loop_config);
+  // keeps that grid whatever the loop rate (--rate max) and through lost packets. The clamp model
+  // file may be of any kind the library runs (estimation::ClampForceModel).
+  endohaptics::workflow::BridgeAssembly bridge(transport, device, clock, cfg, loop_settings(opt));
+  auto& loop = bridge.loop();
+  const auto& paced = bridge.paced();
 
   // Per-tick log and per-second windows leave the loop thread through lock-free rings.
   std::unique_ptr<tp::TickRecorder> recorder;

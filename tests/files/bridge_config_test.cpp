@@ -352,7 +352,8 @@ TEST_CASE("estimator.clamp_model loads an identified model file, relative to the
   write_text(dir.path() / "bridge.json", R"({"estimator": {"clamp_model": "clamp.json"}})");
   const files::BridgeConfig c = files::load_bridge_config(dir.path() / "bridge.json");
   CHECK(c.clamp_model == dir.path() / "clamp.json");
-  const auto models = files::bridge_force_models(c);
+  const auto models =
+      endohaptics::estimation::bridge_force_models(files::load_clamp_force_model(c.clamp_model));
   REQUIRE(models.clamp1.get<endohaptics::estimation::ClampModel2016<double>>() != nullptr);
   REQUIRE(models.clamp2.get<endohaptics::estimation::ClampModel2016<double>>() != nullptr);
   CHECK(models.clamp1.get<endohaptics::estimation::ClampModel2016<double>>()
@@ -365,7 +366,7 @@ TEST_CASE("estimator.clamp_model loads an identified model file, relative to the
             .input_nonlinearity()
             .channel(0)
             .upper() == 0.3);
-  CHECK(files::bridge_force_models(files::BridgeConfig{})
+  CHECK(endohaptics::estimation::bridge_force_models()
             .clamp1.get<endohaptics::estimation::ClampModel2016<double>>()
             ->model()
             .input_nonlinearity()
@@ -408,12 +409,13 @@ TEST_CASE("estimator.clamp_model of a lower order runs in the bridge's 6 states,
   file.output_nonlinearity = {{}};
   files::save_model(dir.path() / "clamp.json", file);
   write_text(dir.path() / "bridge.json", R"({"estimator": {"clamp_model": "clamp.json"}})");
-  const auto models =
-      files::bridge_force_models(files::load_bridge_config(dir.path() / "bridge.json"));
+  const auto models = endohaptics::estimation::bridge_force_models(files::load_clamp_force_model(
+      files::load_bridge_config(dir.path() / "bridge.json").clamp_model));
   REQUIRE(models.clamp1.get<endohaptics::estimation::ClampModel2016<double>>() != nullptr);
   const auto& linear =
       models.clamp1.get<endohaptics::estimation::ClampModel2016<double>>()->model().linear();
-  static_assert(std::remove_cvref_t<decltype(linear)>::states == files::bridge_clamp_states);
+  static_assert(std::remove_cvref_t<decltype(linear)>::states ==
+                endohaptics::estimation::bridge_clamp_states);
   CHECK(linear.A().topLeftCorner<2, 2>() == A);
   CHECK(linear.A().rightCols<4>().isZero());
   CHECK(linear.A().bottomRows<4>().isZero());

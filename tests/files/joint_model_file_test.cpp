@@ -256,7 +256,7 @@ TEST_CASE(
   write_text(dir.path() / "referred.json", referred.dump());
   write_text(dir.path() / "bridge.json", R"({"estimator": {"clamp_model": "referred.json"}})");
   CHECK(message_of([&] {
-          (void)files::bridge_force_models(files::load_bridge_config(dir.path() / "bridge.json"));
+          (void)files::load_bridge_config(dir.path() / "bridge.json");
         }).find("the bidirectional_load_observer refers its current to the commanded current") !=
         std::string::npos);
   // A current reference on a kind without one.
@@ -409,9 +409,7 @@ TEST_CASE("joint-model files: hostile and out-of-range content is refused naming
   TempDir dir("joint_reference");
   write_text(dir.path() / "referred.json", with_command.dump());
   write_text(dir.path() / "bridge.json", R"({"estimator": {"clamp_model": "referred.json"}})");
-  CHECK(message_of([&] {
-          (void)files::bridge_force_models(files::load_bridge_config(dir.path() / "bridge.json"));
-        })
+  CHECK(message_of([&] { (void)files::load_bridge_config(dir.path() / "bridge.json"); })
             .find("refers its current to the commanded current (a third input), which the sbRIO "
                   "protocol does not carry") != std::string::npos);
 }
@@ -447,15 +445,16 @@ TEST_CASE("bridge: a model file of each kind configures the clamps and runs in t
     write_text(dir.path() / "bridge.json",
                std::string(R"({"estimator": {"clamp_model": ")") + name + "\"}}");
     const files::BridgeConfig config = files::load_bridge_config(dir.path() / "bridge.json");
-    const files::BridgeForceModels models = files::bridge_force_models(config);
+    const est::BridgeForceModels models =
+        est::bridge_force_models(files::load_clamp_force_model(config.clamp_model));
     CHECK(models.clamp1.index() != 0);
     CHECK(models.clamp1.get<est::ClampModel2016<double>>() == nullptr);
-    auto settings = files::bridge_estimator_settings(config, models);
+    auto settings = est::bridge_estimator_settings(config.estimator, models);
     // The joint models hold their own friction: the 5.2.3 gate of the clamps is opened.
     CHECK(settings.friction[2].static_level == 0.0);
     CHECK(settings.friction[3].static_level == 0.0);
     CHECK(settings.friction[0].static_level == 0.7);  // roll untouched
-    files::BridgeForceEstimator estimator(models, settings);
+    est::BridgeForceEstimator estimator(models, settings);
     CHECK(estimator.ticks_per_model_step(est::Motor::clamp1) ==
           (std::string(name) == "stall.json" ? 10 : 1));
     est::JointState<double> in;
@@ -487,9 +486,9 @@ TEST_CASE("bridge: a model file of each kind configures the clamps and runs in t
     estimator.reset();
     CHECK(estimator.joint_model<est::Motor::clamp1>().state() == models.clamp1.state());
     // A snapshot restores the model exactly (a failed tick leaves the estimator untouched).
-    files::ClampForceModel model = models.clamp1;
+    est::ClampForceModel model = models.clamp1;
     for (int k = 0; k < 30; ++k) (void)model.advance({0.001 * k, 0.1, -0.02 * k, 0.0});
-    const files::ClampForceModel::State saved = model.state();
+    const est::ClampForceModel::State saved = model.state();
     (void)model.advance({0.05, 0.1, -0.7, 0.0});
     model.reset(saved);
     CHECK(model.state() == saved);

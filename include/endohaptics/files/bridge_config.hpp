@@ -28,11 +28,9 @@
 
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/core/parameter.hpp"
-#include "endohaptics/estimation/any_joint_force_model.hpp"
-#include "endohaptics/estimation/bidirectional_load_observer.hpp"
+#include "endohaptics/estimation/bridge_force_models.hpp"
 #include "endohaptics/estimation/force_estimator.hpp"
-#include "endohaptics/estimation/push_load_observer.hpp"
-#include "endohaptics/estimation/stall_hold.hpp"
+#include "endohaptics/files/clamp_model_file.hpp"
 #include "endohaptics/files/json_text.hpp"
 #include "endohaptics/files/model_file.hpp"
 #include "endohaptics/kinematics/cylindrical_mapper.hpp"
@@ -316,135 +314,6 @@ void with_prefix(std::string_view source, std::string_view key, F&& validate) {
 
 }  // namespace detail::bridge_config
 
-//! The clamp model the bridge runs, whichever kind the model file holds: the appendix C yaw
-//! Hammerstein-Wiener type (estimation::ClampModel2016, also identified "hammerstein_wiener" files
-//! of 6 states, 2 inputs, 1 output), estimation::StallHold, estimation::PushLoadObserver or
-//! estimation::BidirectionalLoadObserver, as an estimation::AnyJointForceModel of the four (a
-//! JointForceModel: noexcept, allocation-free, its State the model's padded to the bidirectional
-//! observer's 23 numbers; reset() the model's own start state).
-using ClampForceModel = estimation::AnyJointForceModel<
-    estimation::ClampModel2016<double>, estimation::StallHold<double>,
-    estimation::PushLoadObserver<double>, estimation::BidirectionalLoadObserver<double>>;
-
-static_assert(estimation::JointForceModel<ClampForceModel>);
-
-//! The models the bridge's ForceEstimator runs: the 2016 roll and pitch models, ClampForceModel
-//! for both clamps.
-using BridgeForceModels =
-    estimation::ForceModels<estimation::RollModel2016<double>, estimation::PitchModel2016<double>,
-                            ClampForceModel>;
-//! The bridge's ForceEstimator: the 2016 rates (rate::Decimate) and BridgeForceModels.
-using BridgeForceEstimator =
-    estimation::ForceEstimator<estimation::rate::Decimate, estimation::RollModel2016<double>,
-                               estimation::PitchModel2016<double>, ClampForceModel>;
-
-//! States of the bridge's Hammerstein-Wiener clamp model (ClampModel2016: the appendix C yaw
-//! model's 6); a clamp model file of lower order is embedded in them (model::embed_states).
-inline constexpr int bridge_clamp_states = 6;
-
-//! The force models the bridge runs: the 2016 models (estimation::models_2016), with the clamp
-//! model file of `config.clamp_model` for both clamps when set, of any kind ClampForceModel
-//! holds (a linear block of order <= bridge_clamp_states). Throws Error naming the model file
-//! when it cannot be loaded, is of another size or its parameters are out of range.
-[[nodiscard]] inline BridgeForceModels bridge_force_models(const BridgeConfig& config) {
-  const auto m2016 = estimation::models_2016<double>();
-  BridgeForceModels models{m2016.roll, m2016.pitch, ClampForceModel(m2016.clamp1),
-                           ClampForceModel(m2016.clamp2)};
-  if (!config.clamp_model.empty()) {
-    const ModelFile file = load_model(config.clamp_model);
-    const std::string where = "model file " + config.clamp_model.string();
-    const auto joint_model = [&] {
-      if (file.current_reference) {
-        ENDOHAPTICS_THROW(Error(  // with_context below adds the file's name
-            "the " + std::string(to_string(file.kind())) +
-            " refers its current to the commanded current (a third input), which the sbRIO "
-            "protocol does not carry: identify the bridge's model from the current and the "
-            "velocity only"));
-      }
-      return std::visit(
-          [](const auto& p) {
-            using P = std::decay_t<decltype(p)>;
-            if constexpr (std::is_same_v<P, estimation::StallHoldParameters<double>>) {
-              return ClampForceModel(estimation::StallHold<double>(p));
-            } else if constexpr (std::is_same_v<P,
-                                                estimation::PushLoadObserverParameters<double>>) {
-              return ClampForceModel(estimation::PushLoadObserver<double>(p));
-            } else if constexpr (std::is_same_v<
-                                     P, estimation::BidirectionalLoadObserverParameters<double>>) {
-              return ClampForceModel(estimation::BidirectionalLoadObserver<double>(p));
-            } else {
-              return ClampForceModel(estimation::models_2016<double>().clamp1);  // not reached
-            }
-          },
-          file.parameters);
-    };
-    // The clamp type holds 6 states (the 2016 yaw model's): a linear block of lower order runs
-    // in it embedded exactly (model::embed_states: the added states are decoupled and zero).
-    const auto hammerstein_wiener = [&] {
-      // An unstable linear block loads as a valid model, but its estimate would grow until the
-      // tick rejects it as non-finite (and renders no force): refused here, as identify does.
-      const double rho = file.state_space.spectral_radius();
-      if (!(rho < 1.0)) {
-        ENDOHAPTICS_THROW(Error(where + ": the clamp model is not stable (spectral radius " +
-                                endohaptics::detail::format_number(rho) +
-                                ", must be < 1): its estimate would grow without bound"));
-      }
-      // A force model maps A and rad/s to N: every number of it lies within the bound of every
-      // joint-model parameter (model::max_joint_model_parameter); a larger one (a corrupt or
-      // hostile file, C = 1e308) would pin the estimate at its output limit on every tick.
-      const model::DynamicStateSpace<>& ss = file.state_space;
-      const std::pair<const char*, const Eigen::MatrixXd*> blocks[] = {
-          {"A", &ss.A()}, {"B", &ss.B()}, {"C", &ss.C()}, {"D", &ss.D()}};
-      const double bound = model::max_joint_model_parameter;
-      for (const auto& [name, block] : blocks) {
-        for (Eigen::Index r = 0; r < block->rows(); ++r) {
-          for (Eigen::Index c = 0; c < block->cols(); ++c) {
-            if (!(std::fabs((*block)(r, c)) <= bound)) {
-              ENDOHAPTICS_THROW(
-                  Error(where + ": " + name + "[" + std::to_string(r) + "][" + std::to_string(c) +
-                        "] is " + endohaptics::detail::format_number((*block)(r, c)) +
-                        ": a clamp force model's numbers must lie in [-1e6, 1e6] (A, rad/s -> N)"));
-            }
-          }
-        }
-      }
-      if (!(ss.state().cwiseAbs().maxCoeff() <= bound)) {
-        ENDOHAPTICS_THROW(Error(where + ": x0 holds a value beyond 1e6: a clamp force model's "
-                                        "numbers must lie in [-1e6, 1e6]"));
-      }
-      ModelFile six = file;
-      if (six.state_space.state_size() < bridge_clamp_states) {
-        six.state_space = model::embed_states(six.state_space, bridge_clamp_states);
-      }
-      return ClampForceModel(estimation::ClampModel2016<double>(
-          hammerstein_wiener_from<bridge_clamp_states, 2, 1>(six, where)));
-    };
-    const ClampForceModel clamp = file.is_joint_model()
-                                      ? detail::model_file::with_context(where, joint_model)
-                                      : hammerstein_wiener();
-    models.clamp1 = clamp;
-    models.clamp2 = clamp;
-  }
-  return models;
-}
-
-//! The estimator settings the bridge runs with `models`: `config.estimator`, except that the
-//! 5.2.3 friction gate of both clamps is opened (level 0) when their model is a joint model
-//! (stall_hold, the observers): those models hold their own friction (the dead zone, the
-//! push regime), and the gate would drop the force they hold while the jaw is stalled against
-//! an object and the current has relaxed below the friction level.
-[[nodiscard]] inline estimation::ForceEstimatorSettings<double> bridge_estimator_settings(
-    const BridgeConfig& config, const BridgeForceModels& models) {
-  estimation::ForceEstimatorSettings<double> settings = config.estimator;
-  if (models.clamp1.index() != 0) {  // not the Hammerstein-Wiener kind
-    for (const auto joint : {estimation::Motor::clamp1, estimation::Motor::clamp2}) {
-      settings.friction[static_cast<std::size_t>(joint)] =
-          model::JointFriction<double>::simplified(0.0);
-    }
-  }
-  return settings;
-}
-
 //! Checks `config` as the bridge will use it: every field in its schema range, then the
 //! library's own checks (TeleopLoopConfig, CylindricalMapper, OperatorScript, and a
 //! ForceEstimator built with the clamp model file). Throws Error "<source>: <key>: ...".
@@ -477,10 +346,15 @@ inline void validate_bridge_config(const BridgeConfig& config,
   bc::with_prefix(source, "mapping",
                   [&] { (void)kinematics::CylindricalMapper<double>(config.mapping); });
   bc::with_prefix(source, "operator", [&] { config.operator_script.validate(); });
-  std::optional<BridgeForceModels> models;
-  bc::with_prefix(source, "estimator.clamp_model", [&] { models = bridge_force_models(config); });
+  // The clamp model file as the bridge will run it, and the estimator it makes with the settings.
+  std::optional<estimation::ClampForceModel> clamp;
+  bc::with_prefix(source, "estimator.clamp_model", [&] {
+    if (!config.clamp_model.empty()) clamp = load_clamp_force_model(config.clamp_model);
+  });
   bc::with_prefix(source, "estimator", [&] {
-    (void)BridgeForceEstimator(*models, bridge_estimator_settings(config, *models));
+    const estimation::BridgeForceModels models = estimation::bridge_force_models(clamp);
+    (void)estimation::BridgeForceEstimator(
+        models, estimation::bridge_estimator_settings(config.estimator, models));
   });
 }
 
