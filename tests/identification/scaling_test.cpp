@@ -108,7 +108,7 @@ TEST_CASE("identify: inputs and outputs scaled by 1e150 or 1e-150 give the unsca
   }
 }
 
-TEST_CASE("identify refuses non-finite data and Hankel matrices above its stated limit") {
+TEST_CASE("identify refuses non-finite data") {
   id::DataSet data = second_order_data(400, 3);
   data.u(10, 1) = std::numeric_limits<double>::infinity();
   CHECK(message_of([&] { (void)id::identify(data.u, data.y); }).find("not finite") !=
@@ -116,7 +116,6 @@ TEST_CASE("identify refuses non-finite data and Hankel matrices above its stated
   data.u(10, 1) = std::numeric_limits<double>::quiet_NaN();
   CHECK(message_of([&] { (void)id::identify(data.u, data.y); }).find("not finite") !=
         std::string::npos);
-  CHECK(id::max_hankel_entries == 268435456.0);
 }
 
 TEST_CASE("fit metrics of data near the overflow limit are those of the unscaled data") {

@@ -121,63 +121,243 @@ ENDOHAPTICS_DECL Vector column_rms(std::span<const DataSet> data, Matrix DataSet
   return rms;
 }
 
+ENDOHAPTICS_DECL TriangularFactor::TriangularFactor(Index cols, Index chunk_rows)
+    : cols_(cols),
+      work_(Matrix::Zero(cols + (chunk_rows > 0 ? chunk_rows : std::max<Index>(2048, 4 * cols)),
+                         cols)) {}
+
+ENDOHAPTICS_DECL void TriangularFactor::flush() {
+  if (pending_ == 0) return;
+  // [R; pending rows] = Q [R'; 0]: R' overwrites the top rows (the Householder vectors below its
+  // diagonal are cleared, the rows below are refilled by the next block).
+  Eigen::Ref<Matrix> top(work_.topRows(cols_ + pending_));
+  const Eigen::HouseholderQR<Eigen::Ref<Matrix>> qr(top);
+  work_.topRows(cols_).triangularView<Eigen::StrictlyLower>().setZero();
+  pending_ = 0;
+}
+
+ENDOHAPTICS_DECL Eigen::Block<Matrix> TriangularFactor::append(Index wanted) {
+  if (cols_ + pending_ == work_.rows()) flush();
+  const Index count = std::min(std::max<Index>(wanted, 1), work_.rows() - cols_ - pending_);
+  const Index first = cols_ + pending_;
+  pending_ += count;
+  rows_ += count;
+  return work_.middleRows(first, count);
+}
+
+ENDOHAPTICS_DECL void TriangularFactor::add(const Eigen::Ref<const Matrix>& rows) {
+  for (Index done = 0; done < rows.rows();) {
+    auto block = append(rows.rows() - done);
+    block = rows.middleRows(done, block.rows());
+    done += block.rows();
+  }
+}
+
+ENDOHAPTICS_DECL Matrix TriangularFactor::R() {
+  flush();
+  return work_.topRows(cols_);
+}
+
+//! Running sum of squares of each column kept as scale^2 * ssq (LAPACK dlassq): no overflow for
+//! entries of 1e200 or underflow for 1e-200, like Eigen's stableNorm of the whole column.
+struct ColumnNorms {
+  Vector scale, ssq;
+  explicit ColumnNorms(Index cols) : scale(Vector::Zero(cols)), ssq(Vector::Ones(cols)) {}
+  void add(Index j, const Eigen::Ref<const Vector>& values) {
+    const double peak = values.cwiseAbs().maxCoeff();
+    if (!(peak > 0.0)) return;
+    const double sum = (values / peak).squaredNorm();
+    if (peak > scale[j]) {
+      ssq[j] = ssq[j] * (scale[j] / peak) * (scale[j] / peak) + sum;
+      scale[j] = peak;
+    } else {
+      ssq[j] += sum * (peak / scale[j]) * (peak / scale[j]);
+    }
+  }
+  [[nodiscard]] double norm(Index j) const { return scale[j] * std::sqrt(ssq[j]); }
+};
+
+//! The regression rows of one data set, `chunk` samples at a time: columns [x0 (n, if
+//! estimated) | vec(B) (n nu) | vec(D) (ny nu, if estimated) | y], ny rows per sample, weighted.
+class RegressionRows {
+ public:
+  RegressionRows(const Matrix& A, const Matrix& C, const DataSet& d, const Matrix* weights,
+                 bool estimate_d, bool estimate_x0)
+      : A_(A), C_(C), d_(d), w_(weights), estimate_d_(estimate_d), estimate_x0_(estimate_x0) {
+    restart();
+  }
+  [[nodiscard]] Index x0_columns() const { return estimate_x0_ ? A_.rows() : 0; }
+  [[nodiscard]] Index columns() const {
+    return x0_columns() + A_.rows() * d_.u.cols() + (estimate_d_ ? C_.rows() * d_.u.cols() : 0) + 1;
+  }
+  [[nodiscard]] bool done() const { return k_ == d_.u.rows(); }
+  void restart() {
+    const Index n = A_.rows();
+    k_ = 0;
+    Z_ = Matrix::Identity(n, n);
+    X_ = Matrix::Zero(n, n * d_.u.cols());
+  }
+  //! Fills `out` with the rows of the next samples (at most out.rows() / ny); returns the rows.
+  Index next(Matrix& out) {
+    const Index n = A_.rows(), ny = C_.rows(), nu = d_.u.cols();
+    const Index x0c = x0_columns(), bc = n * nu;
+    const Index count = std::min(out.rows() / ny, d_.u.rows() - k_);
+    out.topRows(count * ny).setZero();
+    for (Index t = 0; t < count; ++t, ++k_) {
+      const Index r = t * ny;
+      if (estimate_x0_) {
+        out.block(r, 0, ny, n).noalias() = C_ * Z_;
+        next_z_.noalias() = A_ * Z_;
+        Z_.swap(next_z_);
+      }
+      out.block(r, x0c, ny, bc).noalias() = C_ * X_;
+      if (estimate_d_) {
+        for (Index j = 0; j < nu; ++j) {
+          for (Index i = 0; i < ny; ++i) out(r + i, x0c + bc + j * ny + i) = d_.u(k_, j);
+        }
+      }
+      out.block(r, out.cols() - 1, ny, 1) = d_.y.row(k_).transpose();
+      next_x_.noalias() = A_ * X_;
+      for (Index j = 0; j < nu; ++j)
+        next_x_.block(0, j * n, n, n).diagonal().array() += d_.u(k_, j);
+      X_.swap(next_x_);
+      if (w_ != nullptr) {
+        for (Index i = 0; i < ny; ++i) out.row(r + i) *= (*w_)(k_, i);
+      }
+    }
+    return count * ny;
+  }
+
+ private:
+  const Matrix& A_;
+  const Matrix& C_;
+  const DataSet& d_;
+  const Matrix* w_;
+  bool estimate_d_, estimate_x0_;
+  Index k_ = 0;
+  Matrix Z_, X_, next_z_, next_x_;  // A^k (free response) and the input-driven states
+};
+
 ENDOHAPTICS_DECL Regressed regress_b_d_x0(const Matrix& A, const Matrix& C,
                                           std::span<const DataSet> data, bool estimate_d,
                                           bool estimate_x0,
                                           const std::vector<Matrix>* row_weights) {
+  // The least-squares problem min ||Phi theta - y|| over all data sets, Phi with one block of x0
+  // columns per set (zero outside its rows) and the B, D columns shared, solved without forming
+  // Phi: each set's rows [x0 | B D | y] are reduced to a small triangular factor (two passes:
+  // the column norms first, so that every column enters scaled to unit norm as a whole-Phi
+  // solve would scale it), its x0 columns eliminated by a pivoting QR, and the remaining rows
+  // of all sets stacked for B and D; each x0 then follows by back substitution. Same solution
+  // as one pivoting QR of Phi for a full-rank problem.
   const Index n = A.rows();
   const Index ny = C.rows();
   const Index nu = data.front().u.cols();
   const auto sets = static_cast<Index>(data.size());
-  Index rows = 0;
-  for (const DataSet& d : data) rows += d.u.rows() * ny;
-  const Index x0_columns = estimate_x0 ? n * sets : 0;
-  const Index b_columns = n * nu;
-  const Index d_columns = estimate_d ? ny * nu : 0;
-  Matrix Phi = Matrix::Zero(rows, x0_columns + b_columns + d_columns);
-  Vector rhs(rows);
-  Index row = 0;
-  Matrix X(n, n * nu);  // column j*n + i: state driven by input j through B = e_i
-  Matrix next(n, n * nu);
+  const Index x0c = estimate_x0 ? n : 0;
+  const Index shared = n * nu + (estimate_d ? ny * nu : 0);  // B, D columns
+  const Index chunk_samples = std::max<Index>(64, 4096 / std::max<Index>(ny, 1));
+  const auto weights_of = [&](Index e) {
+    return row_weights != nullptr ? &(*row_weights)[static_cast<std::size_t>(e)] : nullptr;
+  };
+  Matrix rows(chunk_samples * ny, x0c + shared + 1);
+  // Pass 1: column norms (x0: per set, shared: over all sets) and overflow.
+  ColumnNorms shared_norms(shared);
+  std::vector<Vector> x0_scale(static_cast<std::size_t>(sets));
   for (Index e = 0; e < sets; ++e) {
-    const DataSet& d = data[static_cast<std::size_t>(e)];
-    const Index N = d.u.rows();
-    if (estimate_x0) Phi.block(row, e * n, N * ny, n) = free_response(A, C, N);
-    X.setZero();
-    for (Index k = 0; k < N; ++k) {
-      const Index r = row + k * ny;
-      Phi.block(r, x0_columns, ny, b_columns).noalias() = C * X;
-      if (estimate_d) {
-        for (Index j = 0; j < nu; ++j) {
-          for (Index i = 0; i < ny; ++i)
-            Phi(r + i, x0_columns + b_columns + j * ny + i) = d.u(k, j);
-        }
+    RegressionRows gen(A, C, data[static_cast<std::size_t>(e)], weights_of(e), estimate_d,
+                       estimate_x0);
+    ColumnNorms x0_norms(x0c);
+    while (!gen.done()) {
+      const Index count = gen.next(rows);
+      const auto block = rows.topRows(count);
+      if (!block.leftCols(x0c + shared).allFinite()) {
+        fail(
+            "identify (B, D, x0): the regression overflowed (the model is too unstable for this "
+            "many samples)");
       }
-      rhs.segment(r, ny) = d.y.row(k).transpose();
-      next.noalias() = A * X;
-      for (Index j = 0; j < nu; ++j) next.block(0, j * n, n, n).diagonal().array() += d.u(k, j);
-      X.swap(next);
+      for (Index j = 0; j < x0c; ++j) x0_norms.add(j, block.col(j));
+      for (Index j = 0; j < shared; ++j) shared_norms.add(j, block.col(x0c + j));
     }
-    if (row_weights != nullptr) {
-      const Matrix& w = (*row_weights)[static_cast<std::size_t>(e)];
-      for (Index k = 0; k < N; ++k) {
-        for (Index i = 0; i < ny; ++i) {
-          Phi.row(row + k * ny + i) *= w(k, i);
-          rhs[row + k * ny + i] *= w(k, i);
-        }
-      }
+    Vector& sc = x0_scale[static_cast<std::size_t>(e)];
+    sc.resize(x0c);
+    for (Index j = 0; j < x0c; ++j) {
+      const double norm = x0_norms.norm(j);
+      sc[j] = norm > 0.0 ? 1.0 / norm : 1.0;
     }
-    row += N * ny;
   }
-  const Vector theta = scaled_least_squares(std::move(Phi), rhs, "identify (B, D, x0)");
+  Vector shared_scale(shared);
+  for (Index j = 0; j < shared; ++j) {
+    const double norm = shared_norms.norm(j);
+    shared_scale[j] = norm > 0.0 ? 1.0 / norm : 1.0;
+  }
+  // Pass 2: per set, R of [x0 | B D | y] scaled; x0 eliminated; the rest stacked. The rank
+  // threshold is the one a pivoting QR of the whole Phi would use (relative to its largest pivot,
+  // about 1 for unit columns).
+  Index total_rows = 0;
+  for (const DataSet& d : data) total_rows += d.u.rows() * ny;
+  const double threshold = std::numeric_limits<double>::epsilon() *
+                           static_cast<double>(std::min(total_rows, x0c * sets + shared));
+  TriangularFactor all(shared + 1);
+  struct Eliminated {
+    Matrix top;                   // the x0 rows of Q1^T [B D | y], rank x (shared + 1)
+    Matrix r11;                   // their upper triangular x0 block, rank x rank (pivoted columns)
+    Eigen::VectorXi permutation;  // x0 column of each pivoted position
+  };
+  std::vector<Eliminated> eliminated(static_cast<std::size_t>(sets));
+  for (Index e = 0; e < sets; ++e) {
+    RegressionRows gen(A, C, data[static_cast<std::size_t>(e)], weights_of(e), estimate_d,
+                       estimate_x0);
+    TriangularFactor set(x0c + shared + 1);
+    Vector column_scale(x0c + shared + 1);
+    column_scale << x0_scale[static_cast<std::size_t>(e)], shared_scale, 1.0;
+    while (!gen.done()) {
+      const Index count = gen.next(rows);
+      set.add(rows.topRows(count) * column_scale.asDiagonal());
+    }
+    const Matrix R = set.R();
+    if (x0c == 0) {
+      all.add(R);
+      continue;
+    }
+    // Pivoting QR of the x0 block (rank-revealing, like the whole-Phi solve): the rows past its
+    // rank carry no x0 and join the shared problem.
+    Eigen::ColPivHouseholderQR<Matrix> qr(R.rows(), x0c);
+    qr.setThreshold(threshold);
+    qr.compute(R.leftCols(x0c));
+    const Index rank = qr.rank();
+    const Matrix rest = qr.householderQ().transpose() * R.rightCols(shared + 1);
+    Eliminated& el = eliminated[static_cast<std::size_t>(e)];
+    el.top = rest.topRows(rank);
+    el.r11 = qr.matrixR().topLeftCorner(rank, rank).triangularView<Eigen::Upper>();
+    el.permutation = qr.colsPermutation().indices();
+    all.add(rest.bottomRows(rest.rows() - rank));
+  }
+  const Matrix Rs = all.R();
+  Eigen::ColPivHouseholderQR<Matrix> shared_qr(shared, shared);
+  shared_qr.setThreshold(threshold);
+  shared_qr.compute(Rs.topLeftCorner(shared, shared));
+  const Vector theta_scaled = shared_qr.solve(Vector(Rs.col(shared).head(shared)));
+  const Vector theta = theta_scaled.cwiseProduct(shared_scale);
   Regressed out;
   for (Index e = 0; e < sets; ++e) {
-    out.x0.push_back(estimate_x0 ? Vector(theta.segment(e * n, n)) : Vector(Vector::Zero(n)));
+    Vector x0 = Vector::Zero(n);
+    if (estimate_x0) {
+      const Eliminated& el = eliminated[static_cast<std::size_t>(e)];
+      const Index rank = el.r11.rows();
+      // Basic solution: the x0 components past the rank are 0 (as a pivoting QR solve sets them).
+      const Vector rhs = el.top.col(shared) - el.top.leftCols(shared) * theta_scaled;
+      const Vector head = el.r11.triangularView<Eigen::Upper>().solve(rhs);
+      const Vector& sc = x0_scale[static_cast<std::size_t>(e)];
+      for (Index i = 0; i < rank; ++i) {
+        const Index col = el.permutation[i];
+        x0[col] = head[i] * sc[col];
+      }
+    }
+    out.x0.push_back(std::move(x0));
   }
-  out.B = Eigen::Map<const Matrix>(theta.data() + x0_columns, n, nu);
-  out.D = estimate_d
-              ? Matrix(Eigen::Map<const Matrix>(theta.data() + x0_columns + b_columns, ny, nu))
-              : Matrix(Matrix::Zero(ny, nu));
+  out.B = Eigen::Map<const Matrix>(theta.data(), n, nu);
+  out.D = estimate_d ? Matrix(Eigen::Map<const Matrix>(theta.data() + n * nu, ny, nu))
+                     : Matrix(Matrix::Zero(ny, nu));
   return out;
 }
 }  // namespace detail::subspace
@@ -228,8 +408,140 @@ ENDOHAPTICS_DECL int default_block_rows(Eigen::Index total_samples, int data_set
   return fits(s) ? s : 0;
 }
 
-ENDOHAPTICS_DECL SubspaceModel identify(std::span<const DataSet> data,
-                                        const SubspaceOptions& options) {
+ENDOHAPTICS_DECL HankelFactor hankel_factor(std::span<const DataSet> data, int block_rows,
+                                            const Eigen::VectorXd& input_scale,
+                                            const Eigen::VectorXd& output_scale) {
+  namespace ds = detail::subspace;
+  using ds::fail;
+  using ds::idx;
+  using ds::Index;
+  if (data.empty()) fail("hankel_factor: no data sets");
+  const Index nu = data.front().u.cols();
+  const Index ny = data.front().y.cols();
+  const Index s = block_rows;
+  if (s < 1) fail("hankel_factor: block_rows must be >= 1, got " + std::to_string(block_rows));
+  if (input_scale.size() != nu || output_scale.size() != ny) {
+    fail("hankel_factor: " + idx(input_scale.size()) + " input and " + idx(output_scale.size()) +
+         " output scales for " + idx(nu) + " inputs and " + idx(ny) + " outputs");
+  }
+  const Index a = s * nu;         // Uf rows
+  const Index p = s * (nu + ny);  // Wp = [Up; Yp] rows
+  const Index r = a + p + s * ny;
+  const Eigen::VectorXd u_inverse = input_scale.cwiseInverse();
+  const Eigen::VectorXd y_inverse = output_scale.cwiseInverse();
+  HankelFactor out;
+  out.block_rows = block_rows;
+  out.data_sets = static_cast<int>(data.size());
+  out.input_scale = input_scale;
+  out.output_scale = output_scale;
+  ds::TriangularFactor tf(r);
+  for (std::size_t e = 0; e < data.size(); ++e) {
+    const DataSet& d = data[e];
+    if (d.u.cols() != nu || d.y.cols() != ny || d.u.rows() != d.y.rows()) {
+      fail("hankel_factor: data set " + std::to_string(e) + " does not match data set 0");
+    }
+    if (d.u.rows() < 2 * s) {
+      fail("hankel_factor: data set " + std::to_string(e) + " has " + idx(d.u.rows()) +
+           " samples, fewer than 2 x " + std::to_string(s) + " block rows");
+    }
+    const Index jn = d.u.rows() - 2 * s + 1;
+    out.samples += d.u.rows();
+    out.columns += jn;
+    // Hankel columns j0.. as rows of H^T, a block at a time, scaled as the data would be.
+    for (Index j0 = 0; j0 < jn;) {
+      auto rows = tf.append(jn - j0);
+      const Index c = rows.rows();
+      for (Index i = 0; i < s; ++i) {
+        for (Index m = 0; m < nu; ++m) {
+          rows.col(i * nu + m) = d.u.block(s + i + j0, m, c, 1) * u_inverse[m];  // Uf
+          rows.col(a + i * nu + m) = d.u.block(i + j0, m, c, 1) * u_inverse[m];  // Up
+        }
+        for (Index m = 0; m < ny; ++m) {
+          rows.col(a + a + i * ny + m) = d.y.block(i + j0, m, c, 1) * y_inverse[m];      // Yp
+          rows.col(a + p + i * ny + m) = d.y.block(s + i + j0, m, c, 1) * y_inverse[m];  // Yf
+        }
+      }
+      if (!rows.allFinite()) {
+        fail("hankel_factor: data set " + std::to_string(e) + " is not finite after scaling");
+      }
+      j0 += c;
+    }
+  }
+  out.R = tf.R();
+  return out;
+}
+
+ENDOHAPTICS_DECL HankelFactor rescaled(const HankelFactor& factor,
+                                       const Eigen::VectorXd& input_scale,
+                                       const Eigen::VectorXd& output_scale) {
+  namespace ds = detail::subspace;
+  const ds::Index nu = factor.input_scale.size();
+  const ds::Index ny = factor.output_scale.size();
+  if (input_scale.size() != nu || output_scale.size() != ny) {
+    ds::fail("rescaled: the scales do not match the factor's " + ds::idx(nu) + " inputs and " +
+             ds::idx(ny) + " outputs");
+  }
+  const ds::Index s = factor.block_rows;
+  // Ratio old / new of each Hankel row's signal, in the order [Uf | Up | Yp | Yf].
+  const Eigen::VectorXd u_ratio = factor.input_scale.cwiseQuotient(input_scale);
+  const Eigen::VectorXd y_ratio = factor.output_scale.cwiseQuotient(output_scale);
+  Eigen::VectorXd ratio(2 * s * (nu + ny));
+  ds::Index k = 0;
+  for (int block = 0; block < 2; ++block) {
+    for (ds::Index i = 0; i < s; ++i) ratio.segment(k + i * nu, nu) = u_ratio;
+    k += s * nu;
+  }
+  for (int block = 0; block < 2; ++block) {
+    for (ds::Index i = 0; i < s; ++i) ratio.segment(k + i * ny, ny) = y_ratio;
+    k += s * ny;
+  }
+  HankelFactor out = factor;
+  out.R = factor.R * ratio.asDiagonal();
+  out.input_scale = input_scale;
+  out.output_scale = output_scale;
+  return out;
+}
+
+ENDOHAPTICS_DECL HankelFactor combine(std::span<const HankelFactor> parts) {
+  namespace ds = detail::subspace;
+  if (parts.empty()) ds::fail("combine: no Hankel factors");
+  const HankelFactor& first = parts.front();
+  ds::TriangularFactor tf(first.R.cols());
+  HankelFactor out;
+  out.block_rows = first.block_rows;
+  out.input_scale = first.input_scale;
+  out.output_scale = first.output_scale;
+  for (const HankelFactor& part : parts) {
+    if (part.block_rows != first.block_rows || part.R.rows() != first.R.rows() ||
+        part.R.cols() != first.R.cols() || part.input_scale.size() != first.input_scale.size() ||
+        part.output_scale.size() != first.output_scale.size()) {
+      ds::fail("combine: the Hankel factors differ in block rows or signals");
+    }
+    if (part.input_scale == first.input_scale && part.output_scale == first.output_scale) {
+      tf.add(part.R);
+    } else {
+      tf.add(rescaled(part, first.input_scale, first.output_scale).R);
+    }
+    out.columns += part.columns;
+    out.samples += part.samples;
+    out.data_sets += part.data_sets;
+  }
+  out.R = tf.R();
+  return out;
+}
+
+namespace detail::subspace {
+
+//! Whether `factor` can stand for the factor of data with these sizes and horizon.
+ENDOHAPTICS_DECL bool matches(const HankelFactor& factor, int block_rows, Index samples,
+                              int data_sets, Index rows) {
+  return factor.R.rows() == rows && factor.R.cols() == rows && factor.block_rows == block_rows &&
+         factor.samples == samples && factor.data_sets == data_sets;
+}
+
+//! `identify` with an optional factor to reuse or fill.
+ENDOHAPTICS_DECL SubspaceModel identify_with(std::span<const DataSet> data,
+                                             const SubspaceOptions& options, HankelFactor* factor) {
   namespace ds = detail::subspace;
   using ds::fail;
   using ds::idx;
@@ -284,15 +596,19 @@ ENDOHAPTICS_DECL SubspaceModel identify(std::span<const DataSet> data,
     u_scale.setOnes();
     y_scale.setOnes();
   }
+  // A scaled copy of the data only when it is scaled (the B, D, x0 regression reads it).
   std::vector<DataSet> scaled_data;
-  scaled_data.reserve(data.size());
-  for (const DataSet& d : data) {
-    scaled_data.push_back(
-        {d.u * u_scale.cwiseInverse().asDiagonal(), d.y * y_scale.cwiseInverse().asDiagonal()});
-    ds::require_finite(scaled_data.back().u, "identify: u scaled to unit RMS");
-    ds::require_finite(scaled_data.back().y, "identify: y scaled to unit RMS");
+  if (scale) {
+    scaled_data.reserve(data.size());
+    for (const DataSet& d : data) {
+      scaled_data.push_back(
+          {d.u * u_scale.cwiseInverse().asDiagonal(), d.y * y_scale.cwiseInverse().asDiagonal()});
+      ds::require_finite(scaled_data.back().u, "identify: u scaled to unit RMS");
+      ds::require_finite(scaled_data.back().y, "identify: y scaled to unit RMS");
+    }
   }
-  const std::span<const DataSet> scaled(scaled_data);
+  const std::span<const DataSet> scaled = scale ? std::span<const DataSet>(scaled_data) : data;
+  HankelFactor factor_storage;
   const int wanted = options.order > 0 ? options.order : options.max_order;
   const auto sets = static_cast<int>(data.size());
   const int s = options.block_rows > 0 ? options.block_rows
@@ -331,31 +647,22 @@ ENDOHAPTICS_DECL SubspaceModel identify(std::span<const DataSet> data,
          " outputs (order <= (s - 1) ny = " + idx(f - ny) + ")");
   }
 
-  // H^T, one row per Hankel column, blocks [Uf | Up | Yp | Yf]; R of its QR is L^T of the LQ
-  // factorisation [Uf; Wp; Yf] = L Q.
-  if (static_cast<double>(columns) * static_cast<double>(r) > max_hankel_entries) {
-    fail("identify: the block-Hankel matrix would have " + idx(columns) + " x " + idx(r) +
-         " entries, more than the limit of " + ds::format_number(max_hankel_entries) +
-         " (2 GB): use fewer samples (a larger sample time) or a lower max_order");
-  }
-  Matrix Ht(columns, r);
-  Index c = 0;
-  for (const DataSet& d : scaled) {
-    const Index jn = d.u.rows() - 2 * s + 1;
-    for (Index i = 0; i < s; ++i) {
-      for (Index m = 0; m < nu; ++m) {
-        Ht.block(c, i * nu + m, jn, 1) = d.u.block(s + i, m, jn, 1);  // Uf
-        Ht.block(c, a + i * nu + m, jn, 1) = d.u.block(i, m, jn, 1);  // Up
-      }
-      for (Index m = 0; m < ny; ++m) {
-        Ht.block(c, a + a + i * ny + m, jn, 1) = d.y.block(i, m, jn, 1);      // Yp
-        Ht.block(c, a + p + i * ny + m, jn, 1) = d.y.block(s + i, m, jn, 1);  // Yf
-      }
+  // R of the QR of H^T (one row per Hankel column, blocks [Uf | Up | Yp | Yf]) is L^T of the LQ
+  // factorisation [Uf; Wp; Yf] = L Q: reused from `factor` when it was computed from these data
+  // with this horizon, else computed a block of columns at a time.
+  if (factor == nullptr || !matches(*factor, s, total, sets, r)) {
+    HankelFactor computed = hankel_factor(data, s, u_scale, y_scale);
+    if (factor == nullptr) {
+      factor_storage = std::move(computed);
+      factor = &factor_storage;
+    } else {
+      *factor = std::move(computed);
     }
-    c += jn;
   }
-  Eigen::HouseholderQR<Eigen::Ref<Matrix>> qr(Ht);  // in place
-  const Matrix L = qr.matrixQR().topRows(r).triangularView<Eigen::Upper>().transpose();
+  const Matrix L = (factor->input_scale == u_scale && factor->output_scale == y_scale
+                        ? factor->R
+                        : rescaled(*factor, u_scale, y_scale).R)
+                       .transpose();
   const Matrix L21 = L.block(a, 0, p, a);
   const Matrix L22 = L.block(a, a, p, p);
   const Matrix L32 = L.block(a + p, a, f, p);
@@ -445,6 +752,18 @@ ENDOHAPTICS_DECL SubspaceModel identify(std::span<const DataSet> data,
                        .weighting = options.weighting,
                        .input_scale = u_scale,
                        .output_scale = y_scale};
+}
+
+}  // namespace detail::subspace
+
+ENDOHAPTICS_DECL SubspaceModel identify(std::span<const DataSet> data,
+                                        const SubspaceOptions& options) {
+  return detail::subspace::identify_with(data, options, nullptr);
+}
+
+ENDOHAPTICS_DECL SubspaceModel identify(std::span<const DataSet> data,
+                                        const SubspaceOptions& options, HankelFactor& factor) {
+  return detail::subspace::identify_with(data, options, &factor);
 }
 
 ENDOHAPTICS_DECL SubspaceModel identify(const Eigen::MatrixXd& u, const Eigen::MatrixXd& y,
