@@ -9,8 +9,10 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
+#include <cstdio>
 #include <limits>
 #include <optional>
 #include <span>
@@ -129,11 +131,15 @@ ENDOHAPTICS_DECL double ranking_score(const CandidateModel& c);
 //! baseline (same dead-zone search) is one more candidate. Keeps the best admissible causal score.
 //! With several candidates a failing one is recorded in `failures` and skipped. Throws Error on bad
 //! options or data, when every candidate failed or was refused, or when the log lists differ in
-//! length.
-[[nodiscard]] ENDOHAPTICS_DECL WorkflowResult
-identify_logs(const std::vector<PreparedLog>& fit_logs, const std::vector<PreparedLog>& score_logs,
-              const std::vector<files::SignalInfo>& inputs,
-              const std::vector<files::SignalInfo>& outputs, const WorkflowOptions& options);
+//! length. The block-Hankel factor of each dead-zone setting is computed once and reused by the
+//! order search (it does not depend on the order). `factor` (optional): the Hankel factor of all
+//! segments of `fit_logs`, in order, mapped by the dead zones options.deadzone starts from (fixed
+//! widths, 0 for fitted ones), e.g. `combine` of per-file factors: the fits with those dead
+//! zones use it instead of a pass over the data (choose_family's folds).
+[[nodiscard]] ENDOHAPTICS_DECL WorkflowResult identify_logs(
+    const std::vector<PreparedLog>& fit_logs, const std::vector<PreparedLog>& score_logs,
+    const std::vector<files::SignalInfo>& inputs, const std::vector<files::SignalInfo>& outputs,
+    const WorkflowOptions& options, const HankelFactor* factor = nullptr);
 
 //! What `choose_family` chose and why.
 struct ModelChoice {
@@ -157,6 +163,8 @@ struct ModelChoice {
 //! `fit_logs`/`score_logs`: the subspace grid, prepared for fitting and for scoring; `joint_logs`:
 //! the joint models' grid, prepared for scoring (all three: the same files, same order). The
 //! chosen family is then fitted on every training file. Throws Error when nothing can be fitted.
+//! The subspace family's folds reuse one block-Hankel factor per training file (`combine`d per
+//! fold) instead of a pass over the fold's data.
 [[nodiscard]] ENDOHAPTICS_DECL ModelChoice choose_family(
     const WorkflowResult* subspace, const std::vector<files::ModelKind>& joint_kinds,
     const std::vector<PreparedLog>& fit_logs, const std::vector<PreparedLog>& score_logs,

@@ -6,7 +6,9 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <limits>
+#include <string_view>
 #include <vector>
 
 #include "endohaptics/identification/subspace.hpp"
@@ -54,6 +56,10 @@ struct WorkflowOptions {
   //! the longest segment of the logs is refused (time_constant_limit), and so is every unstable
   //! candidate (spectral radius >= 1).
   double max_time_constant = std::numeric_limits<double>::infinity();
+  //! Called with one line (no newline) after each model fitted and scored by identify_logs and
+  //! after each fold of choose_family's cross-validation, for long runs (the UMN search fits
+  //! dozens of models); empty: silent. A program prints it, e.g. to stderr.
+  std::function<void(std::string_view)> progress{};
 };
 
 }  // namespace endohaptics::workflow

@@ -89,7 +89,8 @@ ENDOHAPTICS_DECL WorkflowResult identify_logs(const std::vector<PreparedLog>& fi
                                               const std::vector<PreparedLog>& score_logs,
                                               const std::vector<files::SignalInfo>& inputs,
                                               const std::vector<files::SignalInfo>& outputs,
-                                              const WorkflowOptions& options) {
+                                              const WorkflowOptions& options,
+                                              const HankelFactor* factor) {
   namespace wf = detail;
   if (fit_logs.empty()) wf::fail("identify: no logs");
   if (score_logs.size() != fit_logs.size()) {
@@ -151,6 +152,24 @@ ENDOHAPTICS_DECL WorkflowResult identify_logs(const std::vector<PreparedLog>& fi
     }
     return maps;
   };
+  // The block-Hankel factor of the data under each dead-zone setting (the maps' breakpoints):
+  // the fit of another order or weighting on the same mapped data reuses it.
+  std::vector<std::pair<std::vector<double>, HankelFactor>> factors;
+  const auto key_of = [](const std::vector<StaticMap>& maps) {
+    std::vector<double> key;
+    for (const StaticMap& m : maps)
+      key.insert(key.end(), {static_cast<double>(m.kind), m.lower, m.upper});
+    return key;
+  };
+  if (factor != nullptr)
+    factors.emplace_back(key_of(maps_for(std::vector<double>(nu, 0.0))), *factor);
+  const auto factor_for = [&](const std::vector<StaticMap>& maps) -> HankelFactor& {
+    std::vector<double> key = key_of(maps);
+    for (auto& [k, f] : factors) {
+      if (k == key) return f;
+    }
+    return factors.emplace_back(std::move(key), HankelFactor{}).second;
+  };
   // Fits the linear block on the mapped data and scores the candidate causally.
   const auto evaluate = [&](Method kind, const SubspaceOptions& opts,
                             const std::vector<StaticMap>& maps) {
@@ -161,7 +180,7 @@ ENDOHAPTICS_DECL WorkflowResult identify_logs(const std::vector<PreparedLog>& fi
     for (const DataSet& d : data) mapped.push_back({apply_maps(maps, d.u), d.y});
     SubspaceModel linear = kind == Method::static_gain
                                ? fit_static_gain(std::span<const DataSet>(mapped), ts)
-                               : identify(std::span<const DataSet>(mapped), opts);
+                               : identify(std::span<const DataSet>(mapped), opts, factor_for(maps));
     files::ModelProvenance p;
     p.method = method;
     p.files = files;
@@ -188,6 +207,21 @@ ENDOHAPTICS_DECL WorkflowResult identify_logs(const std::vector<PreparedLog>& fi
     }
     c.mean_fit = sum / static_cast<double>(score_logs.size());
     c.model.provenance.fit_percent = per_output;
+    if (options.progress) {
+      std::string line = "model " + std::to_string(result.evaluations) + ": " + method;
+      if (kind != Method::static_gain) line += ", order " + std::to_string(c.linear.order);
+      std::array<char, 64> buffer{};
+      for (std::size_t j = 0; j < maps.size(); ++j) {
+        if (maps[j].kind == StaticMapKind::deadzone) {
+          std::snprintf(buffer.data(), buffer.size(), "%.4g", maps[j].upper);
+          line += ", dead zone " + inputs[j].name + " " + buffer.data();
+        }
+      }
+      std::snprintf(buffer.data(), buffer.size(), "%.2f", c.mean_fit);
+      line += std::string(": mean causal fit ") + buffer.data() + " %" +
+              (c.refused.empty() ? std::string() : " (refused)");
+      options.progress(line);
+    }
     return c;
   };
   // One candidate, or none when its fit fails (e.g. dead zones that leave the subspace fit an
@@ -306,6 +340,8 @@ ENDOHAPTICS_DECL WorkflowResult identify_logs(const std::vector<PreparedLog>& fi
       try {
 #endif
         CandidateModel c = evaluate(base.kind, opts, maps);
+        c.method = base.method;  // keeps " + dead zone" when the base has one
+        c.model.provenance.method = base.method;
         result.order_search.push_back({n, c.mean_fit, c.spectral_radius, c.refused});
         by_order.push_back(std::move(c));
 #if defined(__cpp_exceptions)
@@ -389,6 +425,7 @@ ENDOHAPTICS_DECL ModelChoice choose_family(
     if (!fixed.static_gain) fixed.candidates = {c.linear.weighting};
     fixed.order = fixed.static_gain ? 0 : c.linear.order;
     fixed.search_order = false;
+    fixed.progress = {};  // the folds report once each (below), not their one fit
     fixed.deadzone.assign(inputs.size(), DeadzoneSetting{});
     for (std::size_t j = 0; j < c.model.input_nonlinearity.size() && j < inputs.size(); ++j) {
       const StaticMap& m = c.model.input_nonlinearity[j];
@@ -397,6 +434,46 @@ ENDOHAPTICS_DECL ModelChoice choose_family(
       }
     }
   }
+  // The subspace family's block-Hankel factor per training file, with the chosen dead zones and
+  // the chosen model's scaling: each fold combines those of its files instead of a pass over its
+  // data (filled on the first fold; left empty when a file cannot carry the horizon alone).
+  std::vector<HankelFactor> file_factors;
+  bool file_factors_tried = false;
+  const auto make_file_factors = [&] {
+    file_factors_tried = true;
+    const SubspaceModel& linear = subspace->chosen().linear;
+    std::vector<StaticMap> maps(inputs.size());
+    for (std::size_t j = 0; j < inputs.size(); ++j) {
+      if (fixed.deadzone[j].mode == DeadzoneSetting::Mode::fixed) {
+        maps[j] = {StaticMapKind::deadzone, -fixed.deadzone[j].width, fixed.deadzone[j].width};
+      }
+    }
+    Eigen::Index samples = 0;
+    int sets = 0;
+    for (const PreparedLog& log : fit_logs) {
+      for (const DataSet& d : log.segments) samples += d.u.rows();
+      sets += static_cast<int>(log.segments.size());
+    }
+    const int s = fixed.block_rows > 0
+                      ? fixed.block_rows
+                      : default_block_rows(samples, sets, static_cast<int>(inputs.size()),
+                                           static_cast<int>(outputs.size()), fixed.order);
+    if (s == 0 || linear.input_scale.size() != static_cast<Eigen::Index>(inputs.size())) return;
+#if defined(__cpp_exceptions)
+    try {
+#endif
+      for (const PreparedLog& log : fit_logs) {
+        std::vector<DataSet> mapped;
+        for (const DataSet& d : log.segments) mapped.push_back({apply_maps(maps, d.u), d.y});
+        file_factors.push_back(hankel_factor(std::span<const DataSet>(mapped), s,
+                                             linear.input_scale, linear.output_scale));
+      }
+#if defined(__cpp_exceptions)
+    } catch (const Error&) {
+      file_factors.clear();  // e.g. a segment shorter than 2 s: each fold computes its own
+    }
+#endif
+  };
   const auto fit_family = [&](std::size_t family,
                               const std::vector<std::size_t>& train) -> files::ModelFile {
     if (subspace != nullptr && family == 0) {
@@ -404,6 +481,13 @@ ENDOHAPTICS_DECL ModelChoice choose_family(
       for (const std::size_t i : train) {
         f.push_back(fit_logs[i]);
         s.push_back(score_logs[i]);
+      }
+      if (!fixed.static_gain && !file_factors_tried) make_file_factors();
+      if (file_factors.size() == fit_logs.size()) {
+        std::vector<HankelFactor> parts;
+        for (const std::size_t i : train) parts.push_back(file_factors[i]);
+        const HankelFactor combined = combine(std::span<const HankelFactor>(parts));
+        return identify_logs(f, s, inputs, outputs, fixed, &combined).chosen().model;
       }
       return identify_logs(f, s, inputs, outputs, fixed).chosen().model;
     }
@@ -460,6 +544,13 @@ ENDOHAPTICS_DECL ModelChoice choose_family(
 #endif
       score.fold_fit.push_back(fold_fit);
       score.fold_rmse.push_back(fold_rmse);
+      if (options.progress) {
+        std::array<char, 64> buffer{};
+        std::snprintf(buffer.data(), buffer.size(), "%.2f", fold_fit);
+        options.progress("family " + score.family + ", fold " +
+                         std::to_string(score.fold_fit.size()) + " of " +
+                         std::to_string(folds.size()) + ": causal fit " + buffer.data() + " %");
+      }
       fit_sum += fold_fit;
       rmse_sum += fold_rmse;
     }
