@@ -26,7 +26,7 @@ namespace estimation_joint_force_model_conformance_test {
 namespace est = endohaptics::estimation;
 using endohaptics::model::NumericStatus;
 
-// The bridge's clamp model type (estimation::ClampForceModel), holding an observer.
+// An AnyJointForceModel of the four identified kinds, holding an observer.
 using AnyClamp =
     est::AnyJointForceModel<est::ClampModel2016<double>, est::StallHold<double>,
                             est::PushLoadObserver<double>, est::BidirectionalLoadObserver<double>>;
@@ -90,8 +90,8 @@ struct Factory<est::Clamp2016AsRun<float>> {
   static est::Clamp2016AsRun<float> make() { return est::Clamp2016AsRun<float>(); }
 };
 template <>
-struct Factory<est::PresetClampModel> {
-  static est::PresetClampModel make() {
+struct Factory<est::ClampForceModel> {
+  static est::ClampForceModel make() {
     return est::preset_force_models(est::ClampPreset::clamp2016_as_run).clamp1;
   }
 };
@@ -136,7 +136,7 @@ std::vector<typename M::ScalarType> run(
   est::StallHold<double>, est::StallHold<float>, est::PushLoadObserver<double>, \
       est::BidirectionalLoadObserver<double>, est::ClampModel2016<double>,      \
       est::RollModel2016<double>, AnyClamp, est::Clamp2016AsRun<double>,        \
-      est::Clamp2016AsRun<float>, est::PresetClampModel
+      est::Clamp2016AsRun<float>, est::ClampForceModel
 
 TEST_CASE_TEMPLATE("joint force models: a non-finite signal is refused, the state untouched", M,
                    ENDOHAPTICS_JOINT_FORCE_MODELS) {

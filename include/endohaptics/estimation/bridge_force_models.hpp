@@ -10,6 +10,7 @@
 
 #include "endohaptics/estimation/any_joint_force_model.hpp"
 #include "endohaptics/estimation/bidirectional_load_observer.hpp"
+#include "endohaptics/estimation/clamp_2016_as_run.hpp"
 #include "endohaptics/estimation/force_estimator.hpp"
 #include "endohaptics/estimation/force_models_2016.hpp"
 #include "endohaptics/estimation/push_load_observer.hpp"
@@ -20,12 +21,13 @@ namespace endohaptics::estimation {
 
 //! The clamp model the bridge runs, whichever kind the model file holds: the appendix C yaw
 //! Hammerstein-Wiener type (ClampModel2016, also identified "hammerstein_wiener" files of 6
-//! states, 2 inputs, 1 output), StallHold, PushLoadObserver or BidirectionalLoadObserver, as an
-//! AnyJointForceModel of the four (a JointForceModel: noexcept, allocation-free, its State the
-//! model's padded to the bidirectional observer's 23 numbers; reset() the model's own start state).
+//! states, 2 inputs, 1 output), StallHold, PushLoadObserver or BidirectionalLoadObserver, or the
+//! preset "clamp2016-as-run" (Clamp2016AsRun, estimation/clamp_presets.hpp), as an
+//! AnyJointForceModel of the five (a JointForceModel: noexcept, allocation-free, its State the
+//! model's padded to the as-run filter's 42 numbers; reset() the model's own start state).
 using ClampForceModel =
     AnyJointForceModel<ClampModel2016<double>, StallHold<double>, PushLoadObserver<double>,
-                       BidirectionalLoadObserver<double>>;
+                       BidirectionalLoadObserver<double>, Clamp2016AsRun<double>>;
 
 static_assert(JointForceModel<ClampForceModel>);
 

@@ -3,8 +3,8 @@
 //! worksheet's appendix C yaw model with its table 5.2 dead zones and 5.2.3 friction gates) and
 //! "clamp2016-as-run" (the estimator the 2016 code ran, Clamp2016AsRun, no gate). Each preset is
 //! its force models and its estimator settings; run_clamp_preset runs one on a clamp's recorded
-//! signals through the same ForceEstimator the bridge ticks. Forces in N; configuration time
-//! throws endohaptics::Error.
+//! signals through the same ForceEstimator the bridge ticks (BridgeForceEstimator). Forces in N;
+//! configuration time throws endohaptics::Error.
 #pragma once
 
 #include <Eigen/Core>
@@ -14,7 +14,7 @@
 #include <string_view>
 
 #include "endohaptics/core/error.hpp"
-#include "endohaptics/estimation/any_joint_force_model.hpp"
+#include "endohaptics/estimation/bridge_force_models.hpp"
 #include "endohaptics/estimation/clamp_2016_as_run.hpp"
 #include "endohaptics/estimation/force_estimator.hpp"
 #include "endohaptics/estimation/force_models_2016.hpp"
@@ -42,50 +42,33 @@ enum class ClampPreset : std::uint8_t {
       Error("unknown clamp preset '" + std::string(name) + "' (valid: yaw2016, clamp2016-as-run)"));
 }
 
-//! The clamp model a preset runs: the appendix C HW type or the as-run estimator.
-using PresetClampModel = AnyJointForceModel<ClampModel2016<double>, Clamp2016AsRun<double>>;
-static_assert(JointForceModel<PresetClampModel>);
-//! The 2016 roll and pitch models with the preset's clamp model for both clamps.
-using PresetForceModels =
-    ForceModels<RollModel2016<double>, PitchModel2016<double>, PresetClampModel>;
-//! The estimator a preset runs in (the 2016 rates: rate::Decimate).
-using PresetForceEstimator =
-    ForceEstimator<rate::Decimate, RollModel2016<double>, PitchModel2016<double>, PresetClampModel>;
-
-//! The models of `preset`. yaw2016: models_2016() (clamp 1 with the 0.21 A dead zone of table
-//! 5.2's yaw row, clamp 2 with the 0.20 A of its clamp row). clamp2016-as-run: Clamp2016AsRun
-//! on both clamps with input sign -1 (the code's clamp motor 1; the code's + on motor 4 is the
-//! mirrored clamp 2 setpoint, which ForceEstimator's per-joint convention already carries).
-[[nodiscard]] inline PresetForceModels preset_force_models(ClampPreset preset) {
-  const auto m = models_2016<double>();
+//! The models of `preset` as the bridge runs them (BridgeForceModels, its ClampForceModel on
+//! both clamps). yaw2016: models_2016() (clamp 1 with the 0.21 A dead zone of table 5.2's yaw
+//! row, clamp 2 with the 0.20 A of its clamp row). clamp2016-as-run: Clamp2016AsRun on both
+//! clamps with input sign -1 (the code's clamp motor 1; the code's + on motor 4 is the mirrored
+//! clamp 2 setpoint, which ForceEstimator's per-joint convention already carries).
+[[nodiscard]] inline BridgeForceModels preset_force_models(ClampPreset preset) {
   if (preset == ClampPreset::clamp2016_as_run) {
-    const Clamp2016AsRun<double> as_run{};
-    return {m.roll, m.pitch, PresetClampModel(as_run), PresetClampModel(as_run)};
+    return bridge_force_models(ClampForceModel(Clamp2016AsRun<double>{}));
   }
-  return {m.roll, m.pitch, PresetClampModel(m.clamp1), PresetClampModel(m.clamp2)};
+  return bridge_force_models();
 }
 
-//! The estimator settings of `preset`, from `base` (the configuration's): yaw2016 keeps them
-//! (its table 5.2 gates); clamp2016-as-run opens both clamps' friction gate (the 2016 code
-//! gated nothing: its Deadzone_switch calls are commented out) and drops any output dead zone
-//! on them (the model holds the code's 0.1).
+//! The estimator settings of `preset` from `base` (the configuration's), the bridge's rule
+//! (bridge_estimator_settings): yaw2016 keeps the table 5.2 gates; clamp2016-as-run opens both
+//! clamps' gate (the 2016 code gated nothing: its Deadzone_switch calls are commented out; the
+//! model holds the code's own 0.1 dead zone).
 [[nodiscard]] inline ForceEstimatorSettings<double> preset_estimator_settings(
-    ClampPreset preset, ForceEstimatorSettings<double> base = {}) {
-  if (preset == ClampPreset::clamp2016_as_run) {
-    for (const Motor joint : {Motor::clamp1, Motor::clamp2}) {
-      const auto j = static_cast<std::size_t>(joint);
-      base.friction[j] = model::JointFriction<double>::simplified(0.0);
-      base.output_deadzone[static_cast<Eigen::Index>(j)] = 0.0;
-    }
-  }
-  return base;
+    ClampPreset preset, const ForceEstimatorSettings<double>& base = {}) {
+  return bridge_estimator_settings(base, preset_force_models(preset));
 }
 
-//! The estimator of `preset` at `loop_period` s (the bridge: 1 ms), settings from `base`.
-[[nodiscard]] inline PresetForceEstimator preset_force_estimator(
+//! The bridge's estimator with `preset` at `loop_period` s (the bridge: 1 ms), settings from
+//! `base`.
+[[nodiscard]] inline BridgeForceEstimator preset_force_estimator(
     ClampPreset preset, double loop_period, ForceEstimatorSettings<double> base = {}) {
   base.loop_period = loop_period;
-  return PresetForceEstimator(preset_force_models(preset), preset_estimator_settings(preset, base));
+  return BridgeForceEstimator(preset_force_models(preset), preset_estimator_settings(preset, base));
 }
 
 //! Runs `preset` on one clamp's recorded signals, sampled every `period` s (a multiple of 1 ms
@@ -96,10 +79,10 @@ template <typename SignalsAt>
 requires std::invocable<SignalsAt&, Eigen::Index>
 [[nodiscard]] NumericStatus run_clamp_preset(ClampPreset preset, double period, SignalsAt&& signals,
                                              Eigen::Ref<Eigen::VectorXd> y) {
-  PresetForceEstimator estimator = preset_force_estimator(preset, period);
+  BridgeForceEstimator estimator = preset_force_estimator(preset, period);
   const auto motor = static_cast<Eigen::Index>(Motor::clamp1);  // default motor_order
-  typename PresetForceEstimator::Input in;
-  typename PresetForceEstimator::Forces f;
+  typename BridgeForceEstimator::Input in;
+  typename BridgeForceEstimator::Forces f;
   for (Eigen::Index k = 0; k < y.size(); ++k) {
     const JointSignals<double> s = signals(k);
     in.position[motor] = s.position;

@@ -15,6 +15,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -29,6 +30,7 @@
 #include "endohaptics/workflow/error_context.hpp"
 #include "endohaptics/workflow/joint_models.hpp"
 #include "endohaptics/workflow/prepared_log.hpp"
+#include "endohaptics/workflow/preset_models.hpp"
 
 namespace endohaptics::workflow {
 
@@ -69,6 +71,9 @@ struct ScoringOptions {
   //! from its input-only start); at most max_warmup. 0 with `oracle` (MATLAB compare).
   double warmup = 0.5;
   double max_lag = 1.0;  //!< s, largest |delay| searched by the cross-correlation
+  //! Set: the model is this clamp preset and runs as the bridge runs it (simulate_clamp_preset,
+  //! from its reset state; oracle refused); the model file then gives only names, units and Ts.
+  std::optional<estimation::ClampPreset> clamp_preset{};
 };
 
 //! Largest warm-up accepted, s (issue 15: a stated warm-up of at most 1 s).
@@ -101,11 +106,12 @@ struct FileComparison {
     const model::DynamicStateSpace<>& linear, const Eigen::VectorXd& u0);
 
 //! Simulates the model file (input maps, linear block, output maps; or a joint model, kinds
-//! stall_hold and the observers, from its start state whatever `options.initial_state` says
-//! but oracle, which it refuses) on every segment of `log` from x0 as `options.initial_state` says,
-//! leaves the first `options.warmup` s of each segment (all but its last sample when shorter) out,
-//! and scores the rest of the file together. Throws Error when the log's input or output count
-//! differs from the model's, or the warm-up is outside [0, max_warmup].
+//! stall_hold and the observers, or the clamp preset `options.clamp_preset`, from its start
+//! state whatever `options.initial_state` says but oracle, which it refuses) on every segment of
+//! `log` from x0 as `options.initial_state` says, leaves the first `options.warmup` s of each
+//! segment (all but its last sample when shorter) out, and scores the rest of the file together.
+//! Throws Error when the log's input or output count differs from the model's, or the warm-up is
+//! outside [0, max_warmup].
 [[nodiscard]] ENDOHAPTICS_DECL FileComparison compare_log(const files::ModelFile& model,
                                                           const PreparedLog& log,
                                                           const ScoringOptions& options = {});

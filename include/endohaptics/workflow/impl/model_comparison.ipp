@@ -53,6 +53,11 @@ ENDOHAPTICS_DECL FileComparison compare_log(const files::ModelFile& model, const
              " model has no linear state to fit to the output (it starts from its reset state, "
              "filters at the first sample); score it causally (--x0 steady, the default)");
   }
+  if (options.clamp_preset && options.initial_state == InitialStateMode::oracle) {
+    wf::fail("--x0 oracle: preset:" + std::string(estimation::to_string(*options.clamp_preset)) +
+             " runs as the bridge runs it, from its reset state: no linear state to fit to the "
+             "output; score it causally (--x0 steady, the default)");
+  }
   if (model.is_joint_model() && std::abs(log.sample_time - model.state_space.sample_time()) >
                                     1e-9 * model.state_space.sample_time()) {
     wf::fail(log.source + ": prepared at " + wf::format_number(log.sample_time) + " s, the " +
@@ -78,7 +83,11 @@ ENDOHAPTICS_DECL FileComparison compare_log(const files::ModelFile& model, const
   Eigen::Index row = 0;
   for (const DataSet& d : log.segments) {
     Eigen::MatrixXd y_hat;
-    if (model.is_joint_model()) {  // a joint model: causal from its start state, no x0
+    if (options.clamp_preset) {  // the bridge's estimator with the preset, from reset
+      y_hat = wf::with_context(log.source, [&] {
+        return Eigen::MatrixXd(simulate_clamp_preset(*options.clamp_preset, d.u, log.sample_time));
+      });
+    } else if (model.is_joint_model()) {  // a joint model: causal from its start state, no x0
       y_hat = wf::with_context(log.source,
                                [&] { return Eigen::MatrixXd(simulate_joint_model(model, d.u)); });
     } else {

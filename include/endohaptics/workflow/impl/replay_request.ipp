@@ -57,12 +57,21 @@ ENDOHAPTICS_DECL ReplayReport run_replay(const ReplayRequest& q, const ReplayHoo
   if (q.input_offset) pre.input_offset = offset_mode_from_string(*q.input_offset);
   r.scoring.warmup = q.warmup;
   r.scoring.initial_state = initial_state_from_string(q.x0);
+  // A clamp preset runs as the bridge runs it (one definition: estimation/clamp_presets.hpp).
+  if (preset) r.scoring.clamp_preset = replayed_clamp_preset(q.model.substr(7));
   const bool causal = r.causal();
   if (causal && (q.offset || q.input_offset || q.detrend)) {
     ENDOHAPTICS_THROW(
         Error("--offset, --input-offset and --detrend look at the whole file (or the output): they "
               "apply only to the output-fitted --x0 oracle score; the causal score compares the "
               "output as logged"));
+  }
+  if (r.scoring.clamp_preset && !causal) {
+    ENDOHAPTICS_THROW(
+        Error("--x0 oracle: " + r.name +
+              " runs as the bridge runs it (its dead zone, gate and saturation), from its reset "
+              "state: it has no linear state to fit to the output; replay scores it causally "
+              "(leave out --x0)"));
   }
   if (r.model.is_joint_model() && !causal) {
     ENDOHAPTICS_THROW(
