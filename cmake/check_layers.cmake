@@ -17,7 +17,7 @@ set(allowed_teleop core protocol model kinematics estimation transport)
 set(allowed_sim core protocol model kinematics estimation transport teleop)
 set(allowed_identification core model)
 set(allowed_files core protocol model kinematics estimation transport teleop sim identification)
-set(allowed_workflow core protocol model kinematics estimation teleop identification files)
+set(allowed_workflow core protocol model kinematics estimation teleop sim identification files)
 # Headers held below their area's layer: header -> the only areas it may include (its own area
 # is not implied: another header of the area could reach further).
 # files/model_file.hpp reads and writes model/ and estimation/ types only (a joint model's

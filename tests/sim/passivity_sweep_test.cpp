@@ -10,6 +10,7 @@
 #include <array>
 #include <chrono>
 #include <endohaptics/sim/closed_loop.hpp>
+#include <endohaptics/sim/passivity_sweep.hpp>
 #include <memory>
 #include <string>
 #include <vector>
@@ -22,32 +23,15 @@ namespace sim = endohaptics::sim;
 namespace tp = endohaptics::teleop;
 using endohaptics::test::allocations_during;
 
-// Seconds simulated: without passivity long enough to see the oscillation 1 s after the first
-// peak (which comes within ~1 s of the first contact at ~1 s); with TDPA a 10 s hold after it.
-constexpr double seconds_without = 4.0;
-constexpr double seconds_with = 11.5;
-// J: the observer may dip into the operator-side reserve (PassivityConfig::energy_reserve,
-// 0.01 J) and by the robot port's last steps; never further than this.
-constexpr double epsilon = 0.015;
-// rad of clamp 1 the robot-side controller may still hold back after the hold (0.9 mm of stylus).
-constexpr double max_drift = 0.005;
-
-sim::ClosedLoopConfig scenario(int round_trip_ms, double loss, sim::ContactKind contact,
-                               tp::PassivityMode mode) {
-  sim::ClosedLoopConfig c;
-  c.round_trip = std::chrono::milliseconds(round_trip_ms);
-  c.loss = loss;
-  c.seed = 7;
-  c.contact = contact;
-  c.passivity.mode = mode;
-  return c;
-}
+// The sweep's scenarios, run length and criteria: sim/passivity_sweep.hpp (the program's too).
+constexpr double seconds_without = sim::press_seconds_without;
+constexpr double seconds_with = sim::press_seconds_with;
+constexpr double epsilon = sim::PressCriteria{}.epsilon;
+constexpr double max_drift = sim::PressCriteria{}.max_drift;
+constexpr auto scenario = sim::press_scenario;
 
 sim::PressReport run(const sim::ClosedLoopConfig& config, double seconds) {
-  auto loop = std::make_unique<sim::ClosedLoop>(config);
-  std::vector<sim::ClosedLoopSample> samples;
-  loop->run(seconds, samples);
-  return sim::analyze_press(*loop, samples);
+  return sim::run_press(config, seconds);
 }
 
 std::string name(int ms, double loss, sim::ContactKind contact) {
@@ -68,6 +52,7 @@ void check_row(int ms) {
       CHECK(with.drift < max_drift);
       CHECK(with.max_force < 3.0);   // never at the loop's 3 N limit
       CHECK(with.hold_force > 0.4);  // and the contact is still felt
+      CHECK(sim::press_meets_criteria(with));
     }
   }
 }
@@ -84,6 +69,9 @@ TEST_CASE("passivity sweep: 100 ms stiff stop is unstable without passivity") {
     CHECK_FALSE(without.decays());              // the oscillation does not decay
     CHECK(without.min_energy < -10 * epsilon);  // the channel generated energy
     CHECK(without.max_force >= 3.0 - 1e-9);     // the force reached the loop's limit
+    CHECK(sim::press_verdict_without(without) ==
+          "UNSTABLE (no decay, energy generated, force limit)");
+    CHECK_FALSE(sim::press_meets_criteria(without));
   }
 }
 
@@ -97,6 +85,8 @@ TEST_CASE(
       const sim::PressReport r =
           run(scenario(ms, 0.0, contact, tp::PassivityMode::observe), seconds_without);
       CHECK(r.decays());
+      CHECK(sim::press_verdict_without(r).starts_with("stable") ==
+            (r.min_energy >= -epsilon && r.max_force < 3.0 - 1e-9));
     }
   }
   const sim::PressReport soft200 =
