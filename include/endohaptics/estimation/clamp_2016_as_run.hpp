@@ -109,14 +109,15 @@ class Clamp2016AsRun {
   }
   [[nodiscard]] bool memoryless() const noexcept { return false; }  //!< never
 
-  //! The force the code would publish for this message `s`, at the current filter state.
+  //! The force the code would publish for this message `s`, at the current filter state (0 when
+  //! an estimate is not finite: the sign gate).
   [[nodiscard]] Scalar force(const Signals& s) const noexcept {
     Vector6 x = x_of(z_);
     Matrix6 P = P_of(z_);
     Output ye1, ye2;
-    message(s, x, P, ye1, ye2);
-    const Scalar f = combine(ye1[1], ye2[1]);
-    return std::isfinite(f) ? f : Scalar(0);
+    message(s, x, P, ye1, ye2, false);
+    // A NaN estimate fails both sign tests: the gate gives 0, as the 2016 code did.
+    return combine(ye1[1], ye2[1]);
   }
 
   //! One message: both filter steps, kept. All or nothing: non_finite_input when the position
@@ -149,9 +150,7 @@ class Clamp2016AsRun {
   //! Kalman::estimateOutput once: measurement update with `yv`, output ye = C x, then the time
   //! update with `u`. `x` and `P` are updated in place.
   void filter_step(const Output& yv, Scalar u, Vector6& x, Matrix6& P, Output& ye) const noexcept {
-    const Eigen::Matrix<Scalar, 6, 2> PCt = P * C_.transpose();
-    const Eigen::Matrix<Scalar, 2, 2> M = C_ * PCt + R_;
-    const Eigen::Matrix<Scalar, 6, 2> K = PCt * M.inverse();
+    const Eigen::Matrix<Scalar, 6, 2> K = gain(P);
     x += K * (yv - C_ * x);
     P = (Matrix6::Identity() - K * C_) * P;
     ye = C_ * x;
@@ -171,12 +170,25 @@ class Clamp2016AsRun {
  private:
   static Vector6 x_of(const State& z) noexcept { return z.template head<6>(); }
   static Matrix6 P_of(const State& z) noexcept { return Eigen::Map<const Matrix6>(z.data() + 6); }
-  // Endowrist::forceEstimation's two estimateOutput calls on one filter, for this clamp.
-  void message(const Signals& s, Vector6& x, Matrix6& P, Output& ye1, Output& ye2) const noexcept {
+  // The gain of Kalman::estimateOutput: K = P C' (C P C' + R)^-1.
+  [[nodiscard]] Eigen::Matrix<Scalar, 6, 2> gain(const Matrix6& P) const noexcept {
+    const Eigen::Matrix<Scalar, 6, 2> PCt = P * C_.transpose();
+    const Eigen::Matrix<Scalar, 2, 2> M = C_ * PCt + R_;
+    return PCt * M.inverse();
+  }
+  // Endowrist::forceEstimation's two estimateOutput calls on one filter, for this clamp. With
+  // `keep` false (force()), the second call stops at its output: its covariance and time updates
+  // reach only the next message, which advance() computes.
+  void message(const Signals& s, Vector6& x, Matrix6& P, Output& ye1, Output& ye2,
+               bool keep = true) const noexcept {
     const Output yv(s.position / p_.message_period, Scalar(0));
     const Scalar u = p_.input_sign * s.current;
     filter_step(yv, u, x, P, ye1);
-    filter_step(yv, u, x, P, ye2);
+    if (keep) {
+      filter_step(yv, u, x, P, ye2);
+    } else {
+      ye2 = C_ * (x + gain(P) * (yv - C_ * x));
+    }
   }
 
   Parameters p_;

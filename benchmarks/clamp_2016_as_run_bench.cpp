@@ -1,0 +1,134 @@
+// The 2016 clamp estimator as it ran (estimation/clamp_2016_as_run.hpp) beside the worksheet's
+// clamp model (ClampModel2016, the appendix C yaw Hammerstein-Wiener preset) in the same run:
+// one joint step (advance + force), the step through the bridge's ClampForceModel, and the whole
+// 1 kHz tick of the bridge's estimator with each clamp preset (estimation/clamp_presets.hpp);
+// plus that tick with the clamp variant as it was before it could hold the as-run model (State
+// 23 numbers instead of 42), to price the larger snapshot every tick takes.
+#include <benchmark/benchmark.h>
+
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <endohaptics/estimation/bidirectional_load_observer.hpp>
+#include <endohaptics/estimation/clamp_2016_as_run.hpp>
+#include <endohaptics/estimation/clamp_presets.hpp>
+#include <endohaptics/estimation/force_models_2016.hpp>
+#include <endohaptics/estimation/push_load_observer.hpp>
+#include <endohaptics/estimation/stall_hold.hpp>
+
+namespace clamp_2016_as_run_bench {
+
+namespace {
+
+namespace est = endohaptics::estimation;
+
+// 256 samples of a slow squeeze: position, velocity and current crossing zero and the dead zones.
+constexpr std::size_t sweep_length = 256;
+std::array<est::JointSignals<double>, sweep_length> sweep() {
+  std::array<est::JointSignals<double>, sweep_length> s{};
+  for (std::size_t k = 0; k < sweep_length; ++k) {
+    const double phase = 2.0 * 3.141592653589793 * static_cast<double>(k) / sweep_length;
+    s[k] = {0.5 * std::sin(phase), 0.3 * std::cos(phase), 0.6 * std::sin(phase), 0.0};
+  }
+  return s;
+}
+
+template <typename Model>
+void run(benchmark::State& st, Model model) {
+  const auto signals = sweep();
+  std::size_t k = 0;
+  for (auto _ : st) {
+    const auto status = model.advance(signals[k]);
+    const double f = model.force(signals[k]);
+    benchmark::DoNotOptimize(status);
+    benchmark::DoNotOptimize(f);
+    k = (k + 1) % sweep_length;
+  }
+  st.SetItemsProcessed(st.iterations());
+}
+
+void BM_Clamp2016_worksheet_step(benchmark::State& st) { run(st, est::models_2016().clamp1); }
+BENCHMARK(BM_Clamp2016_worksheet_step);
+
+void BM_Clamp2016_as_run_step(benchmark::State& st) { run(st, est::Clamp2016AsRun<double>()); }
+BENCHMARK(BM_Clamp2016_as_run_step);
+
+// force() alone: what the estimator evaluates on every 1 kHz tick (advance: every 20th).
+template <typename Model>
+void run_force(benchmark::State& st, const Model& model) {
+  const auto signals = sweep();
+  std::size_t k = 0;
+  for (auto _ : st) {
+    benchmark::DoNotOptimize(model.force(signals[k]));
+    k = (k + 1) % sweep_length;
+  }
+  st.SetItemsProcessed(st.iterations());
+}
+void BM_Clamp2016_worksheet_force(benchmark::State& st) {
+  run_force(st, est::models_2016().clamp1);
+}
+BENCHMARK(BM_Clamp2016_worksheet_force);
+void BM_Clamp2016_as_run_force(benchmark::State& st) {
+  run_force(st, est::Clamp2016AsRun<double>());
+}
+BENCHMARK(BM_Clamp2016_as_run_force);
+
+void BM_ClampForceModel_worksheet_step(benchmark::State& st) {
+  run(st, est::ClampForceModel(est::models_2016().clamp1));
+}
+BENCHMARK(BM_ClampForceModel_worksheet_step);
+
+void BM_ClampForceModel_as_run_step(benchmark::State& st) {
+  run(st, est::ClampForceModel(est::Clamp2016AsRun<double>()));
+}
+BENCHMARK(BM_ClampForceModel_as_run_step);
+
+// The whole estimator tick (4 joints, decimation, gates, snapshot) at 1 kHz.
+template <typename Estimator>
+void run_tick(benchmark::State& st, Estimator estimator) {
+  const auto signals = sweep();
+  typename Estimator::Input in;
+  typename Estimator::Forces f;
+  std::size_t k = 0;
+  for (auto _ : st) {
+    const auto& s = signals[k];
+    in.position.setConstant(s.position);
+    in.velocity.setConstant(s.velocity);
+    in.current.setConstant(s.current);
+    benchmark::DoNotOptimize(estimator.step(in, f));
+    benchmark::DoNotOptimize(f);
+    k = (k + 1) % sweep_length;
+  }
+  st.SetItemsProcessed(st.iterations());
+}
+
+void BM_BridgeTick_yaw2016(benchmark::State& st) {
+  run_tick(st, est::preset_force_estimator(est::ClampPreset::yaw2016, 0.001));
+}
+BENCHMARK(BM_BridgeTick_yaw2016);
+
+void BM_BridgeTick_clamp2016_as_run(benchmark::State& st) {
+  run_tick(st, est::preset_force_estimator(est::ClampPreset::clamp2016_as_run, 0.001));
+}
+BENCHMARK(BM_BridgeTick_clamp2016_as_run);
+
+// The clamp variant before it held the as-run model: its State is the bidirectional observer's
+// 23 numbers.
+using ClampVariantBefore =
+    est::AnyJointForceModel<est::ClampModel2016<double>, est::StallHold<double>,
+                            est::PushLoadObserver<double>, est::BidirectionalLoadObserver<double>>;
+void BM_BridgeTick_yaw2016_variant_before(benchmark::State& st) {
+  using Estimator = est::ForceEstimator<est::rate::Decimate, est::RollModel2016<double>,
+                                        est::PitchModel2016<double>, ClampVariantBefore>;
+  const auto m = est::models_2016();
+  est::ForceEstimatorSettings<double> settings;
+  settings.loop_period = 0.001;
+  run_tick(st,
+           Estimator({m.roll, m.pitch, ClampVariantBefore(m.clamp1), ClampVariantBefore(m.clamp2)},
+                     settings));
+}
+BENCHMARK(BM_BridgeTick_yaw2016_variant_before);
+
+}  // namespace
+
+}  // namespace clamp_2016_as_run_bench
