@@ -15,7 +15,7 @@
 
 namespace endohaptics::model {
 
-//! Sample time the appendix C models were identified at (50 Hz, the 2016 code), s.
+//! Sample time the appendix C models were identified at (the logs' 50 Hz; the 2016 code's T), s.
 inline constexpr double sample_time_2016 = 0.02;
 
 //! Static friction current of the yaw motor, table 5.2, A.
