@@ -1,190 +1,24 @@
 // endohaptics-sbrio-gateway: protocol v2's robot side on a small computer beside the sbRIO. It
 // terminates v2 towards the console and relays plain 2016 setpoints to the unchanged LabVIEW loop
 // over a point-to-point link, and the sbRIO's states back, sealed; on silence it disables the
-// motors itself (transport/v2_gateway.hpp, docs/rig.md).
+// motors itself (transport/v2_gateway.hpp, docs/rig.md). Options and run: gateway_app.hpp.
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
-#include <atomic>
-#include <chrono>
-#include <csignal>
 #include <cstdio>
-#include <endohaptics/protocol/key_file.hpp>
-#include <endohaptics/protocol/secure_session.hpp>
-#include <endohaptics/teleop/realtime.hpp>
-#include <endohaptics/transport/secure_transport.hpp>
-#include <endohaptics/transport/udp_server_transport.hpp>
-#include <endohaptics/transport/udp_transport.hpp>
-#include <endohaptics/transport/v2_gateway.hpp>
-#include <endohaptics/workflow/command_line.hpp>
-#include <string>
-#include <string_view>
-#include <utility>
-#include <vector>
+#include <exception>
 
-#include "../cli_numbers.hpp"
-
-namespace protocol = endohaptics::protocol;
-namespace transport = endohaptics::transport;
-
-namespace {
-
-std::atomic<bool> g_stop{false};
-extern "C" void on_signal(int) { g_stop.store(true); }
-
-// "HOST:PORT" (IPv6: "[addr]:port") into host and port 1..65535 (0 too when `any_port`).
-std::pair<std::string, std::uint16_t> parse_endpoint(const std::string& text,
-                                                     const std::string& option, bool any_port) {
-  const auto colon = text.rfind(':');
-  if (colon == std::string::npos || colon == 0 || colon + 1 == text.size()) {
-    throw endohaptics::Error(option + " must be HOST:PORT, got '" + text + "'");
-  }
-  std::string host = text.substr(0, colon);
-  if (host.size() >= 2 && host.front() == '[' && host.back() == ']') {
-    host = host.substr(1, host.size() - 2);
-  }
-  const auto port = endohaptics::workflow::parse_number<std::uint16_t>(
-      std::string_view(text).substr(colon + 1), option + " port", any_port ? 0 : 1, 65535);
-  return {host, port};
-}
-
-std::chrono::nanoseconds from_ms(double ms) {
-  return std::chrono::nanoseconds(static_cast<std::int64_t>(ms * 1e6 + 0.5));
-}
-
-}  // namespace
+#include "gateway_app.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{
       "endohaptics sbRIO gateway: protocol v2's robot side in front of a 2016 sbRIO (relays "
       "authenticated setpoints, disables the motors on silence)"};
-  std::string listen = "0.0.0.0:61557";
-  std::string sbrio = "169.254.4.42:61556";
-  std::vector<std::string> key_paths;
-  std::string rig_name = std::string(protocol::default_rig_name);
-  double watchdog_ms = 100.0;
-  double max_round_trip_ms = 0.0;
-  bool stats = false;
-  double duration = 0.0;
-  app.add_option("--listen", listen,
-                 "HOST:PORT the consoles' protocol v2 datagrams arrive at (port 0: any free "
-                 "port, printed)")
-      ->capture_default_str();
-  app.add_option("--sbrio", sbrio,
-                 "HOST:PORT of the sbRIO on the point-to-point link (plain 2016 wire; only its "
-                 "datagrams are taken)")
-      ->capture_default_str();
-  app.add_option("--key", key_paths,
-                 "the 32-byte key file (mode 0600) the console holds; give it twice while a key "
-                 "is changed over (the key in use and its successor)");
-  app.add_option("--rig", rig_name,
-                 "this robot side's name (1-16 printable characters), bound into every session "
-                 "key: a console for another rig is refused")
-      ->capture_default_str();
-  app.add_option("--watchdog-ms", watchdog_ms,
-                 "no setpoint relayed for this long: send the sbRIO the all-disabled setpoint, "
-                 "once a millisecond")
-      ->check(examples::number_in(1.0, 10000.0))
-      ->capture_default_str();
-  app.add_option("--max-round-trip", max_round_trip_ms,
-                 "the longest round trip granted, ms: a setpoint is obeyed only if the state it "
-                 "acknowledges answered a setpoint received at most this long ago (0: the "
-                 "watchdog)")
-      ->check(examples::number_in(0.0, 10000.0))
-      ->capture_default_str();
-  app.add_flag("--stats", stats, "print the counters every second");
-  app.add_option("--duration", duration, "seconds to run (0: until SIGINT/SIGTERM)")
-      ->check(examples::number_in(0.0, 1e7))
-      ->capture_default_str();
+  gateway::Options options;
+  gateway::add_options(app, options);
   CLI11_PARSE(app, argc, argv);
-
   try {
-    if (key_paths.empty()) {
-      throw endohaptics::Error(
-          "--key FILE is required (the key the console holds; make one with endohaptics-bridge "
-          "--generate-key FILE)");
-    }
-    const auto [listen_host, listen_port] = parse_endpoint(listen, "--listen", true);
-    const auto [sbrio_host, sbrio_port] = parse_endpoint(sbrio, "--sbrio", false);
-    transport::GatewayConfig gateway_config;
-    gateway_config.watchdog = from_ms(watchdog_ms);
-    gateway_config.validate();
-    protocol::ResponderConfig session;
-    session.rig = protocol::make_rig_id(rig_name);
-    session.max_round_trip =
-        max_round_trip_ms > 0 ? from_ms(max_round_trip_ms) : gateway_config.watchdog;
-    session.expiry = gateway_config.watchdog;  // a silent console's session ends with the motors
-    std::string ids;
-    const protocol::KeyRing keys = protocol::load_key_ring(key_paths, &ids);
-
-    transport::UdpServerConfig network_config;
-    network_config.bind_address = listen_host;
-    network_config.port = listen_port;
-    transport::UdpServerTransport network(network_config);
-    transport::SecureTransport<transport::UdpServerTransport, protocol::SecureResponder<4>> secure(
-        network, protocol::SecureResponder<4>(keys, session));
-    transport::UdpConfig link_config;
-    // The link's own address family: an IPv6 sbRIO needs an IPv6 socket.
-    link_config.local_address = sbrio_host.find(':') != std::string::npos ? "::" : "0.0.0.0";
-    link_config.remote_address = sbrio_host;
-    link_config.remote_port = sbrio_port;
-    transport::UdpTransport link(link_config);
-    endohaptics::SteadyClock clock;
-    transport::V2Gateway gateway(secure, link, clock, gateway_config);
-
-    std::signal(SIGINT, on_signal);
-    std::signal(SIGTERM, on_signal);
-    (void)endohaptics::teleop::apply_realtime({.timer_slack_ns = 1});  // prompt receive timeouts
-    std::setvbuf(stdout, nullptr, _IOLBF, 0);  // a supervising script sees the port at once
-    const auto endpoint = network.local_endpoint();
-    fmt::print(
-        "sbrio-gateway: protocol v2 on {}:{} (rig '{}', keys {}; round trips up to {:.0f} ms) -> "
-        "2016 sbRIO {}:{}; watchdog {} ms\n",
-        endpoint.address().to_string(), endpoint.port(), rig_name, ids,
-        std::chrono::duration<double, std::milli>(session.max_round_trip).count(), sbrio_host,
-        sbrio_port, watchdog_ms);
-
-    const auto start = clock.now();
-    auto next_report = start + std::chrono::seconds(1);
-    bool was_silent = true;
-    const auto print_counters = [&](std::string_view prefix) {
-      const auto& c = gateway.counters();
-      fmt::print(
-          "sbrio-gateway: {}{} setpoints relayed, {} states returned, {} disabled setpoints sent "
-          "on silence, {} sbRIO datagrams refused, {} unanswered, {} watchdog trips, {} "
-          "transport errors (v2 {}, sbRIO {}); v2 refused {}\n",
-          prefix, c.relayed, c.returned, c.disabled, c.sbrio_refused, c.unanswered,
-          c.watchdog_trips, c.network_errors + c.sbrio_errors, c.network_errors, c.sbrio_errors,
-          secure.counters().rejected());
-    };
-    // 1 ms receives at most: a signal ends the run well within 1 s.
-    while (!g_stop.load()) {
-      const auto now = clock.now();
-      if (duration > 0 && now - start >= std::chrono::duration<double>(duration)) break;
-      (void)gateway.step(std::chrono::milliseconds(1));
-      if (gateway.silent() != was_silent) {
-        was_silent = !was_silent;
-        fmt::print("sbrio-gateway: {}\n", was_silent
-                                              ? "silence: sending the sbRIO all-disabled setpoints"
-                                              : "relaying setpoints from " + network.peer_name());
-      }
-      if (stats && now >= next_report) {
-        next_report += std::chrono::seconds(1);
-        print_counters("");
-      }
-    }
-    fmt::print("sbrio-gateway: protocol v2 datagrams: {}\n", protocol::describe(secure.counters()));
-    print_counters(fmt::format("done after {:.1f} s: ",
-                               std::chrono::duration<double>(clock.now() - start).count()));
-    endohaptics::workflow::require_written(stdout, "standard output");
-    if (gateway.counters().relayed == 0) {
-      fmt::print(stderr,
-                 "error: no setpoint was relayed: no console with a matching key and rig reached "
-                 "{} (v2 refused {})\n",
-                 listen, secure.counters().rejected());
-      return 3;
-    }
-    return 0;
+    return gateway::run(options);
   } catch (const std::exception& e) {
     fmt::print(stderr, "error: {}\n", e.what());
     return 1;

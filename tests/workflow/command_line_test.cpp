@@ -213,4 +213,30 @@ TEST_CASE("require_finite_scores: a diverging model or an undefined score is an 
   CHECK(g.fit[0] > 99.99);  // the CSV holds 6 decimals
 }
 
+TEST_CASE("parse_endpoint: HOST:PORT, IPv6 in brackets, the port whole and in range") {
+  const wf::Endpoint a = wf::parse_endpoint("169.254.4.42:61556", "--sbrio", false);
+  CHECK(a.host == "169.254.4.42");
+  CHECK(a.port == 61556);
+  const wf::Endpoint b = wf::parse_endpoint("[::1]:0", "--listen", true);
+  CHECK(b.host == "::1");
+  CHECK(b.port == 0);
+  CHECK(wf::parse_endpoint("fe80::1:5000", "--sbrio", false).host == "fe80::1");
+  CHECK(message_of([] { (void)wf::parse_endpoint("localhost", "--sbrio", false); }) ==
+        "--sbrio must be HOST:PORT, got 'localhost'");
+  CHECK(message_of([] { (void)wf::parse_endpoint(":80", "--sbrio", false); }) ==
+        "--sbrio must be HOST:PORT, got ':80'");
+  CHECK(message_of([] { (void)wf::parse_endpoint("host:", "--sbrio", false); }) ==
+        "--sbrio must be HOST:PORT, got 'host:'");
+  // Port 0 (any free port) only where the option allows it; never beyond 65535 or partly a number.
+  CHECK(message_of([] {
+          (void)wf::parse_endpoint("host:0", "--sbrio", false);
+        }).starts_with("--sbrio port"));
+  CHECK(message_of([] {
+          (void)wf::parse_endpoint("host:65536", "--listen", true);
+        }).starts_with("--listen port"));
+  CHECK(message_of([] {
+          (void)wf::parse_endpoint("host:80x", "--listen", true);
+        }).starts_with("--listen port"));
+}
+
 }  // namespace workflow_command_line_test

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <concepts>
 #include <cstddef>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <sstream>
@@ -139,6 +140,17 @@ class NumberCheck {
   T max_;
   std::vector<std::string> keywords_;
 };
+
+//! A network endpoint from the command line.
+struct Endpoint {
+  std::string host;        //!< name or address (IPv6 without its brackets)
+  std::uint16_t port = 0;  //!< UDP port
+};
+
+//! Parses "HOST:PORT" (IPv6: "[addr]:port") given to `option`: the port whole and in 1..65535
+//! (0 too when `any_port`: any free port). Throws Error naming the option otherwise.
+[[nodiscard]] ENDOHAPTICS_DECL Endpoint parse_endpoint(std::string_view text,
+                                                       std::string_view option, bool any_port);
 
 namespace detail {
 

@@ -62,4 +62,20 @@ ENDOHAPTICS_DECL void close_written(std::FILE* out, std::string_view what) {
   }
 }
 
+ENDOHAPTICS_DECL Endpoint parse_endpoint(std::string_view text, std::string_view option,
+                                         bool any_port) {
+  const auto colon = text.rfind(':');
+  if (colon == std::string_view::npos || colon == 0 || colon + 1 == text.size()) {
+    ENDOHAPTICS_THROW(
+        Error(std::string(option) + " must be HOST:PORT, got '" + std::string(text) + "'"));
+  }
+  std::string host(text.substr(0, colon));
+  if (host.size() >= 2 && host.front() == '[' && host.back() == ']') {
+    host = host.substr(1, host.size() - 2);
+  }
+  const auto port = parse_number<std::uint16_t>(
+      text.substr(colon + 1), std::string(option) + " port", any_port ? 0 : 1, 65535);
+  return {std::move(host), port};
+}
+
 }  // namespace endohaptics::workflow
