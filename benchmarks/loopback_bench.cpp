@@ -9,11 +9,13 @@
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
+#include <poll.h>
 #include <sched.h>
 #include <sys/socket.h>
 #include <sys/time.h>
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cstdlib>
@@ -241,11 +243,20 @@ void BM_Loopback_v2_handshake(benchmark::State& st) {
       static_cast<double>(sends) / static_cast<double>(st.iterations());
 }
 
+// How each end of a ping-pong waits for its datagram.
+enum class Wait {
+  blocking,  // recv in a blocking socket (no deadline: the floor)
+  ppoll,     // ppoll with a 1 ms timeout, then a non-blocking read (UdpTransport before timerfds)
+  transport  // detail::ReadableWait with a 1 ms deadline, then a non-blocking read (the transports)
+};
+
 // The wire's floor for `--rate max`: a raw POSIX UDP ping-pong on 127.0.0.1 between this thread
-// and an echo thread, each blocking in recv (17 bytes out, 49 back, the 2016 sizes): the rate the
-// loop would reach if the loop, the emulator and the transports cost nothing. rate_hz here and in
-// BM_Loopback_max_rate, same run, give the ratio docs/performance.md tracks.
-void BM_Baseline_udp_ping_pong(benchmark::State& st) {
+// and an echo thread (17 bytes out, 49 back, the 2016 sizes). With Wait::blocking each end blocks
+// in recv: the rate the loop would reach if the loop, the emulator and the transports cost
+// nothing. rate_hz here and in BM_Loopback_max_rate, same run, give the ratio
+// docs/performance.md tracks. The other waits show what a deadline costs per round trip, both
+// ends waiting as the transports do (same reads and sends, only the wait differs).
+void ping_pong(benchmark::State& st, Wait wait) {
   const auto ticks = st.range(0);
   const auto open_socket = [] {
     const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
@@ -265,26 +276,49 @@ void BM_Baseline_udp_ping_pong(benchmark::State& st) {
   (void)::connect(client, reinterpret_cast<sockaddr*>(&server_address), sizeof server_address);
   const timeval wake{0, 100000};  // the echo thread looks at `stop` at least every 100 ms
   (void)::setsockopt(server, SOL_SOCKET, SO_RCVTIMEO, &wake, sizeof wake);
+  // Waits as `wait` says for `fd` to be readable, at most 1 ms (ReadableWait: `timer`'s).
+  const auto readable = [wait](int fd, transport::detail::ReadableWait& timer) {
+    if (wait == Wait::blocking) return true;
+    if (wait == Wait::transport) {
+      return timer.until(fd, transport::detail::monotonic_now() + std::chrono::milliseconds(1)) ==
+             transport::TransportStatus::ok;
+    }
+    pollfd pfd{fd, POLLIN, 0};
+    const timespec one_ms{0, 1000000};
+    return ::ppoll(&pfd, 1, &one_ms, nullptr) > 0;
+  };
+  const int read_flags = wait == Wait::blocking ? 0 : MSG_DONTWAIT;
   std::atomic<bool> stop{false};
   std::thread echo([&] {
+    (void)tp::apply_realtime({.timer_slack_ns = 1});  // as EmulatorThread
+    transport::detail::ReadableWait timer;
     std::array<char, 64> in{};
     const std::array<char, 49> state{};
     sockaddr_in from{};
     while (!stop.load(std::memory_order_relaxed)) {
+      if (!readable(server, timer)) continue;
       socklen_t n = sizeof from;
-      if (::recvfrom(server, in.data(), in.size(), 0, reinterpret_cast<sockaddr*>(&from), &n) > 0) {
+      if (::recvfrom(server, in.data(), in.size(), read_flags, reinterpret_cast<sockaddr*>(&from),
+                     &n) > 0) {
         (void)::sendto(server, state.data(), state.size(), 0, reinterpret_cast<sockaddr*>(&from),
                        n);
       }
     }
   });
+  (void)tp::apply_realtime({.timer_slack_ns = 1});  // as run_loop
+  transport::detail::ReadableWait timer;
   const std::array<char, 17> setpoint{};
   std::array<char, 64> in{};
   std::int64_t done = 0;
   for (auto _ : st) {
     for (std::int64_t i = 0; i < ticks; ++i) {
-      if (::send(client, setpoint.data(), setpoint.size(), 0) < 0 ||
-          ::recv(client, in.data(), in.size(), 0) <= 0) {
+      if (::send(client, setpoint.data(), setpoint.size(), 0) < 0) {
+        st.SkipWithError("the ping-pong failed");
+        break;
+      }
+      while (!readable(client, timer)) {
+      }
+      if (::recv(client, in.data(), in.size(), read_flags) <= 0) {
         st.SkipWithError("the ping-pong failed");
         break;
       }
@@ -298,6 +332,12 @@ void BM_Baseline_udp_ping_pong(benchmark::State& st) {
   st.counters["rate_hz"] =
       benchmark::Counter(static_cast<double>(done), benchmark::Counter::kIsRate);
   st.SetItemsProcessed(done);
+}
+
+void BM_Baseline_udp_ping_pong(benchmark::State& st) { ping_pong(st, Wait::blocking); }
+void BM_Baseline_udp_ping_pong_ppoll(benchmark::State& st) { ping_pong(st, Wait::ppoll); }
+void BM_Baseline_udp_ping_pong_transport_wait(benchmark::State& st) {
+  ping_pong(st, Wait::transport);
 }
 
 // The floor: a bare absolute-deadline clock_nanosleep loop at 1 kHz on the same machine, its
@@ -348,6 +388,16 @@ BENCHMARK(BM_Loopback_1kHz_v2)
     ->UseRealTime();
 BENCHMARK(BM_Loopback_v2_handshake)->Unit(benchmark::kMicrosecond)->UseRealTime();
 BENCHMARK(BM_Baseline_udp_ping_pong)
+    ->Arg(run_ticks(60000))
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_Baseline_udp_ping_pong_ppoll)
+    ->Arg(run_ticks(60000))
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_Baseline_udp_ping_pong_transport_wait)
     ->Arg(run_ticks(60000))
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond)

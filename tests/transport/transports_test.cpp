@@ -481,4 +481,55 @@ TEST_CASE("filtered drain (UDP): junk that wakes the wait does not end it before
   CHECK(r.rejected == 1);
 }
 
+TEST_CASE(
+    "UDP receive deadline: a timer armed for an earlier wait never ends a wait early or late") {
+  // The transports keep one timer armed across receives (detail::ReadableWait): a receive must
+  // still end at its own deadline, never at the armed one, whether that is earlier or later.
+  transport::UdpServerTransport server({.bind_address = "127.0.0.1", .port = 0});
+  transport::UdpTransport client({.local_address = "127.0.0.1",
+                                  .remote_address = "127.0.0.1",
+                                  .remote_port = server.local_endpoint().port()});
+  std::array<std::byte, 64> buffer{};
+  const auto elapsed = [](auto since) { return std::chrono::steady_clock::now() - since; };
+
+  // A datagram ends a long wait at once and leaves the timer armed 400 ms ahead; a 5 ms receive
+  // after it must end after about 5 ms, not at the armed 400 ms.
+  REQUIRE(client.send(pattern<17>(1)) == TransportStatus::ok);
+  auto t0 = std::chrono::steady_clock::now();
+  REQUIRE(server.receive(buffer, 400ms).status == TransportStatus::ok);
+  t0 = std::chrono::steady_clock::now();
+  CHECK(server.receive(buffer, 5ms).status == TransportStatus::timeout);
+  CHECK(elapsed(t0) >= 5ms);
+  CHECK(elapsed(t0) < 200ms);
+
+  // The timer armed for a 2 ms receive that a datagram ended fires before the next receive's
+  // 60 ms deadline: that receive must not end then.
+  REQUIRE(client.send(pattern<17>(2)) == TransportStatus::ok);
+  REQUIRE(server.receive(buffer, 2ms).status == TransportStatus::ok);
+  t0 = std::chrono::steady_clock::now();
+  CHECK(server.receive(buffer, 60ms).status == TransportStatus::timeout);
+  CHECK(elapsed(t0) >= 60ms);
+
+  // ... and a datagram arriving after the early timer still ends it with ok.
+  REQUIRE(client.send(pattern<17>(3)) == TransportStatus::ok);
+  REQUIRE(server.receive(buffer, 3ms).status == TransportStatus::ok);
+  std::thread late([&] {
+    std::this_thread::sleep_for(20ms);
+    (void)client.send(pattern<17>(4));
+  });
+  t0 = std::chrono::steady_clock::now();
+  const auto r = server.receive(buffer, 2s);
+  late.join();
+  CHECK(r.status == TransportStatus::ok);
+  CHECK(buffer[0] == std::byte{4});
+  CHECK(elapsed(t0) >= 15ms);
+
+  // A deadline already passed still looks once: a queued datagram is returned.
+  REQUIRE(client.send(pattern<17>(5)) == TransportStatus::ok);
+  std::this_thread::sleep_for(5ms);
+  CHECK(server.receive(buffer, 0ms).status == TransportStatus::ok);
+  CHECK(buffer[0] == std::byte{5});
+  CHECK(server.receive(buffer, -1ms).status == TransportStatus::timeout);
+}
+
 }  // namespace transport_transports_test

@@ -1,12 +1,15 @@
 //! @file
 //! UdpTransport: the PC side of the sbRIO link (worksheet 3.3.1) on a connected UDP socket set up
-//! with Boost.Asio; receive waits with nanosecond resolution (ppoll), then drains the socket so
-//! only the newest datagram is returned (the sbRIO's queue-of-one, worksheet 3.1.3). POSIX only.
+//! with Boost.Asio; receive waits until a deadline with nanosecond resolution (ppoll and a
+//! timerfd, ReadableWait), then drains the socket so only the newest datagram is returned (the
+//! sbRIO's queue-of-one, worksheet 3.1.3). Linux.
 #pragma once
 
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
+#include <sys/timerfd.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
@@ -28,22 +31,80 @@ namespace endohaptics::transport {
 
 namespace detail {
 
-//! Waits up to `timeout` (ppoll) until `fd` is readable. ok, timeout or error.
-inline TransportStatus wait_readable(int fd, std::chrono::nanoseconds timeout) noexcept {
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  for (;;) {
-    const auto left = std::max(deadline - std::chrono::steady_clock::now(),
-                               std::chrono::steady_clock::duration::zero());
-    const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(left).count();
-    timespec ts{static_cast<std::time_t>(ns / 1'000'000'000),
-                static_cast<long>(ns % 1'000'000'000)};
-    pollfd pfd{fd, POLLIN, 0};
-    const int ready = ::ppoll(&pfd, 1, &ts, nullptr);
-    if (ready > 0) return TransportStatus::ok;
-    if (ready == 0) return TransportStatus::timeout;
-    if (errno != EINTR) return TransportStatus::error;
-  }
+//! CLOCK_MONOTONIC now, ns (the clock of every receive deadline and of ReadableWait's timer).
+inline std::chrono::nanoseconds monotonic_now() noexcept {
+  timespec ts{};
+  ::clock_gettime(CLOCK_MONOTONIC, &ts);
+  return std::chrono::seconds(ts.tv_sec) + std::chrono::nanoseconds(ts.tv_nsec);
 }
+
+//! Waits until a socket is readable or an absolute deadline passes, exactly (to the timer's
+//! resolution) but without arming a timer on every call. ppoll with a timeout starts and cancels
+//! a high-resolution timer per call: on the 2-core VM of docs/performance.md a loopback
+//! ping-pong with such a wait at both ends took 2.0-2.2x as long per round trip as one with
+//! blocking reads (BM_Baseline_udp_ping_pong_ppoll), about 6 us per wait. Here one timerfd per
+//! socket is armed at a deadline and left armed: a later wait whose deadline is no earlier than
+//! the armed expiry waits on the socket and the timerfd with no timeout of its own (at --rate max
+//! a new deadline is 1 ms after each send, so the timer is armed about once per millisecond, not
+//! once per round trip). When the timer fires before this wait's deadline, it is re-armed at the
+//! deadline and the wait goes on: a wait never ends after its deadline, nor before it without a
+//! datagram. Without a timerfd (creation refused) every wait is a ppoll with its own timeout.
+class ReadableWait {
+ public:
+  ReadableWait() noexcept : timer_(::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC)) {}
+  ~ReadableWait() {
+    if (timer_ >= 0) ::close(timer_);
+  }
+  ReadableWait(const ReadableWait&) = delete;
+  ReadableWait& operator=(const ReadableWait&) = delete;
+
+  //! Waits until `fd` is readable (ok), the CLOCK_MONOTONIC time `deadline` (ns) passes (timeout;
+  //! a deadline already passed still looks once) or the wait fails (error).
+  TransportStatus until(int fd, std::chrono::nanoseconds deadline) noexcept {
+    for (;;) {
+      const auto now = monotonic_now();
+      if (now >= deadline) return poll_until(fd, now);
+      if (timer_ < 0) return poll_until(fd, deadline);
+      // The armed expiry still ahead and no later than the deadline: it wakes this wait in time.
+      if (!(armed_ > now && armed_ <= deadline)) {
+        const auto s = std::chrono::duration_cast<std::chrono::seconds>(deadline);
+        const itimerspec at{
+            {0, 0},
+            {static_cast<std::time_t>(s.count()), static_cast<long>((deadline - s).count())}};
+        // Re-arming also clears an expiry that was not read: the timerfd is readable only
+        // once the new expiry passes.
+        if (::timerfd_settime(timer_, TFD_TIMER_ABSTIME, &at, nullptr) != 0) {
+          return poll_until(fd, deadline);
+        }
+        armed_ = deadline;
+      }
+      std::array<pollfd, 2> fds{pollfd{fd, POLLIN, 0}, pollfd{timer_, POLLIN, 0}};
+      const int ready = ::ppoll(fds.data(), fds.size(), nullptr, nullptr);
+      if (ready < 0 && errno != EINTR) return TransportStatus::error;
+      if (ready > 0 && fds[0].revents != 0) return TransportStatus::ok;
+      // The timer fired (or a signal came): look at the clock again.
+    }
+  }
+
+ private:
+  // ppoll on `fd` alone until the CLOCK_MONOTONIC time `deadline` (looks once when it has
+  // passed): ok, timeout or error.
+  static TransportStatus poll_until(int fd, std::chrono::nanoseconds deadline) noexcept {
+    for (;;) {
+      const auto left = std::max(deadline - monotonic_now(), std::chrono::nanoseconds(0));
+      timespec ts{static_cast<std::time_t>(left.count() / 1'000'000'000),
+                  static_cast<long>(left.count() % 1'000'000'000)};
+      pollfd pfd{fd, POLLIN, 0};
+      const int ready = ::ppoll(&pfd, 1, &ts, nullptr);
+      if (ready > 0) return TransportStatus::ok;
+      if (ready == 0) return TransportStatus::timeout;
+      if (errno != EINTR) return TransportStatus::error;
+    }
+  }
+
+  int timer_;
+  std::chrono::nanoseconds armed_{0};  // CLOCK_MONOTONIC expiry the timer is armed for (0: none)
+};
 
 //! Largest datagram a UDP transport reads whole; longer ones are refused as oversized (every
 //! packet of the protocol is < 100 bytes).
@@ -76,6 +137,7 @@ struct DrainScratch {
   std::array<sockaddr_storage, batch> senders{};  //!< their senders (unconnected sockets)
   std::array<iovec, batch> iov{};                 //!< recvmmsg's vectors
   std::array<mmsghdr, batch> messages{};          //!< recvmmsg's headers
+  ReadableWait wait;                              //!< the wait before each read
 };
 
 //! Waits up to `timeout`, then drains `fd`, reading at most `max_drain` (>= 1) datagrams into
@@ -88,16 +150,18 @@ ReceiveResult receive_newest(int fd, std::span<std::byte> buffer, std::chrono::n
                              sockaddr_storage* from, std::size_t max_drain, DrainScratch& scratch,
                              F& filter, const sockaddr_storage* pin = nullptr,
                              std::size_t* foreign = nullptr) noexcept {
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  const auto start = monotonic_now();
+  // A timeout too long to add (nanoseconds::max(): wait for ever) ends at the clock's end.
+  const auto deadline = timeout > std::chrono::nanoseconds::max() - start
+                            ? std::chrono::nanoseconds::max()
+                            : start + std::max(timeout, std::chrono::nanoseconds(0));
   NewestAccepted<F> drain(buffer, filter);
   TransportStatus none = TransportStatus::timeout;  // readable but nothing (e.g. bad checksum)
   std::size_t reads = 0;
   // Until a datagram is accepted or the deadline passes: junk that wakes the wait does not end
   // it (the valid answer may be a moment behind). At most max_drain reads in all.
   for (;;) {
-    const auto left = std::chrono::duration_cast<std::chrono::nanoseconds>(
-        deadline - std::chrono::steady_clock::now());
-    const TransportStatus waited = wait_readable(fd, std::max(left, std::chrono::nanoseconds(0)));
+    const TransportStatus waited = scratch.wait.until(fd, deadline);
     if (waited == TransportStatus::error) {
       if (!drain.any()) none = TransportStatus::error;
       break;
@@ -140,7 +204,7 @@ ReceiveResult receive_newest(int fd, std::span<std::byte> buffer, std::chrono::n
       if (static_cast<unsigned>(got) < want) break;  // the queue is empty
     }
     if (accepted || reads >= max_drain || none == TransportStatus::error) break;
-    if (std::chrono::steady_clock::now() >= deadline) break;
+    if (monotonic_now() >= deadline) break;
   }
   return drain.finish(none);
 }
