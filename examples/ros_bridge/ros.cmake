@@ -1,4 +1,4 @@
-# endohaptics-ros-bridge and its ROS 1 stand-in (issue 35, docs/ros.md): plain CMake against
+# endohaptics-ros-bridge and its ROS 1 stand-in (docs/ros.md): plain CMake against
 # Debian 12's ROS 1 (roscpp 1.15), no catkin workspace. Only these programs and their tests use
 # ROS; the library (include/endohaptics) has no ROS dependency.
 #

@@ -1,5 +1,5 @@
 //! @file
-//! Recommended identify settings per log format (issue 15): the signals a controller has and the
+//! Recommended identify settings per log format: the signals a controller has and the
 //! truth, the grid (s), the preprocessing for the fit (Hz), the methods, order and dead zones,
 //! chosen by the causal score leave-one-session-out (UMN) and leave-one-file-out (2016
 //! clamp-hits); see docs/identification_results.md. Flags given on the command line win.

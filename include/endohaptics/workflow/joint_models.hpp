@@ -1,5 +1,5 @@
 //! @file
-//! The joint force models of issue 15 in the identify/replay workflow: estimation::StallHold
+//! The joint force models in the identify/replay workflow: estimation::StallHold
 //! (model-file kind "stall_hold", docs/research_force_models.md A1), PushLoadObserver
 //! ("push_load_observer", K2) and BidirectionalLoadObserver ("bidirectional_load_observer", K7),
 //! simulated causally on prepared logs (inputs: current A, velocity rad/s; the observers' encoder

@@ -1,6 +1,6 @@
 //! @file
-//! A model file replayed on prepared logs and scored as a force estimator (worksheet 4.2,
-//! issue 15): input maps, linear block and output maps simulated segment by segment from an
+//! A model file replayed on prepared logs and scored as a force estimator (worksheet 4.2):
+//! input maps, linear block and output maps simulated segment by segment from an
 //! initial state set from the inputs alone (steady state of the first input sample; or zero, or
 //! the file's x0), the first `warmup` s of each segment left out of the score, then NRMSE fit (%),
 //! correlation, RMSE (output units) and the delay of the estimate (s, cross-correlation peak) over
@@ -76,7 +76,7 @@ struct ScoringOptions {
   std::optional<estimation::ClampPreset> clamp_preset{};
 };
 
-//! Largest warm-up accepted, s (issue 15: a stated warm-up of at most 1 s).
+//! Largest warm-up accepted, s (a stated warm-up of at most 1 s).
 inline constexpr double max_warmup = 1.0;
 
 //! A model simulated on one prepared log, segment by segment, and its scores over the whole file.

@@ -2,7 +2,7 @@
 //! One log on the uniform grid k Ts (worksheet 4.2.1): the named inputs and outputs of a log
 //! file (files/log_reader.hpp), resampled to Ts (s) and split at gaps, with what the reader and
 //! the grid dropped. For fitting (`Preparation::fit`): linear interpolation, zero-phase low-pass
-//! and offsets as a Preprocessing says. For scoring (`Preparation::score`, issue 15): inputs held
+//! and offsets as a Preprocessing says. For scoring (`Preparation::score`): inputs held
 //! (zero-order hold) and low-passed causally, velocities by backward difference, outputs as
 //! logged. Signals keep their log units. Configuration time: allocates, throws endohaptics::Error.
 #pragma once
@@ -39,7 +39,7 @@ enum class Preparation : std::uint8_t {
   //! Identification data: linear interpolation, zero-phase (filtfilt) low-pass, offsets and
   //! detrend as the Preprocessing says. May look ahead and at the output: fitting is offline.
   fit,
-  //! Scoring a force estimator (issue 15): what a controller could compute in real time. Inputs
+  //! Scoring a force estimator: what a controller could compute in real time. Inputs
   //! on the grid by zero-order hold (the last logged sample at or before each grid time), the
   //! low-pass applied forward only (Butterworth `sosfilt` started at the steady state of the first
   //! sample), endowrist-2016 `velocity` by backward difference of `position`; no input offsets;

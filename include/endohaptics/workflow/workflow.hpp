@@ -2,7 +2,7 @@
 //! The identification workflow of worksheet 4.2 as endohaptics-identify runs it: fit candidates
 //! on logs prepared for fitting (workflow/prepared_log.hpp, 4.2.1; subspace 4.2.2, input dead
 //! zones 4.2.3, or the static gain baseline), score each causally on the same logs prepared for
-//! scoring (workflow/model_comparison.hpp, issue 15), refuse unstable and near-integrating ones
+//! scoring (workflow/model_comparison.hpp), refuse unstable and near-integrating ones
 //! (time constant in s) and keep the best. Includes the whole workflow area.
 //! Configuration time: allocates, throws endohaptics::Error. See docs/identification_results.md.
 #pragma once
@@ -94,8 +94,8 @@ struct TimeConstantLimit {
 //! The limit identify_logs applies: `max_time_constant` (s), or the duration of the longest
 //! segment of `fit_logs` (its samples times the sample time) when that is shorter. A mode slower
 //! than the longest stretch of data decays by less than 1/e within it: the data cannot tell it
-//! from a drift set by the unknown initial state, so it is not identifiable from them (issue 32;
-//! docs/identification_results.md).
+//! from a drift set by the unknown initial state, so it is not identifiable from them
+//! (docs/identification_results.md).
 [[nodiscard]] ENDOHAPTICS_DECL TimeConstantLimit
 time_constant_limit(double max_time_constant, const std::vector<PreparedLog>& fit_logs);
 

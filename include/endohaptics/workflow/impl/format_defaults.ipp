@@ -23,7 +23,7 @@ ENDOHAPTICS_DECL FormatDefaults format_defaults(files::LogFormat format) {
       d.sample_time = 0.02;
       d.preprocessing.cutoff = 0.0;
       d.current_deadzone = "auto";
-      // Issue 15: the stall-hold dead zone (estimation/stall_hold.hpp) as a second family, on a
+      // The stall-hold dead zone (estimation/stall_hold.hpp) as a second family, on a
       // 10 ms grid (its priors: 30 ms velocity filter, 0.3 s output lag); identify keeps the
       // family with the better inner leave-one-file-out causal fit on the training files.
       d.method = "moesp,stall_hold";
@@ -44,7 +44,7 @@ ENDOHAPTICS_DECL FormatDefaults format_defaults(files::LogFormat format) {
       d.sample_time = 0.01;
       d.preprocessing.cutoff = 10.0;
       d.current_deadzone = "auto";
-      // Issue 15: the push-regime load observer (estimation/push_load_observer.hpp) as another
+      // The push-regime load observer (estimation/push_load_observer.hpp) as another
       // family, at the logs' 1 kHz (the rate of the bridge's loop; its encoder angle is the
       // running sum of motor_velocity, exact on the logged samples); identify keeps the family
       // with the better inner cross-validated causal fit on the training files.
@@ -54,7 +54,7 @@ ENDOHAPTICS_DECL FormatDefaults format_defaults(files::LogFormat format) {
       break;
     case files::LogFormat::csv:
       // Any system, any time unit (a CSV without time column counts samples): no absolute bound
-      // on its modes; identify_logs still refuses one slower than the longest segment (issue 32).
+      // on its modes; identify_logs still refuses one slower than the longest segment.
       break;
   }
   return d;
