@@ -259,6 +259,20 @@ TEST_CASE("regress_b_d_x0 without its matrix: the dense pivoting solution to rou
   CHECK(blind.B.allFinite());
 }
 
+TEST_CASE("estimate_initial_state without the free-response matrix: the dense solution") {
+  const System sys;
+  const id::DataSet d = data_set(sys, 5000, 110, 0.2);  // 5000 samples: 3 blocks of rows
+  const endohaptics::model::DynamicStateSpace<> model(sys.A + 0.02 * noise(3, 3, 8), sys.B, sys.C,
+                                                      sys.D, 1.0);
+  const ds::Matrices m = ds::matrices_of(model);
+  const MatrixXd residual = d.y - id::simulate(model, d.u, VectorXd::Zero(3));
+  const MatrixXd residual_t = residual.transpose();
+  const VectorXd dense = ds::scaled_least_squares(
+      ds::free_response(m.A, m.C, d.u.rows()),
+      Eigen::Map<const VectorXd>(residual_t.data(), residual_t.size()), "test");
+  CHECK(relative(id::estimate_initial_state(model, d.u, d.y), dense) < 1e-10);
+}
+
 TEST_CASE("regress_b_d_x0: a regression that overflows is refused with a message") {
   const System sys;
   const std::vector<id::DataSet> data{data_set(sys, 3000, 100, 0.0)};

@@ -80,21 +80,6 @@ ENDOHAPTICS_DECL Vector scaled_least_squares(Matrix Phi, const Vector& rhs, cons
   return theta.cwiseProduct(scale);
 }
 
-ENDOHAPTICS_DECL Vector estimate_initial_state(const Matrices& m, const Matrix& u, const Matrix& y,
-                                               const char* where) {
-  check_input(m, u, where);
-  if (y.cols() != m.C.rows() || y.rows() != u.rows()) {
-    fail(std::string(where) + ": y is " + idx(y.rows()) + " x " + idx(y.cols()) + ", expected " +
-         idx(u.rows()) + " x " + idx(m.C.rows()) + " (samples x outputs)");
-  }
-  require_finite(y, std::string(where) + ": y");
-  const Index n = m.A.rows();
-  const Matrix residual = y - simulate(m, u, Vector::Zero(n));
-  const Matrix residual_t = residual.transpose();  // sample-major, like free_response's rows
-  const Eigen::Map<const Vector> rhs(residual_t.data(), residual_t.size());
-  return scaled_least_squares(free_response(m.A, m.C, u.rows()), rhs, where);
-}
-
 ENDOHAPTICS_DECL Vector column_rms(std::span<const DataSet> data, Matrix DataSet::*part) {
   const Index cols = (data.front().*part).cols();
   Vector peak = Vector::Zero(cols);
@@ -237,6 +222,65 @@ class RegressionRows {
   Index k_ = 0;
   Matrix Z_, X_, next_z_, next_x_;  // A^k (free response) and the input-driven states
 };
+
+ENDOHAPTICS_DECL Vector estimate_initial_state(const Matrices& m, const Matrix& u, const Matrix& y,
+                                               const char* where) {
+  check_input(m, u, where);
+  if (y.cols() != m.C.rows() || y.rows() != u.rows()) {
+    fail(std::string(where) + ": y is " + idx(y.rows()) + " x " + idx(y.cols()) + ", expected " +
+         idx(u.rows()) + " x " + idx(m.C.rows()) + " (samples x outputs)");
+  }
+  require_finite(y, std::string(where) + ": y");
+  const Index n = m.A.rows();
+  const Index ny = m.C.rows();
+  const Matrix residual = y - simulate(m, u, Vector::Zero(n));
+  // Least squares over the free response rows C A^k (ny per sample) without forming them whole:
+  // column norms first (each column enters scaled to unit norm), then the triangular factor of
+  // [free response | residual], a block of samples at a time.
+  const Index chunk = std::max<Index>(64, 4096 / std::max<Index>(ny, 1));
+  Matrix rows(chunk * ny, n + 1);
+  const auto fill = [&](Matrix& Z, Index k0, Index count) {
+    Matrix next(n, n);
+    for (Index t = 0; t < count; ++t) {
+      rows.block(t * ny, 0, ny, n).noalias() = m.C * Z;
+      rows.block(t * ny, n, ny, 1) = residual.row(k0 + t).transpose();
+      next.noalias() = m.A * Z;
+      Z.swap(next);
+    }
+  };
+  ColumnNorms norms(n);
+  Matrix Z = Matrix::Identity(n, n);
+  for (Index k = 0; k < u.rows(); k += chunk) {
+    const Index count = std::min(chunk, u.rows() - k);
+    fill(Z, k, count);
+    const auto block = rows.topRows(count * ny);
+    if (!block.leftCols(n).allFinite()) {
+      fail(std::string(where) +
+           ": the regression overflowed (the model is too unstable for this many samples)");
+    }
+    for (Index j = 0; j < n; ++j) norms.add(j, block.col(j));
+  }
+  Vector scale(n + 1);
+  for (Index j = 0; j < n; ++j) {
+    const double norm = norms.norm(j);
+    scale[j] = norm > 0.0 ? 1.0 / norm : 1.0;
+  }
+  scale[n] = 1.0;
+  TriangularFactor tf(n + 1);
+  Z.setIdentity();
+  for (Index k = 0; k < u.rows(); k += chunk) {
+    const Index count = std::min(chunk, u.rows() - k);
+    fill(Z, k, count);
+    tf.add(rows.topRows(count * ny) * scale.asDiagonal());
+  }
+  const Matrix R = tf.R();
+  Eigen::ColPivHouseholderQR<Matrix> qr(n, n);
+  qr.setThreshold(std::numeric_limits<double>::epsilon() *
+                  static_cast<double>(std::min(u.rows() * ny, n)));
+  qr.compute(R.topLeftCorner(n, n));
+  const Vector x0 = qr.solve(Vector(R.col(n).head(n)));
+  return x0.cwiseProduct(scale.head(n));
+}
 
 ENDOHAPTICS_DECL Regressed regress_b_d_x0(const Matrix& A, const Matrix& C,
                                           std::span<const DataSet> data, bool estimate_d,
