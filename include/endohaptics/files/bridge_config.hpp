@@ -29,6 +29,7 @@
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/core/parameter.hpp"
 #include "endohaptics/estimation/bridge_force_models.hpp"
+#include "endohaptics/estimation/clamp_presets.hpp"
 #include "endohaptics/estimation/force_estimator.hpp"
 #include "endohaptics/files/clamp_model_file.hpp"
 #include "endohaptics/files/json_text.hpp"
@@ -52,8 +53,9 @@ struct BridgeConfig {
   estimation::ForceEstimatorSettings<double> estimator{};  //!< friction levels, signs, limits
   //! "estimator.clamp_model": an identified model file (endohaptics-identify) for both clamps:
   //! Hammerstein-Wiener (6 states, 2 inputs, 1 output), "stall_hold", "push_load_observer" or
-  //! "bidirectional_load_observer", resolved against the configuration file's folder; empty: the
-  //! 2016 appendix C yaw model.
+  //! "bidirectional_load_observer", resolved against the configuration file's folder; or a clamp
+  //! preset, "preset:yaw2016" or "preset:clamp2016-as-run" (estimation/clamp_presets.hpp); empty:
+  //! the 2016 appendix C yaw model.
   std::filesystem::path clamp_model;
   sim::OperatorScript operator_script{};  //!< the scripted operator of `--device sim`
 };
@@ -348,11 +350,18 @@ inline void validate_bridge_config(const BridgeConfig& config,
   bc::with_prefix(source, "operator", [&] { config.operator_script.validate(); });
   // The clamp model file as the bridge will run it, and the estimator it makes with the settings.
   std::optional<estimation::ClampForceModel> clamp;
+  std::optional<estimation::BridgeForceModels> preset;  // "preset:NAME" (clamp_presets.hpp)
   bc::with_prefix(source, "estimator.clamp_model", [&] {
-    if (!config.clamp_model.empty()) clamp = load_clamp_force_model(config.clamp_model);
+    const std::string name = config.clamp_model.string();
+    if (name.starts_with("preset:")) {
+      preset = estimation::preset_force_models(estimation::clamp_preset(name.substr(7)));
+    } else if (!config.clamp_model.empty()) {
+      clamp = load_clamp_force_model(config.clamp_model);
+    }
   });
   bc::with_prefix(source, "estimator", [&] {
-    const estimation::BridgeForceModels models = estimation::bridge_force_models(clamp);
+    const estimation::BridgeForceModels models =
+        preset ? *preset : estimation::bridge_force_models(clamp);
     (void)estimation::BridgeForceEstimator(
         models, estimation::bridge_estimator_settings(config.estimator, models));
   });
@@ -416,7 +425,8 @@ inline void validate_bridge_config(const BridgeConfig& config,
                "must be the name of a model file (a non-empty string), got " + bc::show(*model));
     }
     const std::filesystem::path p = model->get<std::string>();
-    config.clamp_model = p.is_absolute() || base_dir.empty() ? p : base_dir / p;
+    const bool preset = model->get_ref<const std::string&>().starts_with("preset:");
+    config.clamp_model = p.is_absolute() || base_dir.empty() || preset ? p : base_dir / p;
   });
   validate_bridge_config(config, source);
   return config;

@@ -16,6 +16,7 @@
 
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/estimation/bridge_force_models.hpp"
+#include "endohaptics/estimation/clamp_presets.hpp"
 #include "endohaptics/estimation/paced_estimator.hpp"
 #include "endohaptics/files/bridge_config.hpp"
 #include "endohaptics/files/clamp_model_file.hpp"
@@ -50,9 +51,14 @@ inline constexpr double bridge_estimator_period = 1e-3;
 }
 
 //! The force models of `config`: the 2016 models, with the clamp model file for both clamps
-//! when `config.clamp_model` names one. Throws Error naming the file when it cannot be run.
+//! when `config.clamp_model` names one, or the clamp preset's when it is "preset:NAME". Throws
+//! Error naming the file when it cannot be run.
 [[nodiscard]] inline estimation::BridgeForceModels bridge_force_models(
     const files::BridgeConfig& config) {
+  const std::string name = config.clamp_model.string();
+  if (name.starts_with("preset:")) {  // the clamp preset's one definition
+    return estimation::preset_force_models(estimation::clamp_preset(name.substr(7)));
+  }
   std::optional<estimation::ClampForceModel> clamp;
   if (!config.clamp_model.empty()) clamp = files::load_clamp_force_model(config.clamp_model);
   return estimation::bridge_force_models(clamp);
