@@ -11,9 +11,10 @@
 #      as well or better but generalised worse: at order 6 the identified run's fit ranged
 #      61.5-81.3 % over 19 runs of the 12 s / 6 s pipeline (2 below 70 %), at order 2
 #      77.5-80.7 % over 12 (docs/identification_results.md, "The demo's clamp model");
-#   3. teleoperation with the 2016 preset (appendix C), then with the identified model;
-#   4. endohaptics-force-report: both runs against the emulator's truth, one plot, and as its last
-#      two lines "2016 preset: fit ..." and "identified: fit ...".
+#   3. teleoperation with the 2016 preset (appendix C), with the 2016 code's clamp estimator as
+#      it ran (preset:clamp2016-as-run, half as long), then with the identified model;
+#   4. endohaptics-force-report: the runs against the emulator's truth, one plot, and as its last
+#      three lines "2016 as run: fit ...", "2016 preset: fit ..." and "identified: fit ...".
 # Usage: demo.sh BIN_DIR OUT_DIR [SECONDS per teleoperation run, default 10; the identification
 # experiment runs twice as long. With the default the identified model's fit in step 4 was
 # 77.6-81.5 % over six runs of the demo (README, quick start)]
@@ -77,11 +78,19 @@ echo "== 2. identify the clamp model: reported current and velocity of motor 2 -
 
 echo "== 3. teleoperation with the 2016 preset (appendix C yaw model)"
 run preset
+# The baseline the 2016 operators felt: the 2016 code's own clamp estimator (docs/models.md, "The
+# 2016 code as it ran"), half as long as the other runs to keep the demo short.
+echo "== 3. teleoperation with the 2016 code as it ran (baseline, $(( (seconds + 1) / 2 )) s)"
+printf '{ "estimator": { "clamp_model": "preset:clamp2016-as-run" } }\n' >"$out/as_run.json"
+duration=$(( (seconds + 1) / 2 ))
+run as_run --config "$out/as_run.json"
+duration=$seconds
 echo "== 3. teleoperation with the identified model"
 printf '{ "estimator": { "clamp_model": "clamp_model.json" } }\n' >"$out/identified.json"
 run identified --config "$out/identified.json"
 
 echo "== 4. force feedback against the emulator's truth (motor 2, clamp 1)"
 "$bin/endohaptics-force-report" --joint 2 --plot-dir "$out" \
+  --truth "$out/as_run.truth.csv" --log "$out/as_run.ticks.csv" --label "2016 as run" \
   --truth "$out/preset.truth.csv" --log "$out/preset.ticks.csv" --label "2016 preset" \
   --truth "$out/identified.truth.csv" --log "$out/identified.ticks.csv" --label identified
