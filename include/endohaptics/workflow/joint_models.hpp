@@ -29,6 +29,7 @@
 #include "endohaptics/model/fit_metric.hpp"
 #include "endohaptics/workflow/bidirectional_observer_fit.hpp"
 #include "endohaptics/workflow/error_context.hpp"
+#include "endohaptics/workflow/method.hpp"
 #include "endohaptics/workflow/prepared_log.hpp"
 #include "endohaptics/workflow/push_load_observer_fit.hpp"
 #include "endohaptics/workflow/stall_hold_fit.hpp"
@@ -36,7 +37,7 @@
 namespace endohaptics::workflow {
 
 //! The joint-model kind named by a --method value ("stall_hold", "push_load_observer",
-//! "bidirectional_load_observer"), or none.
+//! "bidirectional_load_observer": method_names), or none.
 [[nodiscard]] ENDOHAPTICS_DECL std::optional<files::ModelKind> joint_model_kind(
     std::string_view method);
 

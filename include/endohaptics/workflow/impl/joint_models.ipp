@@ -8,10 +8,8 @@
 namespace endohaptics::workflow {
 
 ENDOHAPTICS_DECL std::optional<files::ModelKind> joint_model_kind(std::string_view method) {
-  if (method == "stall_hold") return files::ModelKind::stall_hold;
-  if (method == "push_load_observer") return files::ModelKind::push_load_observer;
-  if (method == "bidirectional_load_observer") {
-    return files::ModelKind::bidirectional_load_observer;
+  for (const MethodName& m : method_names) {  // the one table of method names
+    if (m.name == method) return joint_kind_of(m.method);
   }
   return std::nullopt;
 }
