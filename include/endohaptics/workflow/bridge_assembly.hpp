@@ -36,8 +36,9 @@ struct BridgeLoopSettings {
   int max_answer_lag = 0;                //!< v2: setpoints a state may answer behind the newest
 };
 
-//! Slowest and fastest --rate, Hz.
+//! Slowest --rate, Hz.
 inline constexpr double bridge_min_rate_hz = 1.0;
+//! Fastest --rate, Hz.
 inline constexpr double bridge_max_rate_hz = 100000.0;
 //! Period of the force estimator's grid (the 2016 models' rates divide it), s.
 inline constexpr double bridge_estimator_period = 1e-3;

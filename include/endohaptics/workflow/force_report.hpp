@@ -24,12 +24,13 @@ namespace endohaptics::workflow {
 
 //! One run: the emulator's truth log and the bridge's tick log of the same teleoperation.
 struct ForceRun {
-  std::string label;                            //!< its name in the report
-  std::string log_path;                         //!< the tick log's file
-  std::vector<double> truth_time, truth_force;  //!< s, N: the truth log's, of the joint
-  files::TickLog ticks;                         //!< the bridge's tick log
-  sim::ForceAccuracy accuracy;                  //!< the estimate against the truth
-  double t0 = 0.0;                              //!< s, the tick log's first time stamp
+  std::string label;                //!< its name in the report
+  std::string log_path;             //!< the tick log's file
+  std::vector<double> truth_time;   //!< s: the truth log's times
+  std::vector<double> truth_force;  //!< N: the truth log's force of the joint
+  files::TickLog ticks;             //!< the bridge's tick log
+  sim::ForceAccuracy accuracy;      //!< the estimate against the truth
+  double t0 = 0.0;                  //!< s, the tick log's first time stamp
 };
 
 //! The emulator's truth log (a CSV, endohaptics-sbrio-emulator --truth-log), its times kept as

@@ -27,7 +27,8 @@ namespace endohaptics::workflow {
 struct IdentifyRequest {
   std::vector<std::string> logs;              //!< log files, >= 1
   std::string format = "endowrist-2016";      //!< files::parse_log_format's names
-  std::vector<std::string> inputs, outputs;   //!< signal names; empty: the format's
+  std::vector<std::string> inputs;            //!< input signal names; empty: the format's
+  std::vector<std::string> outputs;           //!< output signal names; empty: the format's
   std::optional<std::string> order{};         //!< "N" or "auto"
   int max_order = 10;                         //!< largest order "auto" considers
   std::optional<std::string> method{};        //!< a comma list (parse_methods)
@@ -46,22 +47,24 @@ struct IdentifyRequest {
 //! The request resolved, the logs prepared and the subspace family fitted: what run_identify
 //! has made before it chooses the family (its hooks see this much).
 struct IdentifyProgress {
-  IdentifyRequest request;                                 //!< as given
-  LogSelection selection;                                  //!< format, signals, CSV row time
-  std::string method;                                      //!< the --method text used
-  WorkflowOptions options;                                 //!< the subspace workflow's settings
-  std::vector<files::ModelKind> joint_kinds;               //!< the joint-model families to fit
-  bool subspace_family = false;                            //!< a subspace or static method
-  Preprocessing preprocessing;                             //!< for the subspace fit
-  Preprocessing joint_preprocessing;                       //!< the joint models' (no low-pass)
-  double sample_time = 0.0;                                //!< s, the subspace grid
-  double joint_sample_time = 0.0;                          //!< s, the joint models' grid
-  std::vector<PreparedLog> fit_logs, score_logs;           //!< subspace grid, per file
-  std::vector<PreparedLog> joint_logs;                     //!< joint grid, prepared for scoring
-  TimeConstantLimit time_constant_limit;                   //!< what refuses a slow candidate
-  std::vector<files::SignalInfo> input_info, output_info;  //!< names and units (first log)
-  std::optional<WorkflowResult> subspace;                  //!< the subspace workflow, if fitted
-  std::string subspace_left_out;  //!< why it was left out (joint models remain)
+  IdentifyRequest request;                     //!< as given
+  LogSelection selection;                      //!< format, signals, CSV row time
+  std::string method;                          //!< the --method text used
+  WorkflowOptions options;                     //!< the subspace workflow's settings
+  std::vector<files::ModelKind> joint_kinds;   //!< the joint-model families to fit
+  bool subspace_family = false;                //!< a subspace or static method
+  Preprocessing preprocessing;                 //!< for the subspace fit
+  Preprocessing joint_preprocessing;           //!< the joint models' (no low-pass)
+  double sample_time = 0.0;                    //!< s, the subspace grid
+  double joint_sample_time = 0.0;              //!< s, the joint models' grid
+  std::vector<PreparedLog> fit_logs;           //!< the logs the fit uses, subspace grid, per file
+  std::vector<PreparedLog> score_logs;         //!< the logs scored, subspace grid, per file
+  std::vector<PreparedLog> joint_logs;         //!< joint grid, prepared for scoring
+  TimeConstantLimit time_constant_limit;       //!< what refuses a slow candidate
+  std::vector<files::SignalInfo> input_info;   //!< inputs' names and units (first log)
+  std::vector<files::SignalInfo> output_info;  //!< outputs' names and units (first log)
+  std::optional<WorkflowResult> subspace;      //!< the subspace workflow, if fitted
+  std::string subspace_left_out;               //!< why it was left out (joint models remain)
 
   //! The subspace workflow's result, or an empty one when it did not run.
   [[nodiscard]] const WorkflowResult& subspace_result() const;

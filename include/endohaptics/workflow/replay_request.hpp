@@ -23,18 +23,19 @@ namespace endohaptics::workflow {
 //! What endohaptics-replay is asked to do. The preprocessing is what the model file records
 //! (else none); each override given replaces its field.
 struct ReplayRequest {
-  std::string model;                          //!< model file (JSON) or "preset:NAME"
-  std::vector<std::string> logs;              //!< log files, >= 1
-  std::string format = "endowrist-2016";      //!< files::parse_log_format's names
-  std::vector<std::string> inputs, outputs;   //!< per model input/output; empty: the model's
-  std::string x0 = "steady";                  //!< initial_state_from_string's names
-  double warmup = ScoringOptions{}.warmup;    //!< s per segment left out (not oracle)
-  std::optional<double> csv_row_time{};       //!< s per row of a CSV without time (--ts)
-  std::optional<double> lowpass{};            //!< Hz
-  std::optional<int> filter_order{};          //!< Butterworth order
-  std::optional<double> offset_window{};      //!< s, for offset start
-  std::optional<bool> detrend{};              //!< oracle only
-  std::optional<double> max_gap{};            //!< s
+  std::string model;                        //!< model file (JSON) or "preset:NAME"
+  std::vector<std::string> logs;            //!< log files, >= 1
+  std::string format = "endowrist-2016";    //!< files::parse_log_format's names
+  std::vector<std::string> inputs;          //!< the model's input signals; empty: the model's own
+  std::vector<std::string> outputs;         //!< the model's output signals; empty: the model's own
+  std::string x0 = "steady";                //!< initial_state_from_string's names
+  double warmup = ScoringOptions{}.warmup;  //!< s per segment left out (not oracle)
+  std::optional<double> csv_row_time{};     //!< s per row of a CSV without time (--ts)
+  std::optional<double> lowpass{};          //!< Hz
+  std::optional<int> filter_order{};        //!< Butterworth order
+  std::optional<double> offset_window{};    //!< s, for offset start
+  std::optional<bool> detrend{};            //!< oracle only
+  std::optional<double> max_gap{};          //!< s
   std::optional<Eigen::Index> min_segment{};  //!< samples
   std::optional<std::string> offset{};        //!< output offset mode (oracle only)
   std::optional<std::string> input_offset{};  //!< input offset mode (oracle only)
