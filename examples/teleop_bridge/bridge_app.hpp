@@ -124,15 +124,11 @@ inline endohaptics::workflow::BridgeLoopSettings loop_settings(const Options& op
           .max_answer_lag = opt.max_answer_lag};
 }
 
+// "HOST:PORT" of --sbrio or --local (IPv6: "[addr]:port"), the port in 1..65535.
 inline std::pair<std::string, std::uint16_t> parse_endpoint(const std::string& s,
                                                             const std::string& option = "--sbrio") {
-  const auto colon = s.rfind(':');
-  if (colon == std::string::npos || colon == 0 || colon + 1 == s.size()) {
-    throw endohaptics::Error(option + " must be HOST:PORT, got '" + s + "'");
-  }
-  const auto port = endohaptics::workflow::parse_number<std::uint16_t>(
-      std::string_view(s).substr(colon + 1), option + " port", 1, 65535);
-  return {s.substr(0, colon), port};
+  endohaptics::workflow::Endpoint e = endohaptics::workflow::parse_endpoint(s, option, false);
+  return {std::move(e.host), e.port};
 }
 
 // The v2 counters of `transport` (none for the 2016 protocol).
