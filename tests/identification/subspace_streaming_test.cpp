@@ -144,7 +144,7 @@ TEST_CASE("TriangularFactor: rows given in pieces give the R of one QR, up to ro
   CHECK(relative(Rs.transpose() * Rs, M.topRows(3).transpose() * M.topRows(3)) < 1e-13);
 }
 
-TEST_CASE("hankel_factor is R of the whole block-Hankel matrix; combine joins data sets") {
+TEST_CASE("hankel_factor is R of the whole block-Hankel matrix and combine joins data sets") {
   const System sys;
   const std::vector<id::DataSet> data{data_set(sys, 300, 10, 0.05), data_set(sys, 217, 20, 0.05)};
   const Index s = 5;
