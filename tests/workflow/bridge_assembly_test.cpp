@@ -11,6 +11,7 @@
 #include <endohaptics/sim/scripted_operator.hpp>
 #include <endohaptics/sim/simulated_rig.hpp>
 #include <endohaptics/transport/in_memory_transport.hpp>
+#include <filesystem>
 #include <memory>
 #include <string>
 
@@ -138,6 +139,44 @@ TEST_CASE("bridge assembly: a clamp model file, --rate and TDPA from the setting
   CHECK(r.ok >= 2990);
   CHECK(r.last.link == tp::LinkState::up);
   CHECK(s->emulator.counters().watchdog_trips == 0);
+}
+
+TEST_CASE("bridge assembly: an instrument's model set, its clamps different") {
+  const TempDir dir("bridge_assembly");
+  std::filesystem::create_directories(dir.path() / "sets");
+  // Clamp 1 the appendix C yaw model with a 0.3 A dead zone, clamp 2 the 2016 code as run.
+  files::save_model(
+      dir.path() / "sets" / "yaw03.json",
+      files::make_model_file(endohaptics::model::yaw_force_2016_hw(0.3),
+                             {{"current", "A"}, {"velocity", "rad/s"}}, {{"force", "N"}}));
+  write_text(dir.path() / "sets" / "EW7.json",
+             R"({"format": "endohaptics model set", "format_version": 1, "instrument": "EW7",
+                 "models": {"clamp1": "yaw03.json", "clamp2": "preset:clamp2016-as-run",
+                            "roll": "preset:roll2016"}})");
+  // Pitch renders no force (scale 0): it may be left out and runs its 2016 preset.
+  write_text(dir.path() / "bridge.json", R"({"mapping": {"force_scale": [1, 1, 0]},
+      "estimator": {"model_sets": "sets", "instrument": "EW7"}})");
+  const files::BridgeConfig config = files::load_bridge_config(dir.path() / "bridge.json");
+  const auto s = std::make_unique<Setup>(config, wf::BridgeLoopSettings{});
+  const auto* clamp1 =
+      s->bridge.estimator().joint_model<est::Motor::clamp1>().get<est::ClampModel2016<double>>();
+  REQUIRE(clamp1 != nullptr);
+  CHECK(clamp1->model().input_nonlinearity().channel(0).upper() == 0.3);
+  CHECK(
+      s->bridge.estimator().joint_model<est::Motor::clamp2>().get<est::Clamp2016AsRun<double>>() !=
+      nullptr);
+  const std::string& said = s->bridge.force_models_description();
+  CHECK(said.starts_with("instrument EW7 (model set " +
+                         (dir.path() / "sets" / "EW7.json").string() +
+                         "): clamp1 hammerstein_wiener ("));
+  CHECK(said.ends_with(
+      "clamp2 preset:clamp2016-as-run, roll preset:roll2016, pitch preset:pitch2016 (none in the "
+      "set, no force feedback)"));
+  const Run r = run(*s, 3000);
+  CHECK(r.ok >= 2990);
+  CHECK(r.last.link == tp::LinkState::up);
+  CHECK(s->emulator.counters().watchdog_trips == 0);
+  CHECK(s->bridge.paced().counters().rejected == 0);
 }
 
 TEST_CASE("bridge assembly: a rate too slow for the watchdog is refused, naming --rate") {

@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <optional>
+#include <utility>
 
 #include "endohaptics/estimation/any_joint_force_model.hpp"
 #include "endohaptics/estimation/bidirectional_load_observer.hpp"
@@ -57,14 +58,17 @@ inline constexpr int bridge_clamp_states = 6;
 }
 
 //! The estimator settings the bridge runs with `models`: `settings`, except that the 5.2.3
-//! friction gate of both clamps is opened (level 0) when their model is a joint model
-//! (stall_hold, the observers): those models hold their own friction (the dead zone, the push
-//! regime), and the gate would drop the force they hold while the jaw is stalled against an
-//! object and the current has relaxed below the friction level.
+//! friction gate of a clamp is opened (level 0) when its model is a joint model (stall_hold, the
+//! observers, the 2016 code as run): those models hold their own friction (the dead zone, the
+//! push regime), and the gate would drop the force they hold while the jaw is stalled against an
+//! object and the current has relaxed below the friction level. Each clamp by its own model (a
+//! model set may give the two clamps different kinds).
 [[nodiscard]] inline ForceEstimatorSettings<double> bridge_estimator_settings(
     ForceEstimatorSettings<double> settings, const BridgeForceModels& models) {
-  if (models.clamp1.index() != 0) {  // not the Hammerstein-Wiener kind
-    for (const auto joint : {Motor::clamp1, Motor::clamp2}) {
+  const std::pair<Motor, const ClampForceModel*> clamps[] = {{Motor::clamp1, &models.clamp1},
+                                                             {Motor::clamp2, &models.clamp2}};
+  for (const auto& [joint, clamp] : clamps) {
+    if (clamp->index() != 0) {  // not the Hammerstein-Wiener kind
       settings.friction[static_cast<std::size_t>(joint)] =
           model::JointFriction<double>::simplified(0.0);
     }

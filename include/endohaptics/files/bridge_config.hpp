@@ -34,6 +34,7 @@
 #include "endohaptics/files/clamp_model_file.hpp"
 #include "endohaptics/files/json_text.hpp"
 #include "endohaptics/files/model_file.hpp"
+#include "endohaptics/files/model_set_file.hpp"
 #include "endohaptics/kinematics/cylindrical_mapper.hpp"
 #include "endohaptics/model/joint_model_bounds.hpp"
 #include "endohaptics/model/state_space.hpp"
@@ -57,6 +58,12 @@ struct BridgeConfig {
   //! preset, "preset:yaw2016" or "preset:clamp2016-as-run" (estimation/clamp_presets.hpp); empty:
   //! the 2016 appendix C yaw model.
   std::filesystem::path clamp_model;
+  //! "estimator.model_sets": a folder of model sets, one per instrument (`NAME.json` or
+  //! `NAME/`, files/model_set_file.hpp), resolved against the configuration file's folder.
+  std::filesystem::path model_sets;
+  //! "estimator.instrument" (or the bridge's --instrument): the instrument whose set in
+  //! model_sets the bridge runs; not with clamp_model.
+  std::string instrument;
   sim::OperatorScript operator_script{};  //!< the scripted operator of `--device sim`
 };
 
@@ -75,7 +82,7 @@ using json_text::show;
 
 //! The file's sections in file order, each the field list of one library struct (its
 //! `for_each_field`: names and bounds are the struct's own): `f(section, config struct)`.
-//! "estimator" has one key more, clamp_model (BridgeConfig's, a path).
+//! "estimator" has three keys more, clamp_model, model_sets and instrument (BridgeConfig's).
 template <typename Config, typename F>
 void for_each_section(Config& c, F&& f) {
   f("mapping", c.mapping);
@@ -316,6 +323,43 @@ void with_prefix(std::string_view source, std::string_view key, F&& validate) {
 
 }  // namespace detail::bridge_config
 
+//! The force models `config` names, with the line the bridge logs: the instrument's model set
+//! (estimator.instrument in estimator.model_sets, files/model_set_file.hpp; refused when it misses
+//! a motor the mapping feeds back), else estimator.clamp_model for both clamps (a model file or
+//! "preset:NAME", estimation/clamp_presets.hpp), else the 2016 models. Refuses an instrument
+//! together with a clamp_model, and an instrument without model_sets. Throws Error.
+[[nodiscard]] inline BridgeModelSet bridge_config_force_models(const BridgeConfig& config) {
+  if (!config.instrument.empty()) {
+    if (!config.clamp_model.empty()) {
+      ENDOHAPTICS_THROW(Error(
+          "instrument '" + config.instrument + "' and clamp_model '" + config.clamp_model.string() +
+          "': give one (the instrument's model set names its clamp models), not both"));
+    }
+    if (config.model_sets.empty()) {
+      ENDOHAPTICS_THROW(Error("instrument '" + config.instrument +
+                              "': no estimator.model_sets folder to find its model set in"));
+    }
+    return bridge_model_set(load_instrument_model_set(config.model_sets, config.instrument),
+                            force_feedback_motors(config.mapping));
+  }
+  const std::string name = config.clamp_model.string();
+  if (name.starts_with("preset:")) {  // the clamp preset's one definition
+    return {estimation::preset_force_models(estimation::clamp_preset(name.substr(7))),
+            "clamp model " + name +
+                " on both clamps, roll preset:roll2016, pitch "
+                "preset:pitch2016"};
+  }
+  if (!name.empty()) {
+    const ModelFile file = load_model(config.clamp_model);
+    return {estimation::bridge_force_models(clamp_force_model(file, "model file " + name)),
+            "clamp model " + std::string(to_string(file.kind())) + " (" + name +
+                ") on both clamps, roll preset:roll2016, pitch preset:pitch2016"};
+  }
+  return {estimation::bridge_force_models(),
+          "the 2016 models: clamp1 preset:yaw2016, clamp2 preset:yaw2016, roll "
+          "preset:roll2016, pitch preset:pitch2016"};
+}
+
 //! Checks `config` as the bridge will use it: every field in its schema range, then the
 //! library's own checks (TeleopLoopConfig, CylindricalMapper, OperatorScript, and a
 //! ForceEstimator built with the clamp model file). Throws Error "<source>: <key>: ...".
@@ -348,29 +392,22 @@ inline void validate_bridge_config(const BridgeConfig& config,
   bc::with_prefix(source, "mapping",
                   [&] { (void)kinematics::CylindricalMapper<double>(config.mapping); });
   bc::with_prefix(source, "operator", [&] { config.operator_script.validate(); });
-  // The clamp model file as the bridge will run it, and the estimator it makes with the settings.
-  std::optional<estimation::ClampForceModel> clamp;
-  std::optional<estimation::BridgeForceModels> preset;  // "preset:NAME" (clamp_presets.hpp)
-  bc::with_prefix(source, "estimator.clamp_model", [&] {
-    const std::string name = config.clamp_model.string();
-    if (name.starts_with("preset:")) {
-      preset = estimation::preset_force_models(estimation::clamp_preset(name.substr(7)));
-    } else if (!config.clamp_model.empty()) {
-      clamp = load_clamp_force_model(config.clamp_model);
-    }
-  });
+  // The force models as the bridge will run them, and the estimator they make with the settings.
+  std::optional<estimation::BridgeForceModels> models;
+  const char* models_key = !config.instrument.empty()    ? "estimator.instrument"
+                           : !config.clamp_model.empty() ? "estimator.clamp_model"
+                                                         : "estimator";
+  bc::with_prefix(source, models_key, [&] { models = bridge_config_force_models(config).models; });
   bc::with_prefix(source, "estimator", [&] {
-    const estimation::BridgeForceModels models =
-        preset ? *preset : estimation::bridge_force_models(clamp);
     (void)estimation::BridgeForceEstimator(
-        models, estimation::bridge_estimator_settings(config.estimator, models));
+        *models, estimation::bridge_estimator_settings(config.estimator, *models));
   });
 }
 
 //! Reads a bridge configuration from JSON `text` over the defaults, then validates it
 //! (validate_bridge_config). `source` names the text in messages; a relative
-//! estimator.clamp_model is resolved against `base_dir` (empty: left relative). Throws Error
-//! naming the source, the key and the allowed range or values.
+//! estimator.clamp_model or model_sets is resolved against `base_dir` (empty: left relative).
+//! Throws Error naming the source, the key and the allowed range or values.
 [[nodiscard]] inline BridgeConfig parse_bridge_config(std::string_view text,
                                                       std::string_view source = "<string>",
                                                       const std::filesystem::path& base_dir = {}) {
@@ -387,7 +424,9 @@ inline void validate_bridge_config(const BridgeConfig& config,
     sections.emplace_back(section);
     std::vector<std::string>& keys = schema[std::string(section)];
     std::remove_cvref_t<decltype(part)>::for_each_field(part, bc::KeyCollector{keys});
-    if (section == "estimator") keys.emplace_back("clamp_model");
+    if (section == "estimator") {
+      for (const char* k : {"clamp_model", "model_sets", "instrument"}) keys.emplace_back(k);
+    }
   });
   auto list = [](const auto& names) {
     std::string out;
@@ -418,6 +457,23 @@ inline void validate_bridge_config(const BridgeConfig& config,
     if (it == root.end()) return;
     std::remove_cvref_t<decltype(part)>::for_each_field(part, bc::Reader{*it, source, section});
     if (section != "estimator") return;
+    for (const char* key : {"model_sets", "instrument"}) {
+      const auto v = it->find(key);
+      if (v == it->end()) continue;
+      if (!v->is_string() || v->get_ref<const std::string&>().empty()) {
+        bc::fail(source, bc::dotted("estimator", key),
+                 std::string("must be ") +
+                     (key == std::string_view("instrument") ? "the instrument's name"
+                                                            : "the folder of model sets") +
+                     " (a non-empty string), got " + bc::show(*v));
+      }
+      if (key == std::string_view("instrument")) {
+        config.instrument = v->get<std::string>();
+      } else {
+        const std::filesystem::path p = v->get<std::string>();
+        config.model_sets = p.is_absolute() || base_dir.empty() ? p : base_dir / p;
+      }
+    }
     const auto model = it->find("clamp_model");
     if (model == it->end()) return;
     if (!model->is_string() || model->get_ref<const std::string&>().empty()) {
@@ -443,7 +499,8 @@ inline void validate_bridge_config(const BridgeConfig& config,
   return parse_bridge_config(text, path.string(), path.parent_path());
 }
 
-//! The configuration as JSON text in the file's format (every key; clamp_model when set):
+//! The configuration as JSON text in the file's format (every key; clamp_model, model_sets and
+//! instrument when set):
 //! parse_bridge_config reads it back to the same values.
 [[nodiscard]] inline std::string bridge_config_json(const BridgeConfig& config, int indent = 2) {
   namespace bc = detail::bridge_config;
@@ -453,6 +510,12 @@ inline void validate_bridge_config(const BridgeConfig& config,
     std::remove_cvref_t<decltype(part)>::for_each_field(part, bc::Writer{object});
     if (section == "estimator" && !config.clamp_model.empty()) {
       object["clamp_model"] = config.clamp_model.string();
+    }
+    if (section == "estimator" && !config.model_sets.empty()) {
+      object["model_sets"] = config.model_sets.string();
+    }
+    if (section == "estimator" && !config.instrument.empty()) {
+      object["instrument"] = config.instrument;
     }
   });
   return out.dump(indent);

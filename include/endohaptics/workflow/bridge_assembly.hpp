@@ -1,9 +1,10 @@
 //! @file
 //! The bridge assembled from its configuration (files/bridge_config.hpp) and its loop settings
-//! (--rate, --passivity, --max-answer-lag): the force models (the clamp model file, if any, as
-//! estimation::ClampForceModel), the 2016 force estimator paced at 1 kHz, the cylindrical mapping
-//! (eqs. 5.8/5.9) and the TeleopLoop over any transport, device and clock. Rates in Hz, times in
-//! s. Configuration time: throws endohaptics::Error; the loop it holds is the real-time part.
+//! (--rate, --passivity, --max-answer-lag): the force models (the instrument's model set, or the
+//! clamp model file, as estimation::ClampForceModel), the 2016 force estimator paced at 1 kHz, the
+//! cylindrical mapping (eqs. 5.8/5.9) and the TeleopLoop over any transport, device and clock.
+//! Rates in Hz, times in s. Configuration time: throws endohaptics::Error; the loop it holds is the
+//! real-time part.
 #pragma once
 
 #include <algorithm>
@@ -51,18 +52,12 @@ inline constexpr double bridge_estimator_period = 1e-3;
          teleop::SafetyConfig{}.activation_timeout;
 }
 
-//! The force models of `config`: the 2016 models, with the clamp model file for both clamps
-//! when `config.clamp_model` names one, or the clamp preset's when it is "preset:NAME". Throws
-//! Error naming the file when it cannot be run.
+//! The force models of `config` (files::bridge_config_force_models): the instrument's model set,
+//! else the clamp model file or preset on both clamps, else the 2016 models. Throws Error naming
+//! the file when they cannot be run.
 [[nodiscard]] inline estimation::BridgeForceModels bridge_force_models(
     const files::BridgeConfig& config) {
-  const std::string name = config.clamp_model.string();
-  if (name.starts_with("preset:")) {  // the clamp preset's one definition
-    return estimation::preset_force_models(estimation::clamp_preset(name.substr(7)));
-  }
-  std::optional<estimation::ClampForceModel> clamp;
-  if (!config.clamp_model.empty()) clamp = files::load_clamp_force_model(config.clamp_model);
-  return estimation::bridge_force_models(clamp);
+  return files::bridge_config_force_models(config).models;
 }
 
 //! The estimator settings the bridge runs `models` with: config.estimator, the clamps' friction
@@ -144,7 +139,8 @@ class BridgeAssembly {
   //! Assembles the bridge; throws Error naming the option or the configuration's key.
   BridgeAssembly(Transport& transport, Device& device, ClockT& clock,
                  const files::BridgeConfig& config, const BridgeLoopSettings& settings)
-      : estimator_(make_estimator(config)),
+      : models_(files::bridge_config_force_models(config)),
+        estimator_(models_.models, bridge_estimator_settings(config, models_.models)),
         paced_(estimator_, clock,
                std::chrono::nanoseconds(
                    static_cast<std::int64_t>(bridge_estimator_period * 1e9 + 0.5))),
@@ -164,13 +160,13 @@ class BridgeAssembly {
   [[nodiscard]] const kinematics::CylindricalMapper<>& mapper() const noexcept {
     return mapper_;
   }  //!< the mapping
-
- private:
-  static estimation::BridgeForceEstimator make_estimator(const files::BridgeConfig& config) {
-    const estimation::BridgeForceModels models = bridge_force_models(config);
-    return estimation::BridgeForceEstimator(models, bridge_estimator_settings(config, models));
+  //! The force models it runs, as the bridge logs them ("instrument NAME (FILE): clamp1 ...").
+  [[nodiscard]] const std::string& force_models_description() const noexcept {
+    return models_.description;
   }
 
+ private:
+  files::BridgeModelSet models_;  // the models and their description (before estimator_)
   estimation::BridgeForceEstimator estimator_;
   Paced paced_;
   kinematics::CylindricalMapper<> mapper_;
