@@ -64,6 +64,7 @@ struct Options {
   std::string passivity = "off";      // --passivity: off or tdpa (docs/passivity.md)
   double passivity_round_trip = 0.0;  // ms, --passivity-round-trip
   std::string config_path;
+  std::string instrument;  // --instrument: whose model set (estimator.model_sets) to run
   std::string log_path;
   bool stats = false;
   int fifo_priority = 0;
@@ -222,9 +223,9 @@ int run_loop(Transport& transport, Device& device, endohaptics::SteadyClock& clo
       tp::apply_realtime({opt.fifo_priority, opt.cpu, opt.fifo_priority > 0, /*slack*/ 1});
   for (const auto& m : realtime.messages) fmt::print("bridge: realtime: {}\n", m);
 
-  fmt::print("bridge: sbRIO {}:{}, rate {}, device {}, clamp model {} (paced at 1 kHz)\n", host,
-             port, opt.rate == "max" ? "max" : opt.rate + " Hz", opt.device,
-             cfg.clamp_model.empty() ? "appendix C yaw (2016)" : cfg.clamp_model.string());
+  fmt::print("bridge: sbRIO {}:{}, rate {}, device {} (force models paced at 1 kHz)\n", host, port,
+             opt.rate == "max" ? "max" : opt.rate + " Hz", opt.device);
+  fmt::print("bridge: force models: {}\n", bridge.force_models_description());
   std::fflush(stdout);
   const auto start = clock.now();
   const auto end = opt.duration > 0 ? start + std::chrono::duration_cast<nanoseconds>(
@@ -383,6 +384,9 @@ inline void add_link_options(CLI::App& app, Options& opt) {
       ->capture_default_str();
   app.add_option("--config", opt.config_path, "JSON: mapping, safety, estimator, operator, loop")
       ->check(CLI::ExistingFile);
+  app.add_option("--instrument", opt.instrument,
+                 "run this instrument's model set (NAME.json or NAME/ in the --config's "
+                 "estimator.model_sets)");
   app.add_option("--log", opt.log_path, "per-tick CSV log");
   app.add_flag("--stats", opt.stats, "print table-3.1 figures every second");
   app.add_option("--fifo-priority", opt.fifo_priority, "SCHED_FIFO priority 1..99 (0: off)")
@@ -444,10 +448,22 @@ inline void stop_on_signals() {
   std::signal(SIGTERM, on_signal);
 }
 
-//! The configuration from --config, or the defaults.
+//! The configuration from --config, or the defaults; --instrument chooses the model set (over
+//! estimator.instrument), checked as the configuration is.
 inline files::BridgeConfig load_config(const Options& opt) {
-  return opt.config_path.empty() ? files::BridgeConfig{}
-                                 : files::load_bridge_config(opt.config_path);
+  files::BridgeConfig cfg =
+      opt.config_path.empty() ? files::BridgeConfig{} : files::load_bridge_config(opt.config_path);
+  if (!opt.instrument.empty()) {
+    if (cfg.model_sets.empty()) {
+      throw endohaptics::Error("--instrument " + opt.instrument +
+                               ": needs a --config whose estimator.model_sets names the folder "
+                               "of model sets");
+    }
+    cfg.instrument = opt.instrument;
+    files::validate_bridge_config(
+        cfg, opt.config_path.empty() ? "--instrument" : opt.config_path + " with --instrument");
+  }
+  return cfg;
 }
 
 }  // namespace bridge

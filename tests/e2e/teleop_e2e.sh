@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # End-to-end tests on UDP loopback: endohaptics-sbrio-emulator + endohaptics-bridge as separate
-# processes, bounded in time. Usage: teleop_e2e.sh BIN_DIR steady|kill-restart|identified|delayed
+# processes, bounded in time. Usage: teleop_e2e.sh BIN_DIR steady|kill-restart|identified|delayed|
+# instrument
 set -euo pipefail
 bin=$1
 scenario=$2
@@ -142,6 +143,47 @@ case $scenario in
     [[ $(tail -n 2 "$work/demo.out" | head -n 1) == "2016 preset: fit "* ]] ||
       fail "the second-to-last line is not the 2016 preset's"
     echo "PASS: identified clamp model: fit $fit %, correlation $corr"
+    ;;
+  instrument)
+    # One model set per instrument (files/model_set_file.hpp): --instrument picks the set from
+    # the configuration's estimator.model_sets, the bridge logs the models it runs, and a set
+    # that misses a motor whose force the stylus renders is refused before the loop starts.
+    mkdir -p "$work/sets/EW2"
+    cat >"$work/sets/EW1.json" <<'JSON'
+{"format": "endohaptics model set", "format_version": 1, "instrument": "EW1",
+ "models": {"clamp1": "preset:clamp2016-as-run", "clamp2": "preset:yaw2016",
+            "roll": "preset:roll2016", "pitch": "preset:pitch2016"}}
+JSON
+    cat >"$work/sets/EW2/model_set.json" <<'JSON'
+{"format": "endohaptics model set", "format_version": 1, "instrument": "EW2",
+ "models": {"clamp1": "preset:yaw2016", "clamp2": "preset:yaw2016"}}
+JSON
+    echo '{"estimator": {"model_sets": "sets"}}' >"$work/bridge.json"
+    start_emulator 0
+    "$bin/endohaptics-bridge" --sbrio "127.0.0.1:$port" --key "$key" --duration 1 \
+      --config "$work/bridge.json" --instrument EW1 >"$work/ew1.out" 2>&1 ||
+      fail "bridge --instrument EW1 exited with $?: $(cat "$work/ew1.out")"
+    cat "$work/ew1.out"
+    want="bridge: force models: instrument EW1 (model set $work/sets/EW1.json): clamp1"
+    want+=" preset:clamp2016-as-run, clamp2 preset:yaw2016, roll preset:roll2016, pitch"
+    want+=" preset:pitch2016"
+    grep -qxF "$want" "$work/ew1.out" || fail "no line: $want"
+    ticks=$(summary_value ticks "$work/ew1.out")
+    [[ -n $ticks ]] || fail "no summary line"
+    # EW2 has no roll and pitch models, and the default mapping renders their force: refused.
+    status=0
+    "$bin/endohaptics-bridge" --sbrio "127.0.0.1:$port" --key "$key" --duration 1 \
+      --config "$work/bridge.json" --instrument EW2 >"$work/ew2.out" 2>&1 || status=$?
+    cat "$work/ew2.out"
+    [[ $status != 0 ]] || fail "bridge ran EW2's set, which misses roll and pitch"
+    grep -q "instrument 'EW2': no model for roll, pitch" "$work/ew2.out" || fail "roll, pitch not named"
+    # An instrument without a set: refused, naming it.
+    status=0
+    "$bin/endohaptics-bridge" --sbrio "127.0.0.1:$port" --key "$key" --duration 1 \
+      --config "$work/bridge.json" --instrument EW3 >"$work/ew3.out" 2>&1 || status=$?
+    [[ $status != 0 ]] || fail "bridge ran without EW3's set"
+    grep -q "instrument 'EW3': no model set" "$work/ew3.out" || fail "EW3 not named: $(cat "$work/ew3.out")"
+    echo "PASS: --instrument EW1 runs and logs its set ($ticks ticks); EW2 (no roll, pitch) and EW3 (no set) refused"
     ;;
   *) fail "unknown scenario $scenario" ;;
 esac
