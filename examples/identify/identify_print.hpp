@@ -5,14 +5,25 @@
 
 #include <fmt/format.h>
 
+#include <unistd.h>
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <endohaptics/workflow/identify_request.hpp>
 #include <string>
+#include <string_view>
 
 namespace identify_print {
 
 namespace wf = endohaptics::workflow;
+
+//! The search's progress, one line per model and fold on standard error, when that is a
+//! terminal (a long search, e.g. the 70 UMN runs, shows it is moving; logs and pipes stay as
+//! they were).
+inline std::function<void(std::string_view)> progress_on_terminal() {
+  if (::isatty(STDERR_FILENO) == 0) return {};
+  return [](std::string_view line) { fmt::print(stderr, "identify: {}\n", line); };
+}
 
 //! The preprocessing and the causal score's settings.
 inline void prepared(const wf::IdentifyProgress& r) {

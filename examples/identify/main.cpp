@@ -80,7 +80,8 @@ int main(int argc, char** argv) {
     const wf::IdentifyReport report =
         wf::run_identify(q, {.text = [](const std::string& s) { fmt::print("{}", s); },
                              .prepared = identify_print::prepared,
-                             .subspace_fitted = identify_print::subspace_fitted});
+                             .subspace_fitted = identify_print::subspace_fitted,
+                             .progress = identify_print::progress_on_terminal()});
     identify_print::chosen(report);
     // No false success: a fit that is not finite (a diverging model, a constant output) fails.
     wf::check_scores(report);

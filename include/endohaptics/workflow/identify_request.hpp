@@ -9,6 +9,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 #include "endohaptics/core/separate_compilation.hpp"
 
@@ -89,6 +90,9 @@ struct IdentifyHooks {
   std::function<void(const std::string&)> text{};                  //!< lines, each ending in \n
   std::function<void(const IdentifyProgress&)> prepared{};         //!< logs prepared
   std::function<void(const IdentifyProgress&)> subspace_fitted{};  //!< before choose_family
+  //! One line per model fitted and per fold scored while they run (WorkflowOptions::progress),
+  //! so a long search shows it is moving.
+  std::function<void(std::string_view)> progress{};
 };
 
 //! Runs endohaptics-identify's workflow: resolves the request against the format's defaults,

@@ -141,6 +141,7 @@ ENDOHAPTICS_DECL IdentifyReport run_identify(const IdentifyRequest& request,
     }
   }
   r.time_constant_limit = time_constant_limit(r.options.max_time_constant, r.fit_logs);
+  r.options.progress = hooks.progress;
   if (hooks.prepared) hooks.prepared(r);
 
   const files::Log first = files::read_log(request.logs.front(), r.selection.format);
