@@ -149,6 +149,15 @@ TEST_CASE("model set: refusals name the file and the field") {
   CHECK(message_of([&] {
           (void)files::load_instrument_model_set(dir.path(), "Z");
         }).find("no model set") != std::string::npos);
+  // A set both as a file and as a folder: refused, both named; a folder holding no model.
+  std::filesystem::create_directory(dir.path() / "X");
+  CHECK(message_of([&] {
+          (void)files::load_instrument_model_set(dir.path(), "X");
+        }).find("/ exist: keep one") != std::string::npos);
+  std::filesystem::remove(dir.path() / "X.json");
+  CHECK(message_of([&] {
+          (void)files::load_instrument_model_set(dir.path(), "X");
+        }).find("holds no model_set.json and no clamp1.json") != std::string::npos);
 }
 
 TEST_CASE("model set: the bridge configuration chooses it by instrument, not with clamp_model") {

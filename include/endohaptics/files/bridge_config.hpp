@@ -1,9 +1,11 @@
 //! @file
 //! The bridge's configuration file (JSON) <-> the library's configuration structs: mapping
 //! (kinematics::CylindricalMapperConfig), safety and receive timeout (teleop::TeleopLoopConfig),
-//! force estimator settings and clamp model file, scripted operator (sim::OperatorScript).
-//! Strict: every key optional, defaults are the library's; unknown or duplicate keys, wrong
-//! types, non-integral or out-of-range values are errors naming the file, the key and the range.
+//! force estimator settings and the force models (a clamp model file, or the folder of model sets
+//! and the instrument whose set runs: files/model_set_file.hpp), scripted operator
+//! (sim::OperatorScript). Strict: every key optional, defaults are the library's; unknown or
+//! duplicate keys, wrong types, non-integral or out-of-range values are errors naming the file, the
+//! key and the range.
 #pragma once
 
 #include <Eigen/Core>
@@ -46,7 +48,8 @@ namespace endohaptics::files {
 
 //! Everything the bridge's --config file sets. Keys (docs/rig.md, "The configuration file"):
 //! "mapping" -> mapping, "safety" -> loop.safety, "loop.receive_timeout" (s) ->
-//! loop.receive_timeout, "estimator" -> estimator and clamp_model, "operator" -> operator_script.
+//! loop.receive_timeout, "estimator" -> estimator, clamp_model, model_sets and instrument,
+//! "operator" -> operator_script.
 struct BridgeConfig {
   kinematics::CylindricalMapperConfig<double> mapping{};  //!< eqs. 5.8/5.9
   //! Safety and receive timeout; `period` is not in the file (the bridge's --rate sets it).
