@@ -8,8 +8,8 @@
 #include <unistd.h>
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <endohaptics/workflow/identify_request.hpp>
+#include <functional>
 #include <string>
 #include <string_view>
 

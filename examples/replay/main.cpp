@@ -25,7 +25,8 @@ int main(int argc, char** argv) {
   examples::LogWorkflowOptions o;
   wf::ReplayRequest q;
   std::string plot_path;
-  app.add_option("--model", q.model, "model file (JSON), preset:yaw2016, preset:pitch2016 or preset:clamp2016-as-run")
+  app.add_option("--model", q.model,
+                 "model file (JSON), preset:yaw2016, preset:pitch2016 or preset:clamp2016-as-run")
       ->required();
   examples::add_signal_options(app, examples::Tool::replay, o);
   examples::add_scoring_options(app, examples::Tool::replay, o);

@@ -90,8 +90,9 @@ TEST_CASE("force report: an empty tick log or no overlap after the skip fails, n
           (void)wf::force_run("late", truth, tick_log(3000), "ticks.csv", 2, 100.0);
         }).find("fewer than 2 samples") != std::string::npos);
   const wf::ForceRun flat = wf::force_run("flat", truth, tick_log(3000), "ticks.csv", 0, 0.5);
-  CHECK(message_of([&] { wf::require_finite_accuracy(flat); })
-            .starts_with("flat: the force accuracy is not finite (fit "));
+  CHECK(message_of([&] {
+          wf::require_finite_accuracy(flat);
+        }).starts_with("flat: the force accuracy is not finite (fit "));
   CHECK(message_of([&] {
           (void)wf::force_run("r", truth, tick_log(10), "ticks.csv", 1, 0.0);
         }).find("force1") != std::string::npos);  // the truth has no force1 column
