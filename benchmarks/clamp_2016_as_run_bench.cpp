@@ -16,41 +16,27 @@
 #include <endohaptics/estimation/push_load_observer.hpp>
 #include <endohaptics/estimation/stall_hold.hpp>
 
+#include "joint_signal_sweep.hpp"
+
 namespace clamp_2016_as_run_bench {
 
 namespace {
 
 namespace est = endohaptics::estimation;
 
-// 256 samples of a slow squeeze: position, velocity and current crossing zero and the dead zones.
-constexpr std::size_t sweep_length = 256;
-std::array<est::JointSignals<double>, sweep_length> sweep() {
-  std::array<est::JointSignals<double>, sweep_length> s{};
-  for (std::size_t k = 0; k < sweep_length; ++k) {
-    const double phase = 2.0 * 3.141592653589793 * static_cast<double>(k) / sweep_length;
-    s[k] = {0.5 * std::sin(phase), 0.3 * std::cos(phase), 0.6 * std::sin(phase), 0.0};
-  }
-  return s;
-}
+using joint_signal_sweep::sweep;
+using joint_signal_sweep::sweep_length;
 
-template <typename Model>
-void run(benchmark::State& st, Model model) {
-  const auto signals = sweep();
-  std::size_t k = 0;
-  for (auto _ : st) {
-    const auto status = model.advance(signals[k]);
-    const double f = model.force(signals[k]);
-    benchmark::DoNotOptimize(status);
-    benchmark::DoNotOptimize(f);
-    k = (k + 1) % sweep_length;
-  }
-  st.SetItemsProcessed(st.iterations());
-}
+using joint_signal_sweep::run_joint_steps;
 
-void BM_Clamp2016_worksheet_step(benchmark::State& st) { run(st, est::models_2016().clamp1); }
+void BM_Clamp2016_worksheet_step(benchmark::State& st) {
+  run_joint_steps(st, est::models_2016().clamp1);
+}
 BENCHMARK(BM_Clamp2016_worksheet_step);
 
-void BM_Clamp2016_as_run_step(benchmark::State& st) { run(st, est::Clamp2016AsRun<double>()); }
+void BM_Clamp2016_as_run_step(benchmark::State& st) {
+  run_joint_steps(st, est::Clamp2016AsRun<double>());
+}
 BENCHMARK(BM_Clamp2016_as_run_step);
 
 // force() alone: what the estimator evaluates on every 1 kHz tick (advance: every 20th).
@@ -74,12 +60,12 @@ void BM_Clamp2016_as_run_force(benchmark::State& st) {
 BENCHMARK(BM_Clamp2016_as_run_force);
 
 void BM_ClampForceModel_worksheet_step(benchmark::State& st) {
-  run(st, est::ClampForceModel(est::models_2016().clamp1));
+  run_joint_steps(st, est::ClampForceModel(est::models_2016().clamp1));
 }
 BENCHMARK(BM_ClampForceModel_worksheet_step);
 
 void BM_ClampForceModel_as_run_step(benchmark::State& st) {
-  run(st, est::ClampForceModel(est::Clamp2016AsRun<double>()));
+  run_joint_steps(st, est::ClampForceModel(est::Clamp2016AsRun<double>()));
 }
 BENCHMARK(BM_ClampForceModel_as_run_step);
 

@@ -14,44 +14,26 @@
 #include <endohaptics/estimation/push_load_observer.hpp>
 #include <endohaptics/estimation/stall_hold.hpp>
 
+#include "joint_signal_sweep.hpp"
+
 namespace joint_force_model_bench {
 
 namespace {
 
 namespace est = endohaptics::estimation;
 
-// 256 samples of a slow current/velocity sweep crossing the dead zone and the stall threshold.
-constexpr std::size_t sweep_length = 256;
-std::array<est::JointSignals<double>, sweep_length> sweep() {
-  std::array<est::JointSignals<double>, sweep_length> s{};
-  for (std::size_t k = 0; k < sweep_length; ++k) {
-    const double phase = 2.0 * 3.141592653589793 * static_cast<double>(k) / sweep_length;
-    s[k] = {0.5 * std::sin(phase), 0.3 * std::cos(phase), 0.6 * std::sin(phase), 0.0};
-  }
-  return s;
-}
+using joint_signal_sweep::sweep;
+using joint_signal_sweep::sweep_length;
 
-template <typename Model>
-void run(benchmark::State& st, Model model) {
-  const auto signals = sweep();
-  std::size_t k = 0;
-  for (auto _ : st) {
-    const auto status = model.advance(signals[k]);
-    const double f = model.force(signals[k]);
-    benchmark::DoNotOptimize(status);
-    benchmark::DoNotOptimize(f);
-    k = (k + 1) % sweep_length;
-  }
-  st.SetItemsProcessed(st.iterations());
-}
+using joint_signal_sweep::run_joint_steps;
 
 void BM_JointModel_stall_hold(benchmark::State& st) {
-  run(st, est::StallHold<double>(est::StallHoldParameters<double>{}));
+  run_joint_steps(st, est::StallHold<double>(est::StallHoldParameters<double>{}));
 }
 BENCHMARK(BM_JointModel_stall_hold);
 
 void BM_JointModel_push_load_observer(benchmark::State& st) {
-  run(st, est::PushLoadObserver<double>(est::PushLoadObserverParameters<double>{}));
+  run_joint_steps(st, est::PushLoadObserver<double>(est::PushLoadObserverParameters<double>{}));
 }
 BENCHMARK(BM_JointModel_push_load_observer);
 
@@ -97,12 +79,12 @@ void BM_JointModel_bidirectional_load_observer(benchmark::State& st) {
   p.initial_variance = 1180.0;
   p.output_shape.setConstant(0.5);
   p.output_shape_per_load.setConstant(0.01);
-  run(st, est::BidirectionalLoadObserver<double>(p));
+  run_joint_steps(st, est::BidirectionalLoadObserver<double>(p));
 }
 BENCHMARK(BM_JointModel_bidirectional_load_observer);
 
 void BM_JointModel_clamp_2016_preset(benchmark::State& st) {
-  run(st, est::models_2016<double>().clamp1);
+  run_joint_steps(st, est::models_2016<double>().clamp1);
 }
 BENCHMARK(BM_JointModel_clamp_2016_preset);
 

@@ -1,0 +1,42 @@
+// The input every joint-model benchmark steps through (joint_force_model_bench.cpp,
+// clamp_2016_as_run_bench.cpp), so their figures compare: 256 samples of a slow squeeze whose
+// position, velocity and current cross zero, the dead zones and the stall threshold; and the
+// benchmark loop of one joint step as ForceEstimator drives a model (advance, then force).
+#pragma once
+
+#include <benchmark/benchmark.h>
+
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <endohaptics/estimation/joint_force_model.hpp>
+
+namespace joint_signal_sweep {
+
+inline constexpr std::size_t sweep_length = 256;
+
+inline std::array<endohaptics::estimation::JointSignals<double>, sweep_length> sweep() {
+  std::array<endohaptics::estimation::JointSignals<double>, sweep_length> s{};
+  for (std::size_t k = 0; k < sweep_length; ++k) {
+    const double phase = 2.0 * 3.141592653589793 * static_cast<double>(k) / sweep_length;
+    s[k] = {0.5 * std::sin(phase), 0.3 * std::cos(phase), 0.6 * std::sin(phase), 0.0};
+  }
+  return s;
+}
+
+//! One joint step per iteration: model.advance then model.force on the sweep's next sample.
+template <typename Model>
+void run_joint_steps(benchmark::State& st, Model model) {
+  const auto signals = sweep();
+  std::size_t k = 0;
+  for (auto _ : st) {
+    const auto status = model.advance(signals[k]);
+    const double f = model.force(signals[k]);
+    benchmark::DoNotOptimize(status);
+    benchmark::DoNotOptimize(f);
+    k = (k + 1) % sweep_length;
+  }
+  st.SetItemsProcessed(st.iterations());
+}
+
+}  // namespace joint_signal_sweep
