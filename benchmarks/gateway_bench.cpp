@@ -21,6 +21,8 @@
 #include <thread>
 #include <type_traits>
 
+#include "loopback_emulator.hpp"
+
 namespace gateway_bench {
 
 namespace {
@@ -29,31 +31,13 @@ namespace transport = endohaptics::transport;
 namespace sim = endohaptics::sim;
 namespace protocol = endohaptics::protocol;
 using Legacy = protocol::PacketCodec<4>;
-using RobotV2 =
-    transport::SecureTransport<transport::UdpServerTransport, protocol::SecureResponder<4>>;
-using ConsoleV2 = transport::SecureTransport<transport::UdpTransport, protocol::SecureInitiator<4>>;
+using RobotV2 = loopback_emulator::ServerV2;
+using ConsoleV2 = loopback_emulator::ClientV2;
+using loopback_emulator::bench_key;
+using loopback_emulator::console_config;
+using loopback_emulator::loopback_server;
+using loopback_emulator::robot_config;
 
-protocol::SecureKey bench_key() {
-  std::array<std::byte, protocol::SecureKey::size> k{};
-  for (std::size_t i = 0; i < k.size(); ++i) k[i] = std::byte{static_cast<std::uint8_t>(5 * i)};
-  return protocol::SecureKey(k);
-}
-protocol::InitiatorConfig console_config() {
-  protocol::InitiatorConfig c;
-  c.rig = protocol::make_rig_id("bench");
-  return c;
-}
-protocol::ResponderConfig robot_config() {
-  protocol::ResponderConfig c;
-  c.rig = protocol::make_rig_id("bench");
-  return c;
-}
-transport::UdpServerConfig loopback_server() {
-  transport::UdpServerConfig c;
-  c.bind_address = "127.0.0.1";
-  c.port = 0;
-  return c;
-}
 Legacy::SetpointBytes setpoint_bytes() {
   Legacy::Setpoint s;
   s.enable_mask = 0x0F;
@@ -62,47 +46,11 @@ Legacy::SetpointBytes setpoint_bytes() {
   return b;
 }
 
-// The emulated sbRIO in its own thread on 127.0.0.1: protocol v2 itself (`V2`), or the 2016
-// wire (behind the gateway).
+// The emulated sbRIO with nothing touching the tool: protocol v2 itself (`V2`), or the 2016 wire
+// (behind the gateway).
 template <bool V2>
-class EmulatorThread {
- public:
-  using Link = std::conditional_t<V2, RobotV2, transport::UdpServerTransport>;
-  EmulatorThread()
-      : server_(loopback_server()),
-        link_(make_link()),
-        rig_(sim::endowrist_2016_rig<4>(sim::Environment::free_space)),
-        emulator_(*link_, rig_, clock_),
-        thread_([this] {
-          (void)endohaptics::teleop::apply_realtime({.timer_slack_ns = 1});
-          while (!stop_.load(std::memory_order_relaxed)) {
-            (void)emulator_.poll(std::chrono::milliseconds(1));
-          }
-        }) {}
-  EmulatorThread(const EmulatorThread&) = delete;
-  EmulatorThread& operator=(const EmulatorThread&) = delete;
-  ~EmulatorThread() {
-    stop_.store(true);
-    thread_.join();
-  }
-  [[nodiscard]] std::uint16_t port() const { return server_.local_endpoint().port(); }
-
- private:
-  Link* make_link() {
-    if constexpr (V2) {
-      return &v2_.emplace(server_, protocol::SecureResponder<4>(bench_key(), robot_config()));
-    } else {
-      return &server_;
-    }
-  }
-  transport::UdpServerTransport server_;
-  std::optional<RobotV2> v2_;
-  Link* link_;
-  endohaptics::SteadyClock clock_;
-  sim::SimulatedRig<4> rig_;
-  sim::SbrioEmulator<Link, sim::SimulatedRig<4>> emulator_;
-  std::atomic<bool> stop_{false};
-  std::thread thread_;
+struct EmulatorThread : loopback_emulator::EmulatorThread<V2> {
+  EmulatorThread() : loopback_emulator::EmulatorThread<V2>(sim::Environment::free_space) {}
 };
 
 // endohaptics-sbrio-gateway's loop in its own thread: v2 on 127.0.0.1, the 2016 emulator behind.

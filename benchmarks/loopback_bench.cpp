@@ -38,6 +38,8 @@
 #include <thread>
 #include <type_traits>
 
+#include "loopback_emulator.hpp"
+
 namespace loopback_bench {
 
 namespace {
@@ -47,10 +49,12 @@ namespace sim = endohaptics::sim;
 namespace tp = endohaptics::teleop;
 namespace est = endohaptics::estimation;
 namespace protocol = endohaptics::protocol;
+using loopback_emulator::bench_key;
+using loopback_emulator::ClientV2;
+using loopback_emulator::console_config;
+using loopback_emulator::EmulatorThread;
+using loopback_emulator::robot_config;
 using std::chrono::nanoseconds;
-using ServerV2 =
-    transport::SecureTransport<transport::UdpServerTransport, protocol::SecureResponder<4>>;
-using ClientV2 = transport::SecureTransport<transport::UdpTransport, protocol::SecureInitiator<4>>;
 
 // Ticks per run: `full`, or a tenth of it when ENDOHAPTICS_BENCH_SMOKE=1 (the CTest smoke pass,
 // benchmarks/CMakeLists.txt, which checks that every benchmark runs, not how well: the runs'
@@ -60,74 +64,7 @@ std::int64_t run_ticks(std::int64_t full) {
   return smoke != nullptr && std::string_view(smoke) == "1" ? full / 10 : full;
 }
 
-// The benchmark key (a fixed pattern; the programs load theirs from a file).
-protocol::SecureKey bench_key() {
-  std::array<std::byte, protocol::SecureKey::size> k{};
-  for (std::size_t i = 0; i < k.size(); ++i) k[i] = std::byte{static_cast<std::uint8_t>(3 * i)};
-  return protocol::SecureKey(k);
-}
-
-// The bench's v2 session settings (the rig name both sides use).
-protocol::InitiatorConfig console_config() {
-  protocol::InitiatorConfig c;
-  c.rig = protocol::make_rig_id("bench");
-  return c;
-}
-protocol::ResponderConfig robot_config() {
-  protocol::ResponderConfig c;
-  c.rig = protocol::make_rig_id("bench");
-  return c;
-}
-
-// The emulator's socket: 127.0.0.1, any free port, every other setting its default.
-transport::UdpServerConfig loopback_server() {
-  transport::UdpServerConfig c;
-  c.bind_address = "127.0.0.1";
-  c.port = 0;
-  return c;
-}
-
-// The emulated sbRIO in its own thread, on 127.0.0.1, any free port; over protocol v2 when
-// `V2`.
-template <bool V2>
-class EmulatorThread {
- public:
-  using Link = std::conditional_t<V2, ServerV2, transport::UdpServerTransport>;
-  explicit EmulatorThread(int fifo_priority = 0)
-      : server_(loopback_server()),
-        link_(make_link()),
-        rig_(sim::endowrist_2016_rig<4>(sim::Environment::tissue)),
-        emulator_(*link_, rig_, clock_),
-        thread_([this, fifo_priority] {
-          (void)tp::apply_realtime({.fifo_priority = fifo_priority, .timer_slack_ns = 1});
-          while (!stop_.load(std::memory_order_relaxed)) {
-            (void)emulator_.poll(std::chrono::milliseconds(1));
-          }
-        }) {}
-  ~EmulatorThread() {
-    stop_.store(true);
-    thread_.join();
-  }
-  [[nodiscard]] std::uint16_t port() const { return server_.local_endpoint().port(); }
-
- private:
-  Link* make_link() {
-    if constexpr (V2) {
-      return &v2_.emplace(server_, protocol::SecureResponder<4>(bench_key(), robot_config()));
-    } else {
-      return &server_;
-    }
-  }
-  transport::UdpServerTransport server_;
-  std::optional<ServerV2> v2_;
-  Link* link_;
-  endohaptics::SteadyClock clock_;
-  sim::SimulatedRig<4> rig_;
-  sim::SbrioEmulator<Link, sim::SimulatedRig<4>> emulator_;
-  std::atomic<bool> stop_{false};
-  std::thread thread_;
-};
-
+// The loop's figures as the benchmark's counters.
 void report(benchmark::State& st, const tp::LoopStats& s) {
   st.counters["rate_hz"] = s.rate();
   st.counters["loss_pct"] = s.loss_percent();
@@ -145,7 +82,8 @@ void run_loop(benchmark::State& st, nanoseconds period, nanoseconds busy_tail, b
   const auto rt = tp::apply_realtime({.fifo_priority = fifo ? 80 : 0, .timer_slack_ns = 1});
   for (auto _ : st) {
     st.PauseTiming();
-    auto emulator = std::make_unique<EmulatorThread<V2>>(rt.fifo ? 70 : 0);
+    auto emulator =
+        std::make_unique<EmulatorThread<V2>>(sim::Environment::tissue, rt.fifo ? 70 : 0);
     transport::UdpTransport udp({.local_address = "127.0.0.1",
                                  .remote_address = "127.0.0.1",
                                  .remote_port = emulator->port()});
@@ -215,7 +153,7 @@ void BM_Loopback_1kHz_v2(benchmark::State& st) {
 // The v2 handshake on loopback: from a new console's first send (its HELLO) to the first state
 // of the session, against the emulator thread: HELLO, WELCOME, the first setpoint, its state.
 void BM_Loopback_v2_handshake(benchmark::State& st) {
-  auto emulator = std::make_unique<EmulatorThread<true>>();
+  auto emulator = std::make_unique<EmulatorThread<true>>(sim::Environment::tissue);
   const auto setpoint = [] {
     protocol::PacketCodec<4>::SetpointBytes b{};
     (void)protocol::PacketCodec<4>::encode_setpoint({}, b);
