@@ -1,14 +1,14 @@
-// endohaptics-force-report: how good was the force feedback? For each run (--truth/--log pairs,
-// e.g. the 2016 preset and an identified model) compares the bridge's per-tick log (estimated
-// joint force, stylus force) with the emulator's truth log (true external force), prints fit %,
-// correlation, RMSE, delay and peaks (sim::force_accuracy) and the tick periods
-// (teleop::LoopStats), one panel per run in one plot, then one summary line per run. The tick
-// log's columns are found by name (files::read_tick_log); the runs and plots are
-// workflow/force_report.hpp's.
+// endohaptics-force-report: how good was the force feedback? For each run (--truth/--log pairs)
+// compares the bridge's tick log with the emulator's truth log: fit %, correlation, RMSE, delay,
+// peaks and tick periods, one plot panel per run, then one summary line per run; with
+// --all-joints also every motor, and the stylus force against the ideal one (eq. 5.8 on the true
+// forces, --config as the bridge ran) and in free motion (--free-log). Runs, scores, lines and
+// plots are workflow/force_report.hpp's.
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <endohaptics/files/bridge_config.hpp>
 #include <endohaptics/files/tick_log.hpp>
 #include <endohaptics/workflow/command_line.hpp>
 #include <endohaptics/workflow/force_report.hpp>
@@ -25,10 +25,11 @@ namespace wf = endohaptics::workflow;
 
 int main(int argc, char** argv) {
   CLI::App app{"endohaptics force report: bridge log vs emulator truth"};
-  std::vector<std::string> truth_paths, log_paths, labels;
+  std::vector<std::string> truth_paths, log_paths, labels, config_paths, free_paths;
   std::string plot_dir;
   int joint = 2;
   double skip = 0.5;
+  bool all_joints = false;
   app.add_option("--truth", truth_paths, "emulator truth log (--truth-log); repeat per run")
       ->required()
       ->check(CLI::ExistingFile);
@@ -45,17 +46,26 @@ int main(int argc, char** argv) {
   app.add_option("--plot-dir", plot_dir,
                  "write forces.png (every run) and period.png (the last) here (needs gnuplot; "
                  "a plot that fails is an error)");
+  CLI::Option* all = app.add_flag("--all-joints", all_joints,
+                                  "end with every rendered joint's line and the stylus line of "
+                                  "each run (the stylus force against the ideal one)");
+  app.add_option("--config", config_paths,
+                 "the bridge's --config of the runs (one for all, or one per run; default: the "
+                 "default configuration): the mapping of the ideal stylus force")
+      ->check(CLI::ExistingFile)
+      ->needs(all);
+  app.add_option("--free-log", free_paths,
+                 "bridge tick log of a run in free space (emulator --environment free), one per "
+                 "run: the free-motion RMS (default: the run's ticks without contact)")
+      ->check(CLI::ExistingFile)
+      ->needs(all);
   CLI11_PARSE(app, argc, argv);
 
   try {
-    if (truth_paths.size() != log_paths.size() ||
-        (!labels.empty() && labels.size() != log_paths.size())) {
-      throw endohaptics::Error(
-          "give one --truth and one --log (and one --label, if any) per run: " +
-          std::to_string(truth_paths.size()) + " --truth, " + std::to_string(log_paths.size()) +
-          " --log, " + std::to_string(labels.size()) + " --label");
-    }
+    wf::check_run_options(truth_paths.size(), log_paths.size(), labels.size(), config_paths.size(),
+                          free_paths.size());
     std::vector<wf::ForceRun> runs;
+    std::vector<wf::RunScores> scores;
     for (std::size_t r = 0; r < log_paths.size(); ++r) {
       const files::Log truth = wf::read_truth_log(truth_paths[r]);
       if (truth.report.dropped() > 0) {
@@ -67,22 +77,18 @@ int main(int argc, char** argv) {
       const wf::ForceRun& run = runs.emplace_back(
           wf::force_run(labels.empty() ? "run " + std::to_string(r + 1) : labels[r], truth,
                         std::move(ticks), log_paths[r], joint, skip));
-      const auto& a = run.accuracy;
-      fmt::print(
-          "{}: force feedback (motor {}) over {:.1f} s: fit {:.1f} %, correlation {:.3f}, RMSE "
-          "{:.3f} N, delay of the estimate {:.0f} ms (fit {:.1f} %, correlation {:.3f} once "
-          "delayed); peak true {:.2f} N, peak estimated {:.2f} N\n",
-          run.label, joint, a.span, a.fit_percent, a.correlation, a.rmse, a.delay * 1e3,
-          a.fit_percent_at_delay, a.correlation_at_delay, a.truth_peak, a.estimate_peak);
-      // Tick-to-tick periods from the bridge log (time stamps taken as each tick ended).
-      const auto stats = files::tick_period_stats(run.ticks);
-      const auto& periods = stats.period();
-      fmt::print(
-          "{}: tick periods: {} ticks, median {:.1f} us, p1 {:.1f} us, p99 {:.1f} us, max {:.1f} "
-          "us\n",
-          run.label, run.ticks.rows(), periods.quantile(0.5) * 1e6, periods.quantile(0.01) * 1e6,
-          periods.quantile(0.99) * 1e6, periods.max() * 1e6);
+      fmt::print("{}", wf::run_details(run, joint));
       wf::require_finite_accuracy(run);  // no false success
+      if (!all_joints) continue;
+      const files::BridgeConfig config =
+          config_paths.empty()
+              ? files::BridgeConfig{}
+              : files::load_bridge_config(config_paths[std::min(r, config_paths.size() - 1)]);
+      wf::RunScores& s =
+          scores.emplace_back(wf::score_run(run.label, truth, run.ticks, config, skip));
+      if (!free_paths.empty())
+        wf::free_motion_rms(s.stylus, files::read_tick_log(free_paths[r]), skip);
+      fmt::print("{}", wf::stylus_details(run.label, s.stylus));
     }
     if (!plot_dir.empty()) {  // asked for: a plot that fails fails the run
       std::filesystem::create_directories(plot_dir);
@@ -92,14 +98,15 @@ int main(int argc, char** argv) {
       wf::write_png(wf::period_figure(runs.back()), period);
       fmt::print("plots: {} and {}\n", forces.string(), period.string());
     }
-    // Last: one line per run, side by side (./run demo ends with these).
-    for (const wf::ForceRun& run : runs) {
-      const auto& a = run.accuracy;
-      fmt::print(
-          "{}: fit {:.1f}%, correlation {:.3f}, RMSE {:.3f} N, delay {:.0f} ms, peak {:.2f} N "
-          "(true {:.2f} N)\n",
-          run.label, a.fit_percent, a.correlation, a.rmse, a.delay * 1e3, a.estimate_peak,
-          a.truth_peak);
+    // Last: one line per run, side by side (./run demo ends with these); with --all-joints then
+    // each run's rendered joints and its stylus line ("LABEL, " in front with several runs).
+    for (const wf::ForceRun& run : runs)
+      fmt::print("{}\n", wf::summary_line(run.label, run.accuracy));
+    for (const wf::RunScores& s : scores) {
+      for (const wf::JointScore& j : s.joints) {
+        if (j.rendered) fmt::print("{}\n", wf::joint_line(s.label, j));
+      }
+      fmt::print("{}\n", wf::stylus_line(scores.size() > 1 ? s.label : "", s.stylus));
     }
     wf::require_written(stdout, "standard output");
     return 0;
