@@ -86,7 +86,14 @@ int serve(Transport& transport, Delayed& delayed, transport::UdpServerTransport&
           const sim::EmulatorConfig& config, const RunOptions& opts) {
   const auto& [truth_path, truth_period_ms, duration, watchdog_ms, motors, environment, quiet,
                delay_ms, jitter_ms, loss] = opts;
-  sim::SbrioEmulator emulator(transport, rig, clock, config);
+  // The truth log's rows on an exact grid of the rig's time (not when packets happen to arrive),
+  // so identification sees uniformly sampled signals whatever the UDP timing.
+  sim::EmulatorConfig grid_config = config;
+  if (!truth_path.empty()) {
+    grid_config.sample_period =
+        std::chrono::nanoseconds(static_cast<long>(std::llround(truth_period_ms * 1e6)));
+  }
+  sim::SbrioEmulator emulator(transport, rig, clock, grid_config);
   TruthLog truth;
   if (!truth_path.empty()) {
     truth.file =
@@ -120,14 +127,21 @@ int serve(Transport& transport, Delayed& delayed, transport::UdpServerTransport&
     }
   };
   const auto start = clock.now();
-  const auto truth_period = std::chrono::nanoseconds(static_cast<long>(truth_period_ms * 1e6));
-  auto next_row = start;
+  // One row per grid instant (a write error is reported when the file is closed; running out of
+  // memory for a row's text ends the program, as anywhere else here).
+  const auto write_row = [&](std::chrono::nanoseconds t, const auto& setpoint,
+                             const sim::SimulatedRig<4>& r) noexcept {
+    if (truth.file == nullptr) return;
+    const std::string row = sim::truth_log_row(std::chrono::duration<double>(t).count(), setpoint,
+                                               r.truth(), r.state());
+    std::fputs(row.c_str(), truth.file);
+  };
   auto next_report = start + std::chrono::seconds(1);
   bool was_tripped = false;
   while (!g_stop.load()) {
     const auto now = clock.now();
     if (duration > 0 && now - start >= std::chrono::duration<double>(duration)) break;
-    (void)emulator.poll(std::chrono::milliseconds(1));
+    (void)emulator.poll(std::chrono::milliseconds(1), write_row);
     if (pin_mode) announce_peer();
     if (emulator.watchdog_tripped() != was_tripped) {
       was_tripped = emulator.watchdog_tripped();
@@ -138,12 +152,6 @@ int serve(Transport& transport, Delayed& delayed, transport::UdpServerTransport&
       }
     }
     const auto t = emulator.time();
-    if (truth.file != nullptr && t >= next_row) {
-      next_row = t + truth_period;
-      const std::string row = sim::truth_log_row(std::chrono::duration<double>(t).count(),
-                                                 emulator.setpoint(), rig.truth(), rig.state());
-      std::fputs(row.c_str(), truth.file);
-    }
     if (!quiet && t >= next_report) {
       next_report += std::chrono::seconds(1);
       const auto& c = emulator.counters();
@@ -227,7 +235,8 @@ inline void add_options(CLI::App& app, Options& o) {
       "--truth-log", o.truth_path,
       "CSV: time, setpoints, positions, velocities, currents, true external forces (N, along "
       "+setpoint)");
-  app.add_option("--truth-period-ms", o.truth_period_ms, "truth log row period")
+  app.add_option("--truth-period-ms", o.truth_period_ms,
+                 "truth log row period (rows on an exact grid of the emulator's time)")
       ->check(examples::number_in(0.01, 1000.0))
       ->capture_default_str();
   app.add_option("--duration", o.duration, "seconds to run (0: until SIGINT/SIGTERM)")

@@ -232,3 +232,50 @@ TEST_CASE("polling allocates nothing") {
 }
 
 }  // namespace sim_sbrio_emulator_test
+
+TEST_CASE("with a sample period the rig is seen on an exact grid, whatever the packets' timing") {
+  transport::InMemoryLink<> link;
+  endohaptics::ManualClock clock{1s};
+  FakeRig rig;
+  sim::EmulatorConfig config;
+  config.sample_period = 1ms;
+  sim::SbrioEmulator<transport::InMemoryTransport<>, FakeRig, endohaptics::ManualClock> emulator(
+      link.b(), rig, clock, config);
+  struct Seen {
+    std::chrono::nanoseconds time;
+    double rig_time;
+    std::uint8_t mask;
+  };
+  std::vector<Seen> seen;
+  seen.reserve(16);
+  const auto sampler = [&](std::chrono::nanoseconds t, const Codec::Setpoint& sp,
+                           const FakeRig& r) noexcept {
+    seen.push_back({t, r.time, sp.enable_mask});
+  };
+  // Polls at irregular times: 0.3, 2.6 (a packet arrived before it), 2.9, 4.0 ms.
+  clock.advance(300us);
+  CHECK(emulator.poll(0ns, sampler) == sim::PollEvent::idle);
+  clock.advance(2300us);
+  Codec::Setpoint sp;
+  sp.enable_mask = 0b0001;
+  Codec::SetpointBytes bytes{};
+  REQUIRE(Codec::encode_setpoint(sp, bytes) == endohaptics::protocol::CodecStatus::ok);
+  REQUIRE(link.a().send(bytes) == transport::TransportStatus::ok);
+  CHECK(emulator.poll(0ns, sampler) == sim::PollEvent::answered);
+  clock.advance(300us);
+  CHECK(emulator.poll(0ns, sampler) == sim::PollEvent::idle);
+  clock.advance(1100us);
+  CHECK(emulator.poll(0ns, sampler) == sim::PollEvent::idle);
+  // Instants 0, 1, 2, 3, 4 ms after construction; the rig stopped at each (its own time), and
+  // the setpoint applied at 2.6 ms seen from the 3 ms instant on.
+  REQUIRE(seen.size() == 5);
+  for (std::size_t k = 0; k < seen.size(); ++k) {
+    CHECK(seen[k].time == 1s + std::chrono::milliseconds(k));
+    CHECK(seen[k].rig_time == doctest::Approx(1e-3 * static_cast<double>(k)));
+    CHECK(seen[k].mask == (k >= 3 ? 0b0001 : 0));
+  }
+  CHECK(rig.time == doctest::Approx(4e-3));
+  // No grid by default; a negative period is refused.
+  config.sample_period = -1ms;
+  CHECK_THROWS_AS(config.validate(), endohaptics::Error);
+}

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <span>
 #include <string_view>
+#include <type_traits>
 
 #include "endohaptics/core/clock.hpp"
 #include "endohaptics/core/error.hpp"
@@ -38,6 +39,9 @@ struct EmulatorConfig {
   std::chrono::nanoseconds watchdog_timeout = std::chrono::milliseconds(100);
   //! The rig is advanced in chunks of at most this (bounds the work of one poll after a pause).
   std::chrono::nanoseconds max_advance = std::chrono::seconds(1);
+  //! > 0: the rig is stopped at every multiple of this after construction and `poll`'s sampler
+  //! sees it there (a truth log on an exact grid, whatever the packets' timing). 0: no grid.
+  std::chrono::nanoseconds sample_period{0};
 
   //! Throws Error when a duration is not > 0 (naming field and value).
   void validate() const {
@@ -48,6 +52,10 @@ struct EmulatorConfig {
     if (max_advance.count() <= 0) {
       ENDOHAPTICS_THROW(Error("EmulatorConfig: max_advance must be > 0 ns, got " +
                               std::to_string(max_advance.count())));
+    }
+    if (sample_period.count() < 0) {
+      ENDOHAPTICS_THROW(Error("EmulatorConfig: sample_period must be >= 0 ns (0: no grid), got " +
+                              std::to_string(sample_period.count())));
     }
   }
 };
@@ -104,19 +112,31 @@ class SbrioEmulator {
         clock_(&clock),
         config_((config.validate(), config)),
         last_time_(clock.now()),
-        last_packet_(last_time_) {
+        last_packet_(last_time_),
+        next_sample_(last_time_) {
     rig_->command(setpoint_);  // everything disabled until the PC says otherwise
   }
 
   //! Waits up to `timeout` for a setpoint packet, runs the rig up to the clock's now (tripping the
   //! watchdog on the way if due), applies the packet and answers it with the rig's state.
   [[nodiscard]] PollEvent poll(std::chrono::nanoseconds timeout) noexcept {
+    return poll(timeout, [](std::chrono::nanoseconds, const auto&, const Rig&) noexcept {});
+  }
+
+  //! poll(timeout), and with `EmulatorConfig::sample_period` > 0 the rig is stopped at each grid
+  //! instant it passes on the way to now, where `sampler(time, setpoint, rig)` sees it: the
+  //! time on the grid, the setpoint the rig followed up to then (a packet that arrives is applied
+  //! at the clock's now, after the instants before it). `sampler` must be noexcept.
+  template <typename Sampler>
+  requires std::is_nothrow_invocable_v<Sampler&, std::chrono::nanoseconds,
+                                       const typename Codec::Setpoint&, const Rig&>
+  [[nodiscard]] PollEvent poll(std::chrono::nanoseconds timeout, Sampler&& sampler) noexcept {
     // The newest datagram that decodes wins: junk arriving after a valid setpoint cannot
     // displace it. Every refused datagram is counted by cause.
     Decoder decoder{&counters_};
     const transport::ReceiveResult rx = transport::receive_filtered(
         *transport_, std::span<std::byte>(rx_buffer_), timeout, decoder);
-    advance_to(clock_->now());
+    advance_to(clock_->now(), sampler);
     counters_.stale_dropped += rx.dropped;
     counters_.rejected_size += rx.oversized;
     counters_.rejected += rx.oversized;
@@ -151,14 +171,21 @@ class SbrioEmulator {
 
   //! Runs the rig up to `now` without receiving (e.g. between polls in a test).
   void advance_to(std::chrono::nanoseconds now) noexcept {
+    auto none = [](std::chrono::nanoseconds, const auto&, const Rig&) noexcept {};
+    advance_to(now, none);
+  }
+
+  //! advance_to(now), `sampler` called at the grid instants passed (see poll).
+  template <typename Sampler>
+  void advance_to(std::chrono::nanoseconds now, Sampler& sampler) noexcept {
     if (!tripped_ && setpoint_.enable_mask != 0 && now - last_packet_ > config_.watchdog_timeout) {
-      run_until(last_packet_ + config_.watchdog_timeout);
+      run_until(last_packet_ + config_.watchdog_timeout, sampler);
       setpoint_.enable_mask = 0;  // positions kept; the motors coast
       rig_->command(setpoint_);
       tripped_ = true;
       ++counters_.watchdog_trips;
     }
-    run_until(now);
+    run_until(now, sampler);
   }
 
   //! Running totals since construction.
@@ -198,9 +225,20 @@ class SbrioEmulator {
     }
   };
 
-  void run_until(std::chrono::nanoseconds t) noexcept {
-    while (t > last_time_) {
-      const auto step = std::min(t - last_time_, config_.max_advance);
+  // Runs the rig to `t` in steps of at most max_advance, stopping at each grid instant (the
+  // sampler sees the rig there, the first instant being the construction time).
+  template <typename Sampler>
+  void run_until(std::chrono::nanoseconds t, Sampler& sampler) noexcept {
+    const bool grid = config_.sample_period.count() > 0;
+    for (;;) {
+      if (grid && next_sample_ <= last_time_) {
+        sampler(last_time_, setpoint_, *rig_);
+        next_sample_ += config_.sample_period;
+        continue;
+      }
+      if (t <= last_time_) break;
+      const auto target = grid ? std::min(t, next_sample_) : t;
+      const auto step = std::min(target - last_time_, config_.max_advance);
       (void)rig_->advance(std::chrono::duration<double>(step).count());
       last_time_ += step;
     }
@@ -213,6 +251,7 @@ class SbrioEmulator {
   typename Codec::Setpoint setpoint_{};
   std::chrono::nanoseconds last_time_;
   std::chrono::nanoseconds last_packet_;
+  std::chrono::nanoseconds next_sample_;  // the next grid instant (sample_period > 0)
   bool tripped_ = false;
   EmulatorCounters counters_{};
   // One byte longer than a setpoint packet: a long datagram never decodes as its first bytes.
