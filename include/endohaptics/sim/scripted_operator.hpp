@@ -33,11 +33,22 @@ struct OperatorScript {
   double theta = std::numbers::pi / 2;                 //!< rad, stylus azimuth: straight ahead (+x)
   double z = kinematics::rest_position<double>().z();  //!< m, stylus height (0.13740)
   double r_open = kinematics::rest_position<double>().x();  //!< m, radius, clamps open (0.13002)
-  double r_closed = 0.0186;       //!< m, radius the hand aims at when grasping
-  double open_time = 0.7;         //!< s, resting open at the start of a cycle
-  double close_time = 0.8;        //!< s, closing
-  double hold_time = 0.7;         //!< s, holding closed
-  double release_time = 0.8;      //!< s, opening
+  double r_closed = 0.0186;   //!< m, radius the hand aims at when grasping
+  double open_time = 0.7;     //!< s, resting open at the start of a cycle
+  double close_time = 0.8;    //!< s, closing
+  double hold_time = 0.7;     //!< s, holding closed
+  double release_time = 0.8;  //!< s, opening
+  //! rad, added to theta as the hand closes (0 open, all of it closed): the grasp also turns
+  //! the wrist (roll, eq. 5.9: 0.71 rad of roll per rad of azimuth). 0: roll stays put.
+  double theta_swing = 0.0;
+  //! m, added to z as the hand closes: the grasp also lifts the wrist (pitch, eq. 5.9: 3.93 rad
+  //! of pitch per m). 0: pitch stays put.
+  double z_swing = 0.0;
+  //! In [0, 0.95]: cycle k grasps (r, theta and z alike) only a fraction 1 - depth_variation x
+  //! frac(k x 0.618...) of the way (golden-ratio steps: the depths fill [1 - variation, 1]
+  //! evenly, none repeated), so an identification experiment sees light and firm grasps and
+  //! grasps that stop short of the object. 0: every cycle the same.
+  double depth_variation = 0.0;
   double arm_sample_time = 1e-3;  //!< s, the arm model's ZOH period
 
   //! Duration of one open-close-hold-release cycle, s.
@@ -59,6 +70,9 @@ struct OperatorScript {
     v("close_time", p.close_time, Bound::above(0, inf, "s"));
     v("hold_time", p.hold_time, Bound::in(0, inf, "s"));
     v("release_time", p.release_time, Bound::above(0, inf, "s"));
+    v("theta_swing", p.theta_swing, Bound::in(-std::numbers::pi, std::numbers::pi, "rad"));
+    v("z_swing", p.z_swing, Bound::in(-0.5, 0.5, "m"));
+    v("depth_variation", p.depth_variation, Bound::in(0, 0.95));
   }
 
   //! Throws ParameterError naming the field, its value and the rule.
@@ -72,7 +86,11 @@ struct OperatorScript {
   //! Where the hand aims at time `t` (s since start), m, mapping frame.
   [[nodiscard]] Eigen::Vector3d intent(double t) const noexcept {
     const double c = cycle();
-    double phase = std::fmod(std::max(t, 0.0), c);
+    const double since_start = std::max(t, 0.0);
+    double phase = std::fmod(since_start, c);
+    const double k = std::floor(since_start / c);  // cycle number
+    const double golden = 0.6180339887498949;      // (sqrt 5 - 1) / 2
+    const double depth = 1.0 - depth_variation * (k * golden - std::floor(k * golden));
     auto blend = [](double s) { return 0.5 - 0.5 * std::cos(std::numbers::pi * s); };  // 0 -> 1
     double closed = 0.0;  // 0 open, 1 closed
     if (phase < open_time) {
@@ -85,8 +103,10 @@ struct OperatorScript {
       phase -= hold_time;
       closed = 1.0 - blend(std::min(phase / release_time, 1.0));
     }
+    closed *= depth;
     const double r = r_open + (r_closed - r_open) * closed;
-    return {r * std::sin(theta), r * std::cos(theta), z};  // theta = atan2(x, y)
+    const double th = theta + theta_swing * closed;
+    return {r * std::sin(th), r * std::cos(th), z + z_swing * closed};  // theta = atan2(x, y)
   }
 };
 

@@ -287,7 +287,9 @@ void RigConfig<N, Scalar>::validate() const {
 
 //! The 2016 rig with every default from the worksheet and the 2016 logs (docs/models/sim.md).
 //! Motor order roll, pitch, clamp1, clamp2; joints beyond 4 repeat clamp2's parameters. Every
-//! joint gets `env`, touching at +0.3 rad (direction +1).
+//! joint gets `env`, touching at +0.3 rad (direction +1), except clamp 2, touching at -0.3 rad
+//! (direction -1): the mapping drives the jaws in mirror (eq. 5.9, P_clamp2 = -P_clamp1), so a
+//! grasp closes both onto the object.
 template <int N = 4, typename Scalar = double>
 [[nodiscard]] RigConfig<N, Scalar> endowrist_2016_rig(Environment env = Environment::tissue) {
   RigConfig<N, Scalar> config;
@@ -315,6 +317,10 @@ template <int N = 4, typename Scalar = double>
     c.transmission.tendon_damping =
         static_cast<Scalar>(0.4 * std::sqrt(p.tendon * double(c.transmission.joint_inertia)));
     c.contact.environment = env;
+    if (j >= 3) {  // clamp 2 (and the joints that repeat it)
+      c.contact.contact_position = static_cast<Scalar>(-0.3);
+      c.contact.direction = -1;
+    }
     c.contact.load_cell_stiffness = static_cast<Scalar>(p.load_cell);
     c.contact.load_cell_damping =
         static_cast<Scalar>(0.2 * std::sqrt(p.load_cell * double(c.transmission.joint_inertia)));
