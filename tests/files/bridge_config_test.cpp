@@ -354,14 +354,16 @@ TEST_CASE("estimator.clamp_model loads an identified model file, relative to the
   CHECK(c.clamp_model == dir.path() / "clamp.json");
   const auto models =
       endohaptics::estimation::bridge_force_models(files::load_clamp_force_model(c.clamp_model));
-  REQUIRE(models.clamp1.get<endohaptics::estimation::ClampModel2016<double>>() != nullptr);
-  REQUIRE(models.clamp2.get<endohaptics::estimation::ClampModel2016<double>>() != nullptr);
-  CHECK(models.clamp1.get<endohaptics::estimation::ClampModel2016<double>>()
+  REQUIRE(models.clamp1.get<endohaptics::estimation::IdentifiedHammersteinWiener<double>>() !=
+          nullptr);
+  REQUIRE(models.clamp2.get<endohaptics::estimation::IdentifiedHammersteinWiener<double>>() !=
+          nullptr);
+  CHECK(models.clamp1.get<endohaptics::estimation::IdentifiedHammersteinWiener<double>>()
             ->model()
             .input_nonlinearity()
             .channel(0)
             .upper() == 0.3);
-  CHECK(models.clamp2.get<endohaptics::estimation::ClampModel2016<double>>()
+  CHECK(models.clamp2.get<endohaptics::estimation::IdentifiedHammersteinWiener<double>>()
             ->model()
             .input_nonlinearity()
             .channel(0)
@@ -411,16 +413,19 @@ TEST_CASE("estimator.clamp_model of a lower order runs in the bridge's 6 states,
   write_text(dir.path() / "bridge.json", R"({"estimator": {"clamp_model": "clamp.json"}})");
   const auto models = endohaptics::estimation::bridge_force_models(files::load_clamp_force_model(
       files::load_bridge_config(dir.path() / "bridge.json").clamp_model));
-  REQUIRE(models.clamp1.get<endohaptics::estimation::ClampModel2016<double>>() != nullptr);
+  REQUIRE(models.clamp1.get<endohaptics::estimation::IdentifiedHammersteinWiener<double>>() !=
+          nullptr);
   const auto& linear =
-      models.clamp1.get<endohaptics::estimation::ClampModel2016<double>>()->model().linear();
+      models.clamp1.get<endohaptics::estimation::IdentifiedHammersteinWiener<double>>()
+          ->model()
+          .linear();
   static_assert(std::remove_cvref_t<decltype(linear)>::states ==
                 endohaptics::estimation::bridge_clamp_states);
   CHECK(linear.A().topLeftCorner<2, 2>() == A);
   CHECK(linear.A().rightCols<4>().isZero());
   CHECK(linear.A().bottomRows<4>().isZero());
   CHECK(linear.dc_gain() == low.dc_gain());
-  CHECK(models.clamp1.get<endohaptics::estimation::ClampModel2016<double>>()
+  CHECK(models.clamp1.get<endohaptics::estimation::IdentifiedHammersteinWiener<double>>()
             ->model()
             .input_nonlinearity()
             .channel(0)

@@ -62,18 +62,47 @@ TEST_CASE("model set: a set file loads, its clamps differ and the description na
   CHECK(set.model(Motor::roll) == "preset:roll2016");
   const files::BridgeModelSet b = files::bridge_model_set(set, all_fed);
   CHECK(b.models.clamp1.get<est::StallHold<double>>() != nullptr);
-  const auto* yaw = b.models.clamp2.get<est::ClampModel2016<double>>();
+  const auto* yaw = b.models.clamp2.get<est::IdentifiedHammersteinWiener<double>>();
   REQUIRE(yaw != nullptr);
   CHECK(yaw->model().input_nonlinearity().channel(0).upper() == 0.3);
   CHECK(b.description == "instrument EW1 (model set " + (dir.path() / "EW1.json").string() +
                              "): clamp1 stall_hold (" + (dir.path() / "c1.json").string() +
                              "), clamp2 hammerstein_wiener (" + (dir.path() / "c2.json").string() +
                              "), roll preset:roll2016, pitch preset:pitch2016");
-  // The friction gate opens for the joint model's clamp only.
+  // The friction gate and the 2016 unit scale belong to the 2016 models: opened for both clamps
+  // (a joint model, an identified model), kept for roll and pitch (their presets).
   const auto settings = est::bridge_estimator_settings({}, b.models);
+  const est::ForceEstimatorSettings<double> preset{};
   CHECK(settings.friction[static_cast<std::size_t>(Motor::clamp1)].static_level == 0.0);
-  CHECK(settings.friction[static_cast<std::size_t>(Motor::clamp2)].static_level ==
-        est::ForceEstimatorSettings<double>{}.friction[3].static_level);
+  CHECK(settings.friction[static_cast<std::size_t>(Motor::clamp2)].static_level == 0.0);
+  CHECK(settings.friction[static_cast<std::size_t>(Motor::roll)].static_level ==
+        preset.friction[0].static_level);
+  CHECK(settings.unit_scale[static_cast<int>(Motor::pitch)] == preset.unit_scale[1]);
+}
+
+TEST_CASE("model set: roll and pitch take identified model files, without the 2016 gate and unit") {
+  const TempDir dir("model_set");
+  std::filesystem::create_directories(dir.path() / "EW3");
+  for (const char* m : {"roll", "pitch", "clamp1", "clamp2"}) {
+    files::save_model(
+        dir.path() / "EW3" / (std::string(m) + ".json"),
+        files::make_model_file(endohaptics::model::yaw_force_2016_hw(0.1),
+                               {{"current", "A"}, {"velocity", "rad/s"}}, {{"force", "N"}}));
+  }
+  const files::ModelSet set = files::load_instrument_model_set(dir.path(), "EW3");
+  const files::BridgeModelSet b = files::bridge_model_set(set, all_fed);
+  CHECK(b.models.roll.get<est::IdentifiedHammersteinWiener<double>>() != nullptr);
+  CHECK(b.models.pitch.get<est::IdentifiedHammersteinWiener<double>>() != nullptr);
+  const auto settings = est::bridge_estimator_settings({}, b.models);
+  for (int j = 0; j < 4; ++j) {
+    CHECK(settings.friction[static_cast<std::size_t>(j)].static_level == 0.0);
+    CHECK(settings.unit_scale[j] == 1.0);  // the pitch preset's gram-force is not the file's N
+  }
+  // The defaults keep the 2016 settings on every joint.
+  const auto defaults = est::bridge_estimator_settings({}, est::bridge_force_models());
+  CHECK(defaults.unit_scale[static_cast<int>(Motor::pitch)] == doctest::Approx(9.80665e-3));
+  CHECK(defaults.friction[static_cast<std::size_t>(Motor::roll)].static_level ==
+        doctest::Approx(0.7));
 }
 
 TEST_CASE("model set: a directory of <motor>.json files loads, named by the directory") {

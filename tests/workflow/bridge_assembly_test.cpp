@@ -131,8 +131,9 @@ TEST_CASE("bridge assembly: a clamp model file, --rate and TDPA from the setting
   CHECK(loop.passivity.force_limit == s->bridge.mapper().unclipped_joint_force());
   // The activation timeout allows 4 periods of answer lag beyond the default.
   CHECK(loop.safety.activation_timeout == doctest::Approx(wf::bridge_answer_allowance(3, 2e-3)));
-  const auto* clamp =
-      s->bridge.estimator().joint_model<est::Motor::clamp1>().get<est::ClampModel2016<double>>();
+  const auto* clamp = s->bridge.estimator()
+                          .joint_model<est::Motor::clamp1>()
+                          .get<est::IdentifiedHammersteinWiener<double>>();
   REQUIRE(clamp != nullptr);
   CHECK(clamp->model().input_nonlinearity().channel(0).upper() == 0.3);
   const Run r = run(*s, 3000);
@@ -158,8 +159,9 @@ TEST_CASE("bridge assembly: an instrument's model set, its clamps different") {
       "estimator": {"model_sets": "sets", "instrument": "EW7"}})");
   const files::BridgeConfig config = files::load_bridge_config(dir.path() / "bridge.json");
   const auto s = std::make_unique<Setup>(config, wf::BridgeLoopSettings{});
-  const auto* clamp1 =
-      s->bridge.estimator().joint_model<est::Motor::clamp1>().get<est::ClampModel2016<double>>();
+  const auto* clamp1 = s->bridge.estimator()
+                           .joint_model<est::Motor::clamp1>()
+                           .get<est::IdentifiedHammersteinWiener<double>>();
   REQUIRE(clamp1 != nullptr);
   CHECK(clamp1->model().input_nonlinearity().channel(0).upper() == 0.3);
   CHECK(

@@ -1,8 +1,10 @@
 //! @file
 //! The force models the bridge runs (the real-time types; loading them from files is
-//! files/clamp_model_file.hpp): the 2016 roll and pitch models and, for both clamps, a
-//! ClampForceModel that holds the appendix C yaw Hammerstein-Wiener type or one of the joint
-//! force models (StallHold, PushLoadObserver, BidirectionalLoadObserver). Forces in N.
+//! files/clamp_model_file.hpp): every motor's slot is a BridgeJointModel, which holds the
+//! motor's 2016 appendix C model (roll, pitch, or the yaw Hammerstein-Wiener type for the clamps),
+//! an identified Hammerstein-Wiener model, one of the joint force models (StallHold,
+//! PushLoadObserver, BidirectionalLoadObserver) or the 2016 code's clamp estimator. Forces in N
+//! (roll: N m with its 2016 model, N with an identified one, as the model was fitted).
 #pragma once
 
 #include <cstddef>
@@ -20,36 +22,51 @@
 
 namespace endohaptics::estimation {
 
-//! The clamp model the bridge runs, whichever kind the model file holds: the appendix C yaw
-//! Hammerstein-Wiener type (ClampModel2016, also identified "hammerstein_wiener" files of 6
-//! states, 2 inputs, 1 output), StallHold, PushLoadObserver or BidirectionalLoadObserver, or the
-//! preset "clamp2016-as-run" (Clamp2016AsRun, estimation/clamp_presets.hpp), as an
-//! AnyJointForceModel of the five (a JointForceModel: noexcept, allocation-free, its State the
-//! model's padded to the as-run filter's 42 numbers; reset() the model's own start state).
-using ClampForceModel =
-    AnyJointForceModel<ClampModel2016<double>, StallHold<double>, PushLoadObserver<double>,
-                       BidirectionalLoadObserver<double>, Clamp2016AsRun<double>>;
+//! A Hammerstein-Wiener force model identified from data (endohaptics-identify; 2 inputs: the
+//! reported current, A, and velocity, rad/s; 1 output, N) run in the appendix C yaw model's type
+//! (6 states; a lower order embedded exactly, model::embed_states). A type of its own so that the
+//! bridge tells it from the 2016 yaw preset: it runs without the 2016 gate and unit scale
+//! (bridge_estimator_settings).
+template <typename Scalar = double>
+struct IdentifiedHammersteinWiener : ClampModel2016<Scalar> {
+  using ClampModel2016<Scalar>::ClampModel2016;  //!< from the model (OpenLoop's constructor)
+};
 
-static_assert(JointForceModel<ClampForceModel>);
+//! The force model of one motor slot of the bridge, whichever kind its model file or preset
+//! holds: the 2016 appendix C models (ClampModel2016 for a clamp, RollModel2016, PitchModel2016),
+//! IdentifiedHammersteinWiener, StallHold, PushLoadObserver, BidirectionalLoadObserver, or the
+//! preset "clamp2016-as-run" (Clamp2016AsRun, estimation/clamp_presets.hpp): an
+//! AnyJointForceModel of the eight (a JointForceModel: noexcept, allocation-free; its State the
+//! model's padded to the largest, the as-run filter's 42 numbers; reset() the model's own start
+//! state).
+using BridgeJointModel =
+    AnyJointForceModel<ClampModel2016<double>, IdentifiedHammersteinWiener<double>,
+                       StallHold<double>, PushLoadObserver<double>,
+                       BidirectionalLoadObserver<double>, Clamp2016AsRun<double>,
+                       RollModel2016<double>, PitchModel2016<double>>;
 
-//! The models the bridge's ForceEstimator runs: the 2016 roll and pitch models, ClampForceModel
-//! for both clamps.
-using BridgeForceModels =
-    ForceModels<RollModel2016<double>, PitchModel2016<double>, ClampForceModel>;
+static_assert(JointForceModel<BridgeJointModel>);
+
+//! The clamps' slot: the same type as every slot (kept as the name the clamp presets and the
+//! passivity sweep use).
+using ClampForceModel = BridgeJointModel;
+
+//! The models the bridge's ForceEstimator runs: a BridgeJointModel per joint.
+using BridgeForceModels = ForceModels<BridgeJointModel, BridgeJointModel, BridgeJointModel>;
 //! The bridge's ForceEstimator: the 2016 rates (rate::Decimate) and BridgeForceModels.
 using BridgeForceEstimator =
-    ForceEstimator<rate::Decimate, RollModel2016<double>, PitchModel2016<double>, ClampForceModel>;
+    ForceEstimator<rate::Decimate, BridgeJointModel, BridgeJointModel, BridgeJointModel>;
 
-//! States of the bridge's Hammerstein-Wiener clamp model (ClampModel2016: the appendix C yaw
-//! model's 6); a clamp model file of lower order is embedded in them (model::embed_states).
+//! States of the bridge's Hammerstein-Wiener types (the appendix C yaw model's 6); a model file
+//! of lower order is embedded in them (model::embed_states).
 inline constexpr int bridge_clamp_states = 6;
 
 //! The 2016 models (models_2016), with `clamp` for both clamps when given.
 [[nodiscard]] inline BridgeForceModels bridge_force_models(
-    const std::optional<ClampForceModel>& clamp = std::nullopt) {
+    const std::optional<BridgeJointModel>& clamp = std::nullopt) {
   const auto m2016 = models_2016<double>();
-  BridgeForceModels models{m2016.roll, m2016.pitch, ClampForceModel(m2016.clamp1),
-                           ClampForceModel(m2016.clamp2)};
+  BridgeForceModels models{BridgeJointModel(m2016.roll), BridgeJointModel(m2016.pitch),
+                           BridgeJointModel(m2016.clamp1), BridgeJointModel(m2016.clamp2)};
   if (clamp) {
     models.clamp1 = *clamp;
     models.clamp2 = *clamp;
@@ -57,20 +74,38 @@ inline constexpr int bridge_clamp_states = 6;
   return models;
 }
 
-//! The estimator settings the bridge runs with `models`: `settings`, except that the 5.2.3
-//! friction gate of a clamp is opened (level 0) when its model is a joint model (stall_hold, the
-//! observers, the 2016 code as run): those models hold their own friction (the dead zone, the
-//! push regime), and the gate would drop the force they hold while the jaw is stalled against an
-//! object and the current has relaxed below the friction level. Each clamp by its own model (a
-//! model set may give the two clamps different kinds).
+//! True when `model` holds `joint`'s own appendix C model (the 2016 preset of that joint).
+[[nodiscard]] inline bool holds_2016_model(Motor joint, const BridgeJointModel& model) noexcept {
+  switch (joint) {
+    case Motor::roll:
+      return model.get<RollModel2016<double>>() != nullptr;
+    case Motor::pitch:
+      return model.get<PitchModel2016<double>>() != nullptr;
+    case Motor::clamp1:
+    case Motor::clamp2:
+      return model.get<ClampModel2016<double>>() != nullptr;
+  }
+  return false;
+}
+
+//! The estimator settings the bridge runs with `models`: `settings` for a joint that runs its
+//! 2016 appendix C model; for a joint that runs any other model (identified, a joint model, the
+//! 2016 code as run) the 5.2.3 friction gate is opened (level 0) and the unit scale is 1. The
+//! gate and the pitch model's gram-force unit belong to the appendix C models: a model fitted to
+//! data holds its own friction (dead zones, the push regime) and gives its output in the unit of
+//! the force it was fitted to, and the gate would drop the force such a model holds while the
+//! jaw is stalled against an object and the current has relaxed below the friction level.
 [[nodiscard]] inline ForceEstimatorSettings<double> bridge_estimator_settings(
     ForceEstimatorSettings<double> settings, const BridgeForceModels& models) {
-  const std::pair<Motor, const ClampForceModel*> clamps[] = {{Motor::clamp1, &models.clamp1},
-                                                             {Motor::clamp2, &models.clamp2}};
-  for (const auto& [joint, clamp] : clamps) {
-    if (clamp->index() != 0) {  // not the Hammerstein-Wiener kind
-      settings.friction[static_cast<std::size_t>(joint)] =
-          model::JointFriction<double>::simplified(0.0);
+  const std::pair<Motor, const BridgeJointModel*> joints[] = {{Motor::roll, &models.roll},
+                                                              {Motor::pitch, &models.pitch},
+                                                              {Motor::clamp1, &models.clamp1},
+                                                              {Motor::clamp2, &models.clamp2}};
+  for (const auto& [joint, model] : joints) {
+    if (!holds_2016_model(joint, *model)) {
+      const auto j = static_cast<std::size_t>(joint);
+      settings.friction[j] = model::JointFriction<double>::simplified(0.0);
+      settings.unit_scale[static_cast<Eigen::Index>(j)] = 1.0;
     }
   }
   return settings;

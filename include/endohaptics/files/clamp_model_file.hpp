@@ -1,7 +1,8 @@
 //! @file
-//! A clamp model file (endohaptics-identify's JSON, files/model_file.hpp) as the force model the
-//! bridge runs (estimation::ClampForceModel): a Hammerstein-Wiener model of at most 6 states, 2
-//! inputs (A, rad/s) and 1 output (N), embedded in the appendix C yaw type, or a joint force model
+//! A model file (endohaptics-identify's JSON, files/model_file.hpp) as the force model the bridge
+//! runs in a motor's slot (estimation::BridgeJointModel): a Hammerstein-Wiener model of at most 6
+//! states, 2 inputs (A, rad/s) and 1 output (N), as estimation::IdentifiedHammersteinWiener (the
+//! appendix C yaw type, lower orders embedded), or a joint force model
 //! (stall_hold, push_load_observer, bidirectional_load_observer). Refuses what would misbehave at
 //! run time: unstable linear blocks, numbers beyond model::max_joint_model_parameter, observers
 //! that need the current command. Configuration time: throws endohaptics::Error naming the file.
@@ -91,7 +92,7 @@ namespace endohaptics::files {
     if (six.state_space.state_size() < estimation::bridge_clamp_states) {
       six.state_space = model::embed_states(six.state_space, estimation::bridge_clamp_states);
     }
-    return ClampForceModel(estimation::ClampModel2016<double>(
+    return ClampForceModel(estimation::IdentifiedHammersteinWiener<double>(
         hammerstein_wiener_from<estimation::bridge_clamp_states, 2, 1>(six, where)));
   };
   return file.is_joint_model() ? detail::model_file::with_context(where, joint_model)

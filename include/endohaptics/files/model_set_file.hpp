@@ -4,11 +4,10 @@
 //! of `<motor>.json` model files, chosen by instrument name from a folder of sets, and made into
 //! the models the bridge runs (estimation::BridgeForceModels). A set must cover every motor whose
 //! stylus channel has force feedback (mapping.force_scale != 0); a motor without a model and
-//! without feedback runs its 2016 preset. Clamp models: any kind files/clamp_model_file.hpp runs,
-//! or "preset:yaw2016" / "preset:clamp2016-as-run"; roll and pitch run the 2016 appendix C models
-//! only ("preset:roll2016", "preset:pitch2016"): held as AnyJointForceModel variants of the 2016
-//! model and the joint models, as the clamps are, they made the bridge's estimator tick 105 ->
-//! 142 ns (+35 %, GCC -O3, Google Benchmark median of 5), the snapshot of their padded State.
+//! without feedback runs its 2016 preset. Every motor takes any kind files/clamp_model_file.hpp
+//! runs (an identified model of that motor), or its preset: "preset:yaw2016" /
+//! "preset:clamp2016-as-run" for a clamp, "preset:roll2016" / "preset:pitch2016" for roll and
+//! pitch.
 //! Configuration time: throws endohaptics::Error naming the file and the field.
 #pragma once
 
@@ -230,10 +229,11 @@ struct BridgeModelSet {
   std::string description;  //!< e.g. "instrument A (sets/A.json): clamp1 stall_hold (...), ..."
 };
 
-//! The models of `set` (its motors fed back per `fed_back`, force_feedback_motors): a clamp's
-//! model file as clamp_force_model runs it, or its preset; roll and pitch their 2016 presets.
-//! Refuses a set that misses a fed-back motor (naming them all), an unknown preset, and a model
-//! file for roll or pitch. Throws Error "<set>: models.<motor>: ...".
+//! The models of `set` (its motors fed back per `fed_back`, force_feedback_motors): a motor's
+//! model file as clamp_force_model runs it (any motor: an identified model gives the force it was
+//! fitted to), or its preset (a clamp: preset:yaw2016 or preset:clamp2016-as-run; roll and pitch:
+//! preset:roll2016, preset:pitch2016). Refuses a set that misses a fed-back motor (naming them
+//! all) and an unknown preset. Throws Error "<set>: models.<motor>: ...".
 [[nodiscard]] inline BridgeModelSet bridge_model_set(const ModelSet& set,
                                                      const std::array<bool, 4>& fed_back) {
   using protocol::Motor;
@@ -250,7 +250,6 @@ struct BridgeModelSet {
                     ", whose force the stylus renders (mapping.force_scale != 0): give one, or "
                     "set that channel's force_scale to 0");
   }
-  const auto m2016 = estimation::models_2016<double>();
   BridgeModelSet out{estimation::bridge_force_models(), {}};
   out.description = "instrument " + set.instrument + " (" + source + "):";
   bool first = true;
@@ -267,28 +266,26 @@ struct BridgeModelSet {
     } else if (entry.starts_with("preset:")) {
       said = entry;
     }
-    estimation::ClampForceModel* slot = m == Motor::clamp1
-                                            ? &out.models.clamp1
-                                            : (m == Motor::clamp2 ? &out.models.clamp2 : nullptr);
+    estimation::BridgeJointModel& slot =
+        m == Motor::roll
+            ? out.models.roll
+            : (m == Motor::pitch ? out.models.pitch
+                                 : (m == Motor::clamp1 ? out.models.clamp1 : out.models.clamp2));
     if (entry.starts_with("preset:")) {
       if (entry == own_preset) {
-        if (slot != nullptr) {
-          *slot = estimation::ClampForceModel(m == Motor::clamp1 ? m2016.clamp1 : m2016.clamp2);
-        }
+        // bridge_force_models() holds every joint's own 2016 model already
       } else if (clamp && entry == "preset:clamp2016-as-run") {
-        *slot = estimation::ClampForceModel(estimation::Clamp2016AsRun<double>{});
+        slot = estimation::BridgeJointModel(estimation::Clamp2016AsRun<double>{});
       } else {
         detail::model_set::fail(
             where, "unknown preset '" + detail::json_text::excerpt(entry) + "' (valid: " +
-                       (clamp ? "preset:yaw2016, preset:clamp2016-as-run" : own_preset) + ")");
+                       (clamp ? "preset:yaw2016, preset:clamp2016-as-run" : own_preset) +
+                       ", or a model file)");
       }
-    } else if (!clamp) {
-      detail::model_set::fail(where, "'" + entry + "': the bridge runs the 2016 " + name +
-                                         " model only; give \"" + own_preset + "\"");
     } else {
       try {
         const ModelFile file = load_model(entry);
-        *slot = clamp_force_model(file, "model file " + entry);
+        slot = clamp_force_model(file, "model file " + entry);
         said = std::string(to_string(file.kind())) + " (" + entry + ")";
       } catch (const Error& e) {
         detail::model_set::fail(where, e.what());
