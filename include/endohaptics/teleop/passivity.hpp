@@ -44,6 +44,18 @@ enum class PassivityMode : std::uint8_t {
   return "unknown";
 }
 
+//! How the observer splits the channel's energy between the two controllers.
+enum class PassivityObserver : std::uint8_t {
+  //! One observer per joint (both ports summed) drives both controllers.
+  combined = 0,
+  //! Per direction (the two-port network TDPA of Artigas et al. 2011): the robot-side controller
+  //! answers for operator -> robot (what the operator put in, booked with the force before the
+  //! operator-side controller, minus what the setpoint put into the environment), the
+  //! operator-side one for robot -> operator (what the robot gave back minus what the hand got):
+  //! neither controller's action feeds the other's observer, nor its own.
+  per_direction,
+};
+
 //! Settings of the passivity layer.
 struct PassivityConfig {
   using Vector = estimation::MotorVector;  //!< one value per motor (motor order)
@@ -70,6 +82,27 @@ struct PassivityConfig {
   double energy_reserve = 0.01;
   //! 1/s: the operator-side force scale returns towards 1 at most this fast once energy allows.
   double gain_recovery_rate = 0.2;
+  //! Which observer drives the controllers (combined keeps the layer as it was).
+  PassivityObserver observer = PassivityObserver::combined;
+  //! N per motor, >= 0: the bound of the force estimate's error (a sensorless estimate is not
+  //! zero in free motion). Both ports book the force shrunk towards zero by this much (a dead
+  //! band), and the operator-side controller renders that shrunk force: a force within the band
+  //! is neither felt nor booked, so an estimate error within it cannot drain the observer, and
+  //! what the operator feels is what the observer booked. 0: the force as it is.
+  Vector estimate_tolerance = Vector::Zero();
+  //! True: energy comes back at the robot port only as far as both the setpoint and the robot's
+  //! reported motion show it (right for a force sensor: a robot held at a stop by its servo
+  //! returns nothing however far the setpoint retreats, while the sensor still reads the stop).
+  //! False: as far as the setpoint shows it; right for a sensorless estimate, which reads what
+  //! the servo pushes (its current): with the robot stuck (a stop, stiction) that force follows
+  //! the setpoint's distance from the robot, a spring the setpoint stores energy in and gets back.
+  bool robot_return_needs_motion = true;
+  //! False: the operator-side force scale follows the deficit (1 + E / energy_reserve) at every
+  //! tick. True: only on ticks where the operator port gives the hand energy (the force along
+  //! the hand's motion), the condition of the impedance-type PC of Ryu, Kwon & Hannaford 2004;
+  //! on the others (a still hand, a hand pressing into the force: no work done on it) the scale
+  //! comes back at gain_recovery_rate, so a hold after an impact is felt again.
+  bool recover_while_absorbing = false;
 
   //! Throws Error naming the field and value.
   void validate() const {
@@ -107,6 +140,17 @@ struct PassivityConfig {
                                 endohaptics::detail::format_number(force_limit[j])));
       }
     }
+    if (observer != PassivityObserver::combined && observer != PassivityObserver::per_direction) {
+      ENDOHAPTICS_THROW(Error("PassivityConfig: observer must be combined or per_direction, got " +
+                              std::to_string(static_cast<int>(observer))));
+    }
+    for (int j = 0; j < estimate_tolerance.size(); ++j) {
+      if (!std::isfinite(estimate_tolerance[j]) || estimate_tolerance[j] < 0.0) {
+        ENDOHAPTICS_THROW(Error("PassivityConfig: estimate_tolerance[" + std::to_string(j) +
+                                "] must be finite and >= 0 N, got " +
+                                endohaptics::detail::format_number(estimate_tolerance[j])));
+      }
+    }
     if (!std::isfinite(min_motion) || !(min_motion > 0.0)) {
       ENDOHAPTICS_THROW(Error("PassivityConfig: min_motion must be finite and > 0 m, got " +
                               endohaptics::detail::format_number(min_motion)));
@@ -121,9 +165,15 @@ struct PassivityFigures {
   double energy_robot = 0.0;         //!< J, put in at the robot port (in - out) so far
   double dissipated_operator = 0.0;  //!< J, removed by the operator-side PC so far
   double dissipated_robot = 0.0;     //!< J, removed by the robot-side PC so far
-  double damping = 0.0;          //!< N s/m at the tool, the operator-side PC as a damper (largest)
-  double force_gain = 1.0;       //!< the operator-side PC's force scale now (smallest joint), 0..1
-  double drift = 0.0;            //!< rad, largest |desired - sent| setpoint difference (held back)
+  double damping = 0.0;     //!< N s/m at the tool, the operator-side PC as a damper (largest)
+  double force_gain = 1.0;  //!< the operator-side PC's force scale now (smallest joint), 0..1
+  double drift = 0.0;       //!< rad, largest |desired - sent| setpoint difference (held back)
+  //! J, operator -> robot: what the operator put in (force before the operator-side PC) minus
+  //! what the setpoint put into the environment (PassivityObserver::per_direction's robot side)
+  double energy_to_robot = 0.0;
+  //! J, robot -> operator: what the environment gave back minus what the hand got
+  //! (PassivityObserver::per_direction's operator side)
+  double energy_to_operator = 0.0;
   bool operator_active = false;  //!< the operator-side PC changed the force this tick
   bool robot_active = false;     //!< the robot-side PC changed the setpoint this tick
 };
@@ -139,7 +189,9 @@ class TimeDomainPassivity {
 
   //! Throws Error on an invalid configuration.
   explicit TimeDomainPassivity(const PassivityConfig& config = {})
-      : config_((config.validate(), config)), inverse_reserve_(1.0 / config.energy_reserve) {
+      : config_((config.validate(), config)),
+        inverse_reserve_(1.0 / config.energy_reserve),
+        per_direction_(config.observer == PassivityObserver::per_direction) {
     history_.fill(Vector::Zero());
   }
 
@@ -156,6 +208,8 @@ class TimeDomainPassivity {
     if (!enabled()) return;
     in_operator_.setZero();
     out_operator_.setZero();
+    in_network_.setZero();
+    network_.setZero();
     in_robot_.setZero();
     out_robot_.setZero();
     in_setpoint_.setZero();
@@ -177,9 +231,13 @@ class TimeDomainPassivity {
     motion_ = have_desired_ ? Vector(desired - desired_) : Vector(Vector::Zero());
     desired_ = desired;
     have_desired_ = true;
-    const Vector power = rendered_.cwiseProduct(motion_.cwiseProduct(config_.lever));
+    const Vector step = motion_.cwiseProduct(config_.lever);
+    const Vector power = rendered_.cwiseProduct(step);
     out_operator_ += power.cwiseMax(0.0);  // > 0: the channel worked on the hand
     in_operator_ += (-power).cwiseMax(0.0);
+    // The same motion against the force before the operator-side PC: what the operator put in
+    // as far as the robot side is concerned (the PC's scaling is not the robot's to answer for).
+    in_network_ += (-network_.cwiseProduct(step)).cwiseMax(0.0);
   }
 
   //! Robot-side PC (admittance type): while the observer shows a deficit, shortens the step from
@@ -193,10 +251,11 @@ class TimeDomainPassivity {
     out = candidate;
     if (!controlling() || !started_) return false;
     bool changed = false;
+    const Vector booked = tolerated(force);
     for (int j = 0; j < Vector::SizeAtCompileTime; ++j) {
-      const double deficit = -energy(j);
+      const double deficit = per_direction_ ? -energy_to_robot(j) : -energy(j);
       const double step = (candidate[j] - from[j]) * config_.lever[j];  // m at the tool
-      const double cost = -force[j] * step;  // J this step puts into the environment
+      const double cost = -booked[j] * step;  // J this step puts into the environment
       if (deficit > 0.0 && cost > 0.0) {
         const double keep = std::clamp((cost - deficit) / cost, 0.0, 1.0);
         out[j] = from[j] + keep * (candidate[j] - from[j]);
@@ -228,8 +287,10 @@ class TimeDomainPassivity {
     out = estimate;
     damping_ = 0.0;
     if (!enabled()) return false;
-    // What the mapping and the device render: beyond it the booked power would not be real.
-    const Vector force = estimate.cwiseMax(-config_.force_limit).cwiseMin(config_.force_limit);
+    // What the mapping and the device render: beyond it the booked power would not be real;
+    // within the estimate's error bound nothing is booked (nor, with the PC, rendered).
+    const Vector force =
+        tolerated(estimate).cwiseMax(-config_.force_limit).cwiseMin(config_.force_limit);
     if (started_) {
       const std::size_t n = history_.size();
       const auto back = static_cast<std::size_t>(config_.round_trip_ticks);  // < n - 1
@@ -244,7 +305,8 @@ class TimeDomainPassivity {
       // Energy comes back only as far as both the setpoint and the robot's reported motion show
       // it: a robot held at the contact by its servo returns nothing however far the setpoint
       // retreats.
-      in_robot_ = in_setpoint_.cwiseMin(in_measured_);
+      in_robot_ =
+          config_.robot_return_needs_motion ? in_setpoint_.cwiseMin(in_measured_) : in_setpoint_;
     }
     estimate_ = force;
     bool changed = false;
@@ -256,8 +318,15 @@ class TimeDomainPassivity {
         // The force is scaled down as the observer dips into the reserve (none left: no force),
         // and comes back at most gain_recovery_rate per s: a smooth variable damping rather than
         // a switch, which would kick a light stylus at 1 kHz.
-        double g = std::clamp(1.0 + energy(j) * inverse_reserve_, 0.0, 1.0);
-        g = std::min(g, gain_[j] + dt * config_.gain_recovery_rate);
+        const double e = per_direction_ ? energy_to_operator(j) : energy(j);
+        double g = gain_[j] + dt * config_.gain_recovery_rate;
+        // Scaled to the deficit while the port gives the hand energy (or always, by default);
+        // with recover_while_absorbing, a force that does no work on the hand (the hand still,
+        // or pressing into it) comes back at the recovery rate whatever the deficit.
+        if (!config_.recover_while_absorbing || force[j] * step[j] > 0.0) {
+          g = std::min(g, std::clamp(1.0 + e * inverse_reserve_, 0.0, 1.0));
+        }
+        g = std::min(g, 1.0);
         gain_[j] = g;
         if (g < 1.0) {
           out[j] = g * force[j];
@@ -278,6 +347,7 @@ class TimeDomainPassivity {
       damping_ = damping_force / damping_step;
     }
     rendered_ = controlling() ? out : force;
+    network_ = force;
     return changed;
   }
 
@@ -291,13 +361,14 @@ class TimeDomainPassivity {
       in_measured_ += (-power).cwiseMax(0.0);  // the environment pushed the robot back
     }
     robot_position_ = position;
-    robot_force_ = force;
+    robot_force_ = tolerated(force);
     have_robot_ = true;
   }
 
   //! A tick without force rendered (lost link, device fault): the operator port carries nothing.
   void render_nothing() noexcept {
     rendered_.setZero();
+    network_.setZero();
     damping_ = 0.0;
   }
 
@@ -313,16 +384,36 @@ class TimeDomainPassivity {
     f.damping = damping_;
     f.force_gain = gain_min_;
     f.drift = have_desired_ && started_ ? (desired_ - sent_).cwiseAbs().maxCoeff() : 0.0;
+    f.energy_to_robot = (in_network_ - out_robot_).sum();
+    f.energy_to_operator = (in_robot_ - out_operator_).sum();
     return f;
   }
   //! J, the observer of joint `j`: what the operator and the robot port put into the channel.
   [[nodiscard]] double energy(int j) const noexcept {
     return in_operator_[j] - out_operator_[j] + in_robot_[j] - out_robot_[j];
   }
+  //! J, joint `j` operator -> robot: in at the operator port (force before the operator-side PC)
+  //! minus out at the robot port.
+  [[nodiscard]] double energy_to_robot(int j) const noexcept {
+    return in_network_[j] - out_robot_[j];
+  }
+  //! J, joint `j` robot -> operator: in at the robot port minus out to the hand.
+  [[nodiscard]] double energy_to_operator(int j) const noexcept {
+    return in_robot_[j] - out_operator_[j];
+  }
 
  private:
+  // The force shrunk towards zero by the estimate's error bound (PassivityConfig::
+  // estimate_tolerance): f - clamp(f, -tol, tol).
+  [[nodiscard]] Vector tolerated(const Vector& force) const noexcept {
+    return force - force.cwiseMax(-config_.estimate_tolerance).cwiseMin(config_.estimate_tolerance);
+  }
+
   PassivityConfig config_;
   double inverse_reserve_;                // 1 / energy_reserve (no division per joint on the tick)
+  bool per_direction_;                    // PassivityObserver::per_direction
+  Vector in_network_ = Vector::Zero();    // J in at the operator port, force before the PC
+  Vector network_ = Vector::Zero();       // N, the force last tick before the operator-side PC
   Vector in_operator_ = Vector::Zero();   // J the operator put into the channel
   Vector out_operator_ = Vector::Zero();  // J the channel put into the operator
   Vector in_robot_ = Vector::Zero();      // J the environment gave back at the setpoint
