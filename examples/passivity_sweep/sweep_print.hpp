@@ -4,9 +4,11 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <endohaptics/sim/passivity_sweep.hpp>
 #include <endohaptics/workflow/command_line.hpp>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -16,37 +18,72 @@ namespace sweep_print {
 namespace sim = endohaptics::sim;
 namespace tp = endohaptics::teleop;
 
-//! The sweep (round trip x loss x contact), without passivity and with TDPA, markdown.
-inline void table() {
+//! Where the force comes from: the source and, for identified, the clamp model.
+struct Source {
+  sim::ForceSource source = sim::ForceSource::sensor;                   //!< what is fed back
+  std::optional<endohaptics::estimation::ClampForceModel> clamp_model;  //!< identified's
+  std::optional<tp::PassivityObserver> observer;  //!< replaces the sweep's choice when given
+  std::optional<double> tolerance;                //!< N on the clamps, replaces the sweep's
+  std::optional<bool> return_needs_motion;        //!< replaces the sweep's choice when given
+  std::optional<double> reserve;                  //!< J, replaces the sweep's energy reserve
+  std::optional<double> recovery;                 //!< 1/s, replaces the sweep's gain recovery
+  std::optional<bool> recover_absorbing;          //!< replaces recover_while_absorbing
+  //! The scenario with this source and the overrides.
+  [[nodiscard]] sim::ClosedLoopConfig scenario(int ms, double loss, sim::ContactKind contact,
+                                               tp::PassivityMode mode) const {
+    auto c = sim::press_scenario(ms, loss, contact, mode, source, clamp_model);
+    if (observer) c.passivity.observer = *observer;
+    if (return_needs_motion) c.passivity.robot_return_needs_motion = *return_needs_motion;
+    if (reserve) c.passivity.energy_reserve = *reserve;
+    if (recovery) c.passivity.gain_recovery_rate = *recovery;
+    if (recover_absorbing) c.passivity.recover_while_absorbing = *recover_absorbing;
+    if (tolerance) {
+      for (const int j : {2, 3}) c.passivity.estimate_tolerance[j] = *tolerance;
+    }
+    return c;
+  }
+};
+
+//! The sweep (round trip x loss x contact), without passivity and with TDPA, markdown, with the
+//! force from `src`; ends with one line per mode: "stable: K of N cases (force source S,
+//! passivity off|tdpa)".
+inline void table(const Source& src) {
   fmt::print(
       "| round trip | loss | contact | without: peak N | osc. after 1 s N | min energy J | "
       "max force N | verdict | TDPA: peak N | osc. after 1 s N | min energy J | max force N | "
-      "hold N | drift mrad | criteria |\n");
-  fmt::print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+      "hold N | felt/true | drift mrad | criteria |\n");
+  fmt::print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  int cases = 0, stable_off = 0, stable_tdpa = 0;
   for (const int ms : sim::press_round_trips_ms) {
     for (const double loss : {0.0, 0.1}) {
       for (const auto contact : {sim::ContactKind::soft_tissue, sim::ContactKind::stiff_stop}) {
-        const auto a =
-            sim::run_press(sim::press_scenario(ms, loss, contact, tp::PassivityMode::observe),
-                           sim::press_seconds_without);
-        const auto b =
-            sim::run_press(sim::press_scenario(ms, loss, contact, tp::PassivityMode::tdpa),
-                           sim::press_seconds_with);
+        const auto a = sim::run_press(src.scenario(ms, loss, contact, tp::PassivityMode::observe),
+                                      sim::press_seconds_without);
+        const auto b = sim::run_press(src.scenario(ms, loss, contact, tp::PassivityMode::tdpa),
+                                      sim::press_seconds_with);
+        const std::string missed = sim::press_missed_criteria(b, ms);
+        ++cases;
+        stable_off += sim::press_stable_without(a) ? 1 : 0;
+        stable_tdpa += missed.empty() ? 1 : 0;
         fmt::print(
             "| {} ms | {:.0f} % | {} | {:.2f} | {:.3f} | {:.3f} | {:.2f} | {} | {:.2f} | {:.3f} | "
-            "{:.4f} | {:.2f} | {:.2f} | {:.2f} | {} |\n",
+            "{:.4f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {} |\n",
             ms, loss * 100, to_string(contact), a.first_peak, a.decay_amplitude, a.min_energy,
             a.max_force, sim::press_verdict_without(a), b.first_peak, b.decay_amplitude,
-            b.min_energy, b.max_force, b.hold_force, 1e3 * b.drift,
-            sim::press_meets_criteria(b) ? "met" : "NOT MET");
+            b.min_energy, b.max_force, b.hold_force, b.felt_ratio(), 1e3 * b.drift,
+            missed.empty() ? std::string("met") : "NOT MET (" + missed + ")");
         std::fflush(stdout);
       }
     }
   }
+  fmt::print("stable: {} of {} cases (force source {}, passivity off)\n", stable_off, cases,
+             to_string(src.source));
+  fmt::print("stable: {} of {} cases (force source {}, passivity tdpa)\n", stable_tdpa, cases,
+             to_string(src.source));
 }
 
 //! Felt vs true stiffness up to a 1 s round trip, without passivity and with TDPA, markdown.
-inline void transparency(sim::ContactKind contact) {
+inline void transparency(sim::ContactKind contact, const Source& src) {
   // Felt stiffness: mean stylus force over the last second / the operator's penetration (stylus
   // radius past the touch); true: the same force ratio for the robot's penetration, so the two
   // agree when the stylus feels the contact the robot meets. Reference: the 0 ms run.
@@ -58,8 +95,8 @@ inline void transparency(sim::ContactKind contact) {
   for (const int ms : sim::transparency_round_trips_ms) {
     for (const auto mode : {tp::PassivityMode::observe, tp::PassivityMode::tdpa}) {
       std::vector<sim::ClosedLoopSample> samples;
-      const auto r = sim::run_press(sim::press_scenario(ms, 0.0, contact, mode),
-                                    sim::press_seconds_with, &samples);
+      const auto r =
+          sim::run_press(src.scenario(ms, 0.0, contact, mode), sim::press_seconds_with, &samples);
       const int m = mode == tp::PassivityMode::tdpa ? 1 : 0;
       if (ms == 0) reference[m] = r.felt_stiffness;
       fmt::print("| {} ms | {} | {:.2f} | {:.0f} | {:.0f} | {:.2f} | {:.2f} | {} | {:.3f} |\n", ms,
@@ -77,23 +114,33 @@ inline void transparency(sim::ContactKind contact) {
 inline void trace(const std::string& path, const sim::ClosedLoopConfig& config, double seconds) {
   std::vector<sim::ClosedLoopSample> samples;
   const auto r = sim::run_press(config, seconds, &samples);
+  double min_to_robot = 0.0, min_to_operator = 0.0;
+  for (const auto& s : samples) {
+    min_to_robot = std::min(min_to_robot, s.passivity.energy_to_robot);
+    min_to_operator = std::min(min_to_operator, s.passivity.energy_to_operator);
+  }
   std::FILE* out = std::fopen(path.c_str(), "w");
   if (out == nullptr) throw std::runtime_error("cannot write " + path);
   fmt::print(out,
              "time,stylus_force,commanded_force,contact_force,desired,setpoint,robot,energy,"
-             "damping,force_gain,drift\n");
+             "damping,force_gain,drift,estimated_force,true_stylus_force\n");
   for (const auto& s : samples) {
     fmt::print(
-        out, "{:.4f},{:.5g},{:.5g},{:.5g},{:.6g},{:.6g},{:.6g},{:.6g},{:.5g},{:.4g},{:.5g}\n",
+        out,
+        "{:.4f},{:.5g},{:.5g},{:.5g},{:.6g},{:.6g},{:.6g},{:.6g},{:.5g},{:.4g},{:.5g},{:.5g},"
+        "{:.5g}\n",
         s.time, s.stylus_force, s.commanded_force, s.contact_force, s.desired, s.setpoint, s.robot,
-        s.passivity.energy, s.passivity.damping, s.passivity.force_gain, s.passivity.drift);
+        s.passivity.energy, s.passivity.damping, s.passivity.force_gain, s.passivity.drift,
+        s.estimated_force, s.true_stylus_force);
   }
   if (std::fclose(out) != 0) throw std::runtime_error("cannot write " + path);
   fmt::print(
       "{}: {} samples; first peak {:.2f} N, oscillation 1 s later {:.3f} N, min energy "
-      "{:.4f} J, max force {:.2f} N, hold {:.2f} N, drift {:.2f} mrad\n",
+      "{:.4f} J, max force {:.2f} N, hold {:.2f} N (true {:.2f} N, felt/true {:.2f}), drift "
+      "{:.2f} mrad; lowest energy operator -> robot {:.4f} J, robot -> operator {:.4f} J\n",
       path, samples.size(), r.first_peak, r.decay_amplitude, r.min_energy, r.max_force,
-      r.hold_force, 1e3 * r.drift);
+      r.hold_force, r.true_hold_force, r.felt_ratio(), 1e3 * r.drift, min_to_robot,
+      min_to_operator);
 }
 
 }  // namespace sweep_print

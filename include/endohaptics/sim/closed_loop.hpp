@@ -4,9 +4,11 @@
 //! Touch-like stylus, pressing into a contact and holding) -> the real TeleopLoop (eqs. 5.8/5.9
 //! mapping, watchdog, optional passivity layer) -> FaultInjectingTransport (loss) over DelayLine
 //! (delay, jitter), both directions -> SbrioEmulator -> SimulatedRig with a contact on clamp 1
-//! (soft tissue or a stiff stop). The force fed back is an ideal sensor's: the rig's true contact
-//! force sampled when the sbRIO answers and carried with that state packet (so it is delayed and
-//! lost with it). Units: s, m, rad, N, J. docs/passivity.md.
+//! (soft tissue or a stiff stop). The force fed back (ForceSource) is an ideal sensor's (the rig's
+//! true contact force sampled when the sbRIO answers and carried with that state packet, so it is
+//! delayed and lost with it) or the bridge's sensorless estimate from what the sbRIO reports
+//! (an identified clamp model, or the 2016 preset), computed at the PC as the bridge does.
+//! Units: s, m, rad, N, J. docs/passivity.md.
 #pragma once
 
 #include <Eigen/Core>
@@ -16,6 +18,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -23,6 +26,9 @@
 
 #include "endohaptics/core/clock.hpp"
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/estimation/bridge_force_models.hpp"
+#include "endohaptics/estimation/clamp_presets.hpp"
+#include "endohaptics/estimation/paced_estimator.hpp"
 #include "endohaptics/kinematics/cylindrical_mapper.hpp"
 #include "endohaptics/model/human_arm_model.hpp"
 #include "endohaptics/sim/delay_line.hpp"
@@ -46,6 +52,26 @@ enum class ContactKind : std::uint8_t {
   return k == ContactKind::soft_tissue ? "soft tissue" : "stiff stop";
 }
 
+//! Where the force fed back comes from.
+enum class ForceSource : std::uint8_t {
+  sensor = 0,   //!< an ideal sensor: the rig's true force, carried with the state packet
+  identified,   //!< the bridge's estimator with an identified clamp model (ClosedLoopConfig)
+  preset_2016,  //!< the bridge's estimator with the 2016 preset (yaw2016: appendix C, gates)
+};
+
+//! The source's name ("sensor", "identified", "preset-2016").
+[[nodiscard]] constexpr std::string_view to_string(ForceSource s) noexcept {
+  switch (s) {
+    case ForceSource::sensor:
+      return "sensor";
+    case ForceSource::identified:
+      return "identified";
+    case ForceSource::preset_2016:
+      return "preset-2016";
+  }
+  return "unknown";
+}
+
 //! One closed-loop scenario.
 struct ClosedLoopConfig {
   std::chrono::nanoseconds round_trip{0};  //!< network delay, both directions together
@@ -66,6 +92,10 @@ struct ClosedLoopConfig {
   DeviceParameters device{};                //!< the stylus
   model::HumanArmParameters<double> arm{};  //!< table 5.1
   teleop::TeleopLoopConfig loop{};  //!< period, timeout, safety (passivity taken from above)
+  ForceSource force_source = ForceSource::sensor;  //!< what the loop renders
+  //! ForceSource::identified: the clamp model both clamps run (as the bridge runs a clamp model
+  //! file); required then, ignored otherwise.
+  std::optional<estimation::ClampForceModel> clamp_model{};
 
   //! Throws Error naming the field and value.
   void validate() const {
@@ -89,6 +119,9 @@ struct ClosedLoopConfig {
                 endohaptics::detail::format_number(force_gain) + " and " +
                 endohaptics::detail::format_number(force_limit)));
     }
+    if (force_source == ForceSource::identified && !clamp_model) {
+      ENDOHAPTICS_THROW(Error("ClosedLoopConfig: force source identified needs a clamp_model"));
+    }
     if (!std::isfinite(press_depth) || press_depth < 0.0 || press_depth > 0.1) {
       ENDOHAPTICS_THROW(Error("ClosedLoopConfig: press_depth must be in [0, 0.1] m, got " +
                               endohaptics::detail::format_number(press_depth)));
@@ -100,14 +133,16 @@ struct ClosedLoopConfig {
 struct ClosedLoopSample {
   double time = 0.0;                                        //!< s since the start
   teleop::TickStatus status = teleop::TickStatus::waiting;  //!< the loop's tick status
-  double stylus_force = 0.0;     //!< N, device force along +x (the radius: pushes the hand back)
-  double stylus_position = 0.0;  //!< m, stylus x (the radius)
-  double commanded_force = 0.0;  //!< N, |force| the loop commanded (before the device's limit)
-  double contact_force = 0.0;    //!< N at the tool, true, >= 0
-  double desired = 0.0;          //!< rad, clamp 1 setpoint the stylus maps to (range-clamped)
-  double setpoint = 0.0;         //!< rad, clamp 1 setpoint sent
-  double robot = 0.0;            //!< rad, clamp 1 true joint position
-  bool force_limited = false;    //!< a limit scaled the force this tick
+  double stylus_force = 0.0;       //!< N, device force along +x (the radius: pushes the hand back)
+  double stylus_position = 0.0;    //!< m, stylus x (the radius)
+  double commanded_force = 0.0;    //!< N, |force| the loop commanded (before the device's limit)
+  double contact_force = 0.0;      //!< N at the tool, true, >= 0
+  double estimated_force = 0.0;    //!< N at the tool, clamp 1's force the loop has (motor order)
+  double true_stylus_force = 0.0;  //!< N, the stylus force the true tool forces map to (+x)
+  double desired = 0.0;            //!< rad, clamp 1 setpoint the stylus maps to (range-clamped)
+  double setpoint = 0.0;           //!< rad, clamp 1 setpoint sent
+  double robot = 0.0;              //!< rad, clamp 1 true joint position
+  bool force_limited = false;      //!< a limit scaled the force this tick
   teleop::PassivityFigures passivity{};  //!< the loop's energy figures (observe/tdpa)
 };
 
@@ -119,13 +154,22 @@ struct PressReport {
   double peak_time = 0.0;        //!< s, when
   double decay_amplitude = 0.0;  //!< N, half the force's range 1.0 to 1.5 s after the peak
   double late_amplitude = 0.0;   //!< N, half the force's range over the last second
-  double min_energy = 0.0;       //!< J, lowest observer value (observe/tdpa modes)
-  double max_force = 0.0;        //!< N, largest force the loop commanded
-  double saturated = 0.0;        //!< fraction of ticks after contact with a force limit hit
-  double hold_force = 0.0;       //!< N, mean stylus force over the last second
-  double drift = 0.0;            //!< rad, clamp 1 |desired - sent| at the end
-  double felt_stiffness = 0.0;   //!< N/m, hold force / operator's penetration (stylus)
-  double true_stiffness = 0.0;   //!< N/m, the same for the robot's true penetration
+  //! J, lowest observer value (observe/tdpa modes): the combined observer, or with TDPA on
+  //! per-direction observers the lowest of the two the controllers answer for
+  double min_energy = 0.0;
+  double max_force = 0.0;   //!< N, largest force the loop commanded
+  double saturated = 0.0;   //!< fraction of ticks after contact with a force limit hit
+  double hold_force = 0.0;  //!< N, mean stylus force over the last second
+  //! N, mean over the last second of the stylus force the true tool forces map to (what an
+  //! ideal sensor would render without the passivity layer): the hold felt should be near it.
+  double true_hold_force = 0.0;
+  double drift = 0.0;           //!< rad, clamp 1 |desired - sent| at the end
+  double felt_stiffness = 0.0;  //!< N/m, hold force / operator's penetration (stylus)
+  double true_stiffness = 0.0;  //!< N/m, the same for the robot's true penetration
+  //! Felt / true hold force (hold_force / true_hold_force; 0 without a true hold force).
+  [[nodiscard]] double felt_ratio() const noexcept {
+    return true_hold_force > 1e-9 ? hold_force / true_hold_force : 0.0;
+  }
   //! The oscillation fell below 10 % of the first peak within 1 s of it.
   [[nodiscard]] bool decays() const noexcept {
     return contact && decay_amplitude < 0.1 * first_peak;
@@ -143,6 +187,46 @@ struct TaggedForceSensor {
     return true;
   }
   void reset() noexcept {}  //!< stateless
+};
+
+//! The loop's estimator: the ideal sensor, or the bridge's (BridgeForceEstimator paced at 1 kHz
+//! on the loop's clock, estimation::PacedEstimator, from the decoded sbRIO state only).
+//! estimation::JointForceEstimator; neither copied nor moved (the pacer holds its address).
+class LoopForceEstimator {
+ public:
+  using Clock = ManualClock;  //!< the loop's virtual clock
+  //! `newest`: the sensor's tag (ForceSource::sensor). Throws Error on a model the bridge's
+  //! estimator refuses.
+  LoopForceEstimator(const estimation::MotorVector* newest, ForceSource source,
+                     const std::optional<estimation::ClampForceModel>& clamp, Clock& clock)
+      : sensor_{newest} {
+    if (source == ForceSource::sensor) return;
+    const auto models = source == ForceSource::identified
+                            ? estimation::bridge_force_models(clamp)
+                            : estimation::preset_force_models(estimation::ClampPreset::yaw2016);
+    estimation::ForceEstimatorSettings<double> settings;
+    settings.loop_period = 1e-3;
+    estimator_.emplace(models, estimation::bridge_estimator_settings(settings, models));
+    paced_.emplace(*estimator_, clock, std::chrono::milliseconds(1));
+  }
+  LoopForceEstimator(const LoopForceEstimator&) = delete;             //!< the pacer points in
+  LoopForceEstimator& operator=(const LoopForceEstimator&) = delete;  //!< the pacer points in
+
+  //! JointForceEstimator: the sensor's tag, or the paced estimate.
+  bool estimate(const estimation::MotorState4& measured, const estimation::MotorVector& setpoint,
+                estimation::MotorVector& force) noexcept {
+    if (!paced_) return sensor_.estimate(measured, setpoint, force);
+    return paced_->estimate(measured, setpoint, force);
+  }
+  //! Forgets the model's history (the link came back).
+  void reset() noexcept {
+    if (paced_) paced_->reset();
+  }
+
+ private:
+  TaggedForceSensor sensor_;
+  std::optional<estimation::BridgeForceEstimator> estimator_;
+  std::optional<estimation::PacedEstimator<estimation::BridgeForceEstimator, Clock>> paced_;
 };
 
 //! The whole loop. Large (the delay lines): create with std::make_unique. Single-threaded.
@@ -207,7 +291,7 @@ class ClosedLoop {
   using Device = HapticDeviceModel<ManualClock>;                        //!< stylus and arm
   using Mapper = kinematics::CylindricalMapper<>;                       //!< eqs. 5.8/5.9
   //! The real TeleopLoop over the simulated network, stylus and sensor.
-  using Loop = teleop::TeleopLoop<PcTransport, Device, TaggedForceSensor, Mapper, ManualClock>;
+  using Loop = teleop::TeleopLoop<PcTransport, Device, LoopForceEstimator, Mapper, ManualClock>;
 
   //! Throws Error on an invalid configuration.
   explicit ClosedLoop(const ClosedLoopConfig& config)
@@ -222,7 +306,7 @@ class ClosedLoop {
         sbrio_transport_(sbrio_end_, loss_rates(config.loss), config.seed + 3),
         emulator_(sbrio_transport_, rig_, clock_),
         device_(clock_, press_script(config), config.device, config.arm),
-        sensor_{&newest_force_},
+        sensor_(&newest_force_, config.force_source, config.clamp_model, clock_),
         mapper_(mapping(config)),
         loop_(pc_transport_, device_, sensor_, mapper_, clock_, loop_config(config)),
         start_(clock_.now()) {}
@@ -243,6 +327,11 @@ class ClosedLoop {
     s.stylus_position = device_.position().x();
     s.commanded_force = device_.commanded_norm();
     s.contact_force = rig_.truth().contact_force[clamp1];
+    s.estimated_force = r.motor_force[clamp1];
+    Eigen::Vector3d truth_force;
+    if (mapper_.map_force(rig_.truth().external_force, truth_force).ok()) {
+      s.true_stylus_force = truth_force.x();
+    }
     s.desired = desired_clamp1();
     s.setpoint = r.setpoint[clamp1];
     s.robot = rig_.truth().joint_position[clamp1];
@@ -383,7 +472,7 @@ class ClosedLoop {
   Emulator emulator_;
   Device device_;
   estimation::MotorVector newest_force_ = estimation::MotorVector::Zero();
-  TaggedForceSensor sensor_;
+  LoopForceEstimator sensor_;
   Mapper mapper_;
   Loop loop_;
   std::chrono::nanoseconds start_;
@@ -398,8 +487,12 @@ class ClosedLoop {
   if (samples.empty()) return r;
   const auto& cfg = loop.config();
   std::size_t onset = samples.size();
+  const bool directional = cfg.passivity.mode == teleop::PassivityMode::tdpa &&
+                           cfg.passivity.observer == teleop::PassivityObserver::per_direction;
   for (std::size_t i = 0; i < samples.size(); ++i) {
-    r.min_energy = std::min(r.min_energy, samples[i].passivity.energy);
+    const auto& p = samples[i].passivity;
+    r.min_energy = std::min(
+        r.min_energy, directional ? std::min(p.energy_to_robot, p.energy_to_operator) : p.energy);
     r.max_force = std::max(r.max_force, samples[i].commanded_force);
     if (onset == samples.size() && samples[i].contact_force > 0.05) onset = i;
   }
@@ -427,7 +520,7 @@ class ClosedLoop {
   r.decay_amplitude = half_range(r.peak_time + 1.0, r.peak_time + 1.5);
   const double end = samples.back().time;
   r.late_amplitude = half_range(end - 1.0, end);
-  double force = 0.0, desired = 0.0, robot = 0.0, contact = 0.0;
+  double force = 0.0, desired = 0.0, robot = 0.0, contact = 0.0, true_force = 0.0;
   int n = 0;
   for (const auto& s : samples) {
     if (s.time < end - 1.0) continue;
@@ -435,6 +528,7 @@ class ClosedLoop {
     desired += s.desired;
     robot += s.robot;
     contact += s.contact_force;
+    true_force += s.true_stylus_force;
     ++n;
   }
   force /= n;
@@ -442,6 +536,7 @@ class ClosedLoop {
   robot /= n;
   contact /= n;
   r.hold_force = force;
+  r.true_hold_force = true_force / n;
   r.drift = std::fabs(samples.back().desired - samples.back().setpoint);
   const double a = loop.mapper().config().a_clamp;  // rad of clamp 1 per m of stylus radius
   const double q = cfg.contact_position;
