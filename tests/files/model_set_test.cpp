@@ -97,6 +97,7 @@ TEST_CASE("model set: roll and pitch take identified model files, without the 20
   for (int j = 0; j < 4; ++j) {
     CHECK(settings.friction[static_cast<std::size_t>(j)].static_level == 0.0);
     CHECK(settings.unit_scale[j] == 1.0);  // the pitch preset's gram-force is not the file's N
+    CHECK(settings.output_limit[j] == doctest::Approx(9.80665));  // not roll's 0.084 N m
   }
   // The defaults keep the 2016 settings on every joint.
   const auto defaults = est::bridge_estimator_settings({}, est::bridge_force_models());

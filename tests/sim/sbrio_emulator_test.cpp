@@ -231,8 +231,6 @@ TEST_CASE("polling allocates nothing") {
         }) == 1);
 }
 
-}  // namespace sim_sbrio_emulator_test
-
 TEST_CASE("with a sample period the rig is seen on an exact grid, whatever the packets' timing") {
   transport::InMemoryLink<> link;
   endohaptics::ManualClock clock{1s};
@@ -279,3 +277,5 @@ TEST_CASE("with a sample period the rig is seen on an exact grid, whatever the p
   config.sample_period = -1ms;
   CHECK_THROWS_AS(config.validate(), endohaptics::Error);
 }
+
+}  // namespace sim_sbrio_emulator_test

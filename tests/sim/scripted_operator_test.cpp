@@ -35,6 +35,45 @@ TEST_CASE("the default script opens and closes clamp 1 through the default mappi
   CHECK(setpoint[2] == doctest::Approx(0.0).scale(1).epsilon(0.01));
 }
 
+TEST_CASE("the grasp turns and lifts the wrist, and its depth varies from cycle to cycle") {
+  sim::OperatorScript script;
+  script.theta_swing = 0.8;
+  script.z_swing = 0.14;
+  endohaptics::kinematics::CylindricalMapper<> mapper;
+  const auto setpoint_at = [&](double t) {
+    Eigen::Vector4d sp;
+    REQUIRE(mapper.map_position(script.intent(t), sp).ok());
+    return sp;
+  };
+  // Open: roll and pitch at rest. Closed (0.3 s into the hold): roll +0.71 x 0.8 rad, pitch
+  // +3.93 x 0.14 rad (eq. 5.9), clamp 1 at 0.6 rad as without the swings.
+  CHECK(setpoint_at(0.1)[0] == doctest::Approx(0.0066).epsilon(0.05));
+  const Eigen::Vector4d closed = setpoint_at(1.8);
+  CHECK(closed[0] == doctest::Approx(0.0066 + 0.7096 * 0.8).epsilon(0.01));
+  CHECK(closed[1] == doctest::Approx(3.93 * 0.14).epsilon(0.01));
+  CHECK(closed[2] == doctest::Approx(0.6).epsilon(0.01));
+  // Depth variation: every cycle a different depth in [1 - v, 1] of the full grasp, the first
+  // full; without it every cycle the same.
+  const double cycle = script.cycle();
+  script.depth_variation = 0.6;
+  double lowest = 1.0;
+  double previous = -1.0;
+  for (int k = 0; k < 8; ++k) {
+    const double depth = setpoint_at(1.8 + k * cycle)[2] / 0.6;
+    if (k == 0) CHECK(depth == doctest::Approx(1.0).epsilon(0.01));
+    CHECK(depth >= 0.4 - 1e-9);
+    CHECK(depth <= 1.0 + 1e-9);
+    CHECK(std::fabs(depth - previous) > 0.01);  // not repeated
+    lowest = std::min(lowest, depth);
+    previous = depth;
+  }
+  CHECK(lowest < 0.55);  // the depths spread over the range
+  script.depth_variation = 0.0;
+  CHECK(setpoint_at(1.8 + 5 * cycle)[2] == doctest::Approx(0.6).epsilon(0.01));
+  script.depth_variation = 1.0;  // out of range: refused
+  CHECK_THROWS(script.validate());
+}
+
 TEST_CASE("the scripted rest pose is the mapper's rest pose: straight ahead, mid-range setpoints") {
   // One definition of the rest pose (kinematics::rest_position, the mapping frame: +x towards the
   // operator, z up, origin on the waist axis at the desk), shared with the Touch adapters.

@@ -90,11 +90,12 @@ inline constexpr int bridge_clamp_states = 6;
 
 //! The estimator settings the bridge runs with `models`: `settings` for a joint that runs its
 //! 2016 appendix C model; for a joint that runs any other model (identified, a joint model, the
-//! 2016 code as run) the 5.2.3 friction gate is opened (level 0) and the unit scale is 1. The
-//! gate and the pitch model's gram-force unit belong to the appendix C models: a model fitted to
-//! data holds its own friction (dead zones, the push regime) and gives its output in the unit of
-//! the force it was fitted to, and the gate would drop the force such a model holds while the
-//! jaw is stalled against an object and the current has relaxed below the friction level.
+//! 2016 code as run) the 5.2.3 friction gate is opened (level 0), the unit scale is 1 and the
+//! output limit is the clamps' (a force, N). The gate, the pitch model's gram-force unit and the
+//! roll model's 0.084 N m limit belong to the appendix C models: a model fitted to data holds its
+//! own friction (dead zones, the push regime) and gives its output in the unit of the force it
+//! was fitted to, and the gate would drop the force such a model holds while the jaw is stalled
+//! against an object and the current has relaxed below the friction level.
 [[nodiscard]] inline ForceEstimatorSettings<double> bridge_estimator_settings(
     ForceEstimatorSettings<double> settings, const BridgeForceModels& models) {
   const std::pair<Motor, const BridgeJointModel*> joints[] = {{Motor::roll, &models.roll},
@@ -106,6 +107,8 @@ inline constexpr int bridge_clamp_states = 6;
       const auto j = static_cast<std::size_t>(joint);
       settings.friction[j] = model::JointFriction<double>::simplified(0.0);
       settings.unit_scale[static_cast<Eigen::Index>(j)] = 1.0;
+      settings.output_limit[static_cast<Eigen::Index>(j)] =
+          settings.output_limit[static_cast<Eigen::Index>(Motor::clamp1)];
     }
   }
   return settings;
