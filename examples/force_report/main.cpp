@@ -48,7 +48,8 @@ int main(int argc, char** argv) {
                  "a plot that fails is an error)");
   CLI::Option* all = app.add_flag("--all-joints", all_joints,
                                   "end with every rendered joint's line and the stylus line of "
-                                  "each run (the stylus force against the ideal one)");
+                                  "each run (the stylus force against the ideal one) instead "
+                                  "of the --joint line");
   app.add_option("--config", config_paths,
                  "the bridge's --config of the runs (one for all, or one per run; default: the "
                  "default configuration): the mapping of the ideal stylus force")
@@ -98,10 +99,11 @@ int main(int argc, char** argv) {
       wf::write_png(wf::period_figure(runs.back()), period);
       fmt::print("plots: {} and {}\n", forces.string(), period.string());
     }
-    // Last: one line per run, side by side (./run demo ends with these); with --all-joints then
-    // each run's rendered joints and its stylus line ("LABEL, " in front with several runs).
-    for (const wf::ForceRun& run : runs)
-      fmt::print("{}\n", wf::summary_line(run.label, run.accuracy));
+    // Last: one line per run at --joint, side by side; with --all-joints instead each run's
+    // rendered joints and its stylus line ("LABEL, " in front with several runs).
+    for (std::size_t r = 0; r < runs.size() && !all_joints; ++r) {
+      fmt::print("{}\n", wf::summary_line(runs[r].label, runs[r].accuracy));
+    }
     for (const wf::RunScores& s : scores) {
       for (const wf::JointScore& j : s.joints) {
         if (j.rendered) fmt::print("{}\n", wf::joint_line(s.label, j));

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # End-to-end tests on UDP loopback: endohaptics-sbrio-emulator + endohaptics-bridge as separate
 # processes, bounded in time. Usage: teleop_e2e.sh BIN_DIR steady|kill-restart|identified|delayed|
-# instrument
+# instrument|stylus
 set -euo pipefail
 bin=$1
 scenario=$2
@@ -133,16 +133,28 @@ case $scenario in
     bash "$(dirname "${BASH_SOURCE[0]}")/../../examples/demo.sh" "$bin" "$work/demo" 6 \
       >"$work/demo.out" 2>&1 || fail "demo.sh exited with $?: $(cat "$work/demo.out")"
     cat "$work/demo.out"
-    line=$(tail -n 1 "$work/demo.out")
-    [[ $line == identified:* ]] || fail "the last line is not the identified model's: $line"
+    # The runs' summary lines, found by their start (the demo may end with more lines after them:
+    # force-report --all-joints' joint and stylus lines).
+    line=$(grep '^identified: fit ' "$work/demo.out" | head -n 1 || true)
+    [[ -n $line ]] || fail "no line 'identified: fit ...'"
     fit=$(sed -n 's/^identified: fit \([-0-9.]*\)%.*/\1/p' <<<"$line")
     corr=$(sed -n 's/.*correlation \([-0-9.]*\),.*/\1/p' <<<"$line")
     [[ -n $fit && -n $corr ]] || fail "cannot read fit and correlation from: $line"
     awk -v f="$fit" -v c="$corr" 'BEGIN { exit !(f >= 70 && c >= 0.9) }' ||
       fail "identified model: fit $fit % (>= 70 needed), correlation $corr (>= 0.9 needed)"
-    [[ $(tail -n 2 "$work/demo.out" | head -n 1) == "2016 preset: fit "* ]] ||
-      fail "the second-to-last line is not the 2016 preset's"
-    echo "PASS: identified clamp model: fit $fit %, correlation $corr"
+    preset=$(grep -n '^2016 preset: fit ' "$work/demo.out" | head -n 1 | cut -d: -f1)
+    identified=$(grep -n '^identified: fit ' "$work/demo.out" | head -n 1 | cut -d: -f1)
+    [[ -n $preset && $identified == $((preset + 1)) ]] ||
+      fail "the line before 'identified: fit ...' is not the 2016 preset's"
+    # When the demo scores every joint (force-report --all-joints), it ends with the stylus line.
+    stylus=""
+    if grep -q '^identified, clamp1: fit ' "$work/demo.out"; then
+      stylus=$(tail -n 1 "$work/demo.out")
+      [[ $stylus =~ ^stylus:\ RMSE\ [0-9.]+\ N\ against\ the\ ideal\ force,\ free\ motion\ RMS\ [0-9.]+\ N$ ]] ||
+        fail "the demo scores every joint but does not end with the stylus line: $stylus"
+      stylus="; $stylus"
+    fi
+    echo "PASS: identified clamp model: fit $fit %, correlation $corr$stylus"
     ;;
   instrument)
     # One model set per instrument (files/model_set_file.hpp): --instrument picks the set from
@@ -184,6 +196,55 @@ JSON
     [[ $status != 0 ]] || fail "bridge ran without EW3's set"
     grep -q "instrument 'EW3': no model set" "$work/ew3.out" || fail "EW3 not named: $(cat "$work/ew3.out")"
     echo "PASS: --instrument EW1 runs and logs its set ($ticks ticks); EW2 (no roll, pitch) and EW3 (no set) refused"
+    ;;
+  stylus)
+    # endohaptics-force-report --all-joints (workflow/force_report.hpp): a run in tissue and one
+    # in free space, each 3 s with the 2016 models and the bridge's --config, scored at every
+    # motor and at the stylus. The report's replay of the bridge's mapping on its own estimate
+    # must match the rendered force (the report maps as the bridge did; without the bridge's
+    # --config it does not); the lines end the output.
+    echo '{ "mapping": { "force_scale": [0.5, 1, 1] } }' >"$work/bridge.json"
+    for environment in tissue free; do
+      start_emulator 0 --environment "$environment" --truth-log "$work/$environment.truth.csv"
+      "$bin/endohaptics-bridge" --sbrio "127.0.0.1:$port" --key "$key" --duration 3 \
+        --config "$work/bridge.json" --log "$work/$environment.ticks.csv" \
+        >"$work/$environment.out" 2>&1 || fail "bridge exited with $?: $(cat "$work/$environment.out")"
+      kill -INT "$emulator_pid"
+      wait "$emulator_pid" || true
+      emulator_pid=""
+    done
+    "$bin/endohaptics-force-report" --all-joints --config "$work/bridge.json" \
+      --truth "$work/tissue.truth.csv" --log "$work/tissue.ticks.csv" --label tissue \
+      --free-log "$work/free.ticks.csv" >"$work/report.out" 2>&1 ||
+      fail "force-report exited with $?: $(cat "$work/report.out")"
+    cat "$work/report.out"
+    number='-?([0-9.]+|inf|nan)'
+    tail -n 5 "$work/report.out" | head -n 4 >"$work/last.out"
+    expected=("tissue, roll: fit" "tissue, pitch: fit" "tissue, clamp1: fit" "tissue, clamp2: fit")
+    for k in 0 1 2 3; do
+      row=$(sed -n "$((k + 1))p" "$work/last.out")
+      [[ $row == "${expected[$k]}"* ]] || fail "line $((k + 1)) of the last 5 is not '${expected[$k]} ...': $row"
+      grep -Eq "fit $number%, correlation $number, RMSE [0-9.]+ N, delay [0-9]+ ms, peak [0-9.]+ N \(true [0-9.]+ N\)$" <<<"$row" ||
+        fail "not a joint line: $row"
+    done
+    last=$(tail -n 1 "$work/report.out")
+    [[ $last =~ ^stylus:\ RMSE\ ([0-9.]+)\ N\ against\ the\ ideal\ force,\ free\ motion\ RMS\ ([0-9.]+)\ N$ ]] ||
+      fail "the last line is not the stylus line: $last"
+    rmse=${BASH_REMATCH[1]}
+    free=${BASH_REMATCH[2]}
+    replay=$(sed -n 's/.*the mapping replayed on the estimate: RMSE \([0-9.]*\) N.*/\1/p' "$work/report.out")
+    [[ -n $replay ]] || fail "no replay figure"
+    awk -v r="$replay" 'BEGIN { exit !(r < 0.01) }' ||
+      fail "the report's mapping differs from the bridge's: RMSE $replay N replayed on the estimate"
+    "$bin/endohaptics-force-report" --all-joints --truth "$work/tissue.truth.csv" \
+      --log "$work/tissue.ticks.csv" >"$work/default.out" 2>&1 ||
+      fail "force-report without --config exited with $?: $(cat "$work/default.out")"
+    other=$(sed -n 's/.*the mapping replayed on the estimate: RMSE \([0-9.]*\) N.*/\1/p' "$work/default.out")
+    awk -v r="$other" 'BEGIN { exit !(r > 0.05) }' ||
+      fail "the default mapping (clamp scale 1) replayed the bridge's (0.5) to $other N"
+    grep -q "over [0-9]* ticks of $work/free.ticks.csv (free space)" "$work/report.out" ||
+      fail "the free-motion figure is not over the free log"
+    echo "PASS: every motor and the stylus scored: stylus RMSE $rmse N against the ideal force, free motion RMS $free N, the mapping replayed on the estimate to $replay N (default mapping: $other N)"
     ;;
   *) fail "unknown scenario $scenario" ;;
 esac

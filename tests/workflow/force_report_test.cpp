@@ -249,6 +249,12 @@ TEST_CASE("force report: theta from the roll setpoint, unknown at a limit or whi
   CHECK(th.source[2] == wf::ThetaSource::roll_setpoint);
   CHECK(th.theta[2] == doctest::Approx(M_PI / 2 + 0.004 / 0.7096));
   CHECK(th.source[3] == wf::ThetaSource::unknown);
+  // The limiter's step is at most one period's (1 ms): a 4 mrad step after a 5 ms gap is limited.
+  const wf::StylusTheta gap =
+      wf::stylus_theta(parse_ticks("time,setpoint0\n1.000," + std::to_string(pi2) + "\n1.005," +
+                                   std::to_string(pi2 + 0.004) + "\n"),
+                       config);
+  CHECK(gap.source[1] == wf::ThetaSource::unknown);
   // A logged theta wins where finite; nan falls back to the setpoint.
   const wf::StylusTheta logged =
       wf::stylus_theta(parse_ticks("time,setpoint0,stylus_theta\n1.000," + std::to_string(pi2) +

@@ -231,9 +231,10 @@ struct RunScores {
 enum class ThetaSource : std::uint8_t {
   logged,         //!< the tick log's stylus_theta (the mapper's theta, exact)
   roll_setpoint,  //!< eq. 5.9 inverted on the roll setpoint sent
-  //! Not known: the roll setpoint was at a limit of its range, or moved at more than half the
-  //! setpoint rate limit since the previous tick (it may lag the stylus; e.g. theta turns by pi
-  //! when the stylus crosses the waist axis).
+  //! Not known: the roll setpoint was at a limit of its range, or moved by more than half the
+  //! setpoint rate limit's step (over the time since the previous tick, at most 1 ms) since the
+  //! previous tick: it may lag the stylus (e.g. theta turns by pi when the stylus crosses the
+  //! waist axis).
   unknown,
 };
 
@@ -274,8 +275,11 @@ struct StylusTheta {
       continue;
     }
     const bool at_limit = setpoint[i] <= lower + tolerance || setpoint[i] >= upper - tolerance;
-    const bool moving = i > 0 && std::fabs(setpoint[i] - setpoint[i - 1]) >
-                                     0.5 * safety.max_setpoint_rate * (time[i] - time[i - 1]);
+    // The limiter's step is max_setpoint_rate x the tick's dt, dt at most one period (1 ms at
+    // the tested --rate 1000): a long gap in the log does not allow a longer step.
+    const bool moving =
+        i > 0 && std::fabs(setpoint[i] - setpoint[i - 1]) >
+                     0.5 * safety.max_setpoint_rate * std::min(time[i] - time[i - 1], 1e-3);
     if (at_limit || moving) {
       out.theta[i] = std::numeric_limits<double>::quiet_NaN();
       out.source[i] = ThetaSource::unknown;
