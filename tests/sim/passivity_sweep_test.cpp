@@ -3,6 +3,9 @@
 // of docs/passivity.md: round trip {0, 20, 50, 100, 200} ms x loss {0, 10 %} x {soft tissue, stiff
 // stop}, without passivity (the observer only: the loop renders exactly what it would with it off)
 // and with TDPA. docs/passivity.md prints the same table (endohaptics-passivity-sweep --table).
+// With the sensorless estimate too: a clamp model identified on training runs (force feedback
+// off, other presses than the sweep's), as endohaptics-passivity-sweep --force-source identified
+// does.
 #include "alloc_counter.hpp"  // first: counts every heap allocation of this executable
 
 #include <doctest/doctest.h>
@@ -11,9 +14,15 @@
 #include <chrono>
 #include <endohaptics/sim/closed_loop.hpp>
 #include <endohaptics/sim/passivity_sweep.hpp>
+#include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
+
+#include <unistd.h>
+
+#include "../../examples/passivity_sweep/identify_training.hpp"
 
 namespace sim_passivity_sweep_test {
 
@@ -28,7 +37,12 @@ constexpr double seconds_without = sim::press_seconds_without;
 constexpr double seconds_with = sim::press_seconds_with;
 constexpr double epsilon = sim::PressCriteria{}.epsilon;
 constexpr double max_drift = sim::PressCriteria{}.max_drift;
-constexpr auto scenario = sim::press_scenario;
+sim::ClosedLoopConfig scenario(
+    int ms, double loss, sim::ContactKind contact, tp::PassivityMode mode,
+    sim::ForceSource source = sim::ForceSource::sensor,
+    const std::optional<endohaptics::estimation::ClampForceModel>& model = std::nullopt) {
+  return sim::press_scenario(ms, loss, contact, mode, source, model);
+}
 
 sim::PressReport run(const sim::ClosedLoopConfig& config, double seconds) {
   return sim::run_press(config, seconds);
@@ -52,7 +66,38 @@ void check_row(int ms) {
       CHECK(with.drift < max_drift);
       CHECK(with.max_force < 3.0);   // never at the loop's 3 N limit
       CHECK(with.hold_force > 0.4);  // and the contact is still felt
-      CHECK(sim::press_meets_criteria(with));
+      CHECK(sim::press_meets_criteria(with, ms));
+    }
+  }
+}
+
+// The clamp model identified on the training runs, once per test process (its own directory:
+// CTest runs test cases in parallel processes).
+const endohaptics::estimation::ClampForceModel& identified_model() {
+  static const endohaptics::estimation::ClampForceModel model = [] {
+    const auto dir = std::filesystem::temp_directory_path() /
+                     ("endohaptics-sweep-test-" + std::to_string(::getpid()));
+    auto m = sweep_identify::identify_sweep_clamp_model(dir);
+    std::filesystem::remove_all(dir);
+    return m;
+  }();
+  return model;
+}
+
+// Every setting of one round trip with the identified model and TDPA: every criterion of the
+// sweep, the felt / true hold force included up to 100 ms.
+void check_identified_row(int ms) {
+  for (const double loss : {0.0, 0.1}) {
+    for (const auto contact : {sim::ContactKind::soft_tissue, sim::ContactKind::stiff_stop}) {
+      CAPTURE(name(ms, loss, contact));
+      const sim::PressReport r = run(scenario(ms, loss, contact, tp::PassivityMode::tdpa,
+                                              sim::ForceSource::identified, identified_model()),
+                                     seconds_with);
+      CAPTURE(r.felt_ratio());
+      CAPTURE(r.decay_amplitude);
+      CAPTURE(r.hold_force);
+      CHECK(sim::press_missed_criteria(r, ms) == "");
+      CHECK(sim::press_meets_criteria(r, ms));
     }
   }
 }
@@ -71,7 +116,7 @@ TEST_CASE("passivity sweep: 100 ms stiff stop is unstable without passivity") {
     CHECK(without.max_force >= 3.0 - 1e-9);     // the force reached the loop's limit
     CHECK(sim::press_verdict_without(without) ==
           "UNSTABLE (no decay, energy generated, force limit)");
-    CHECK_FALSE(sim::press_meets_criteria(without));
+    CHECK_FALSE(sim::press_meets_criteria(without, 100));
   }
 }
 
@@ -111,6 +156,64 @@ TEST_CASE("passivity sweep: 200 ms round trip, TDPA stable at every loss and con
   check_row(200);
 }
 
+// The sensorless estimate (docs/passivity.md, "With the sensorless estimate"): a clamp model
+// identified once per test process (the identification is most of these cases' time). What
+// holds today in every case: the per-direction observers within the reserve, the force below
+// the loop's limit, the drift small; at 0 ms every criterion; without TDPA the identified loop
+// is unstable from 20 ms.
+TEST_CASE("passivity sweep: identified model with TDPA passive in every case, 0 ms meets all") {
+  for (const int ms : sim::press_round_trips_ms) {
+    for (const double loss : {0.0, 0.1}) {
+      for (const auto contact : {sim::ContactKind::soft_tissue, sim::ContactKind::stiff_stop}) {
+        CAPTURE(name(ms, loss, contact));
+        const sim::PressReport r = run(scenario(ms, loss, contact, tp::PassivityMode::tdpa,
+                                                sim::ForceSource::identified, identified_model()),
+                                       seconds_with);
+        REQUIRE(r.contact);
+        CHECK(r.min_energy > -epsilon);
+        CHECK(r.max_force < 3.0);
+        CHECK(r.drift < max_drift);
+        CHECK(r.true_hold_force > 0.5);  // the tool holds the contact
+        if (ms == 0) CHECK(sim::press_missed_criteria(r, ms) == "");
+      }
+    }
+  }
+  const sim::PressReport without =
+      run(scenario(20, 0.0, sim::ContactKind::stiff_stop, tp::PassivityMode::observe,
+                   sim::ForceSource::identified, identified_model()),
+          seconds_without);
+  CHECK_FALSE(sim::press_stable_without(without));
+}
+
+// The requirement: with the identified model and TDPA every case meets every criterion, the hold
+// felt (felt / true >= 0.5) up to 100 ms. Not met yet from 20 ms (soft tissue does not decay
+// from 50 ms; the hold is felt at 0.14-0.33 of the true force): marked should_fail, so it
+// reports the day every row passes.
+TEST_CASE("passivity sweep: identified with TDPA, 20 to 200 ms, every criterion (not met)" *
+          doctest::should_fail()) {
+  for (const int ms : {20, 50, 100, 200}) check_identified_row(ms);
+}
+
+TEST_CASE("passivity closed loop: the preset-2016 estimate runs from the sbRIO's reports only") {
+  // The estimator sees the decoded state: zero contact, zero force held; the sensor's tag is
+  // never read (a scenario with the sensor source and one with the preset differ).
+  auto preset = std::make_unique<sim::ClosedLoop>(scenario(0, 0.0, sim::ContactKind::stiff_stop,
+                                                           tp::PassivityMode::observe,
+                                                           sim::ForceSource::preset_2016));
+  auto sensor = std::make_unique<sim::ClosedLoop>(
+      scenario(0, 0.0, sim::ContactKind::stiff_stop, tp::PassivityMode::observe));
+  bool differ = false;
+  for (int i = 0; i < 2000; ++i) {
+    const auto a = preset->step();
+    const auto b = sensor->step();
+    differ = differ || a.estimated_force != b.estimated_force;
+  }
+  CHECK(differ);
+  sim::ClosedLoopConfig c;
+  c.force_source = sim::ForceSource::identified;  // without a model
+  CHECK_THROWS_WITH(sim::ClosedLoop{c}, doctest::Contains("identified needs a clamp_model"));
+}
+
 TEST_CASE("passivity closed loop: observe renders exactly what off renders") {
   auto off = std::make_unique<sim::ClosedLoop>(
       scenario(100, 0.1, sim::ContactKind::stiff_stop, tp::PassivityMode::off));
@@ -129,10 +232,15 @@ TEST_CASE("passivity closed loop: observe renders exactly what off renders") {
 }
 
 TEST_CASE("passivity closed loop: a step with TDPA allocates nothing, and is deterministic") {
-  auto a = std::make_unique<sim::ClosedLoop>(
-      scenario(50, 0.1, sim::ContactKind::stiff_stop, tp::PassivityMode::tdpa));
-  auto b = std::make_unique<sim::ClosedLoop>(
-      scenario(50, 0.1, sim::ContactKind::stiff_stop, tp::PassivityMode::tdpa));
+  sim::ClosedLoopConfig config =
+      scenario(50, 0.1, sim::ContactKind::stiff_stop, tp::PassivityMode::tdpa);
+  SUBCASE("ideal sensor") {}
+  SUBCASE("the 2016 preset's estimate, per-direction observers") {
+    config = scenario(50, 0.1, sim::ContactKind::stiff_stop, tp::PassivityMode::tdpa,
+                      sim::ForceSource::preset_2016);
+  }
+  auto a = std::make_unique<sim::ClosedLoop>(config);
+  auto b = std::make_unique<sim::ClosedLoop>(config);
   double last_a = 0.0, last_b = 0.0;
   const long n = allocations_during([&] {
     for (int i = 0; i < 3000; ++i) last_a = a->step().stylus_force;

@@ -93,6 +93,14 @@ TEST_CASE("passivity: PassivityConfig::validate names the field and the value") 
   c = {};
   c.mode = static_cast<tp::PassivityMode>(7);
   CHECK_THROWS_WITH(c.validate(), doctest::Contains("mode must be off, observe or tdpa, got 7"));
+  c = {};
+  c.estimate_tolerance[2] = -0.1;
+  CHECK_THROWS_WITH(c.validate(),
+                    doctest::Contains("estimate_tolerance[2] must be finite and >= 0 N, got -0.1"));
+  c = {};
+  c.observer = static_cast<tp::PassivityObserver>(5);
+  CHECK_THROWS_WITH(c.validate(),
+                    doctest::Contains("observer must be combined or per_direction, got 5"));
   CHECK(tp::to_string(tp::PassivityMode::tdpa) == "tdpa");
   CHECK(tp::to_string(tp::PassivityMode::observe) == "observe");
 }
@@ -139,6 +147,13 @@ TEST_CASE("passivity: a tick of the controllers allocates nothing") {
   tp::PassivityConfig config;
   config.mode = tp::PassivityMode::tdpa;
   config.round_trip_ticks = 50;
+  SUBCASE("combined") {}
+  SUBCASE("per direction, tolerant, recovering while absorbing") {
+    config.observer = tp::PassivityObserver::per_direction;
+    config.estimate_tolerance = Vector::Constant(0.05);
+    config.recover_while_absorbing = true;
+    config.robot_return_needs_motion = false;
+  }
   tp::TimeDomainPassivity tdpa(config);
   tdpa.reset(Vector::Zero());
   Vector out, force = Vector::Constant(-0.5);
@@ -152,6 +167,149 @@ TEST_CASE("passivity: a tick of the controllers allocates nothing") {
     }
   });
   CHECK(n == 0);
+}
+
+// The hand presses clamp 1 into a constant force (it does work on the channel, gets none) while
+// the setpoint sent runs twice as far as the hand's (the robot port puts out twice what the
+// operator put in): operator -> robot is in deficit, robot -> operator is not. Returns the
+// smallest force scale, and the figures at the end.
+struct PressRun {
+  double min_gain = 1.0;
+  tp::PassivityFigures end{};
+};
+
+PressRun run_press_against(tp::PassivityObserver observer) {
+  tp::PassivityConfig config;
+  config.mode = tp::PassivityMode::tdpa;
+  config.observer = observer;
+  tp::TimeDomainPassivity tdpa(config);
+  tdpa.reset(Vector::Zero());
+  Vector force = Vector::Zero();
+  force[clamp1] = -0.5;  // N, pushing the clamp back (against the press)
+  PressRun r;
+  for (int t = 1; t <= 2000; ++t) {
+    Vector desired = Vector::Zero(), sent = Vector::Zero();
+    desired[clamp1] = 1e-4 * t;
+    sent[clamp1] = 2e-4 * t;
+    tdpa.track_desired(desired);
+    tdpa.commit(sent);  // (no robot-side shaping: the deficit is the point)
+    tdpa.observe_robot(sent, force);
+    Vector out;
+    (void)tdpa.shape_force(force, 1e-3, out);
+    r.min_gain = std::min(r.min_gain, tdpa.figures().force_gain);
+  }
+  r.end = tdpa.figures();
+  return r;
+}
+
+TEST_CASE(
+    "passivity: per-direction observers: a deficit towards the robot leaves the force alone") {
+  const PressRun combined = run_press_against(tp::PassivityObserver::combined);
+  const PressRun split = run_press_against(tp::PassivityObserver::per_direction);
+  // 2000 ticks x 1e-4 rad x 0.32 m/rad x 0.5 N: the operator put in ~0.032 J, the setpoint
+  // put ~0.064 J into the environment.
+  CHECK(split.end.energy_to_robot < -0.02);
+  CHECK(split.end.energy_to_operator == doctest::Approx(0.0).epsilon(1e-12));
+  CHECK(split.min_gain == 1.0);     // the hand got no energy: nothing to take away from it
+  CHECK(combined.min_gain == 0.0);  // one observer: the robot side's deficit scales the force
+}
+
+TEST_CASE("passivity: per-direction: the operator side's scaling does not feed its observer") {
+  // A spring 100 ms late: the operator-side PC scales the force down; in the per-direction
+  // form the robot side books the operator's input with the force before that scaling, so the
+  // robot-side deficit is no larger than with the PC's scaling left out of the books.
+  tp::PassivityConfig config;
+  config.mode = tp::PassivityMode::tdpa;
+  config.round_trip_ticks = 100;
+  config.observer = tp::PassivityObserver::per_direction;
+  tp::TimeDomainPassivity tdpa(config);
+  const double dt = 1e-3, k = 5.0;
+  std::deque<double> forces(101, 0.0);
+  Vector sent = Vector::Zero(), force = Vector::Zero();
+  tdpa.reset(sent);
+  double min_to_operator = 0.0, min_gain = 1.0;
+  for (int t = 0; t < 4000; ++t) {
+    Vector desired = Vector::Zero();
+    desired[clamp1] = 0.05 + 0.05 * std::sin(2 * std::numbers::pi * 2.0 * t * dt);
+    tdpa.track_desired(desired);
+    Vector out;
+    (void)tdpa.shape_setpoint(desired, force, out);
+    sent = out;
+    tdpa.commit(sent);
+    forces.push_back(-k * std::max(sent[clamp1], 0.0));
+    forces.pop_front();
+    force = Vector::Zero();
+    force[clamp1] = forces.front();
+    tdpa.observe_robot(sent, force);
+    Vector rendered;
+    (void)tdpa.shape_force(force, dt, rendered);
+    CHECK(rendered[clamp1] * force[clamp1] >= 0.0);  // scaled, never reversed
+    min_to_operator = std::min(min_to_operator, tdpa.energy_to_operator(clamp1));
+    min_gain = std::min(min_gain, tdpa.figures().force_gain);
+  }
+  CHECK(min_gain < 1.0);  // the operator-side PC acted
+  // ... and held its own direction within the reserve (plus a tick's energy)
+  CHECK(min_to_operator > -config.energy_reserve - 1e-3);
+}
+
+TEST_CASE("passivity: a force within the estimate tolerance is neither booked nor rendered") {
+  tp::PassivityConfig config;
+  config.mode = tp::PassivityMode::tdpa;
+  config.estimate_tolerance[clamp1] = 0.1;
+  tp::TimeDomainPassivity tdpa(config);
+  tdpa.reset(Vector::Zero());
+  Vector force = Vector::Zero(), out;
+  force[clamp1] = 0.08;  // an estimate error in free motion, pushing the hand along
+  for (int t = 1; t <= 1000; ++t) {
+    Vector desired = Vector::Zero();
+    desired[clamp1] = 1e-4 * t;
+    tdpa.track_desired(desired);
+    (void)tdpa.shape_setpoint(desired, force, out);
+    tdpa.commit(out);
+    tdpa.observe_robot(out, force);
+    (void)tdpa.shape_force(force, 1e-3, out);
+    CHECK(out[clamp1] == 0.0);
+  }
+  CHECK(tdpa.figures().energy == 0.0);
+  CHECK(tdpa.figures().force_gain == 1.0);
+  force[clamp1] = -0.3;  // a contact: felt less the tolerance
+  (void)tdpa.shape_force(force, 1e-3, out);
+  CHECK(out[clamp1] == doctest::Approx(-0.2));
+}
+
+TEST_CASE("passivity: recover_while_absorbing brings the force back while the hand holds still") {
+  for (const bool recover : {false, true}) {
+    CAPTURE(recover);
+    tp::PassivityConfig config;
+    config.mode = tp::PassivityMode::tdpa;
+    config.recover_while_absorbing = recover;
+    tp::TimeDomainPassivity tdpa(config);
+    tdpa.reset(Vector::Zero());
+    Vector force = Vector::Zero(), out;
+    force[clamp1] = 0.5;  // pushes the hand along its motion: the hand gets energy
+    Vector desired = Vector::Zero();
+    for (int t = 1; t <= 600; ++t) {  // 0.5 N x 0.32 m/rad x 0.06 rad: the reserve is spent
+      desired[clamp1] = 1e-4 * t;
+      tdpa.track_desired(desired);
+      tdpa.commit(desired);
+      tdpa.observe_robot(Vector::Zero(), force);  // the robot reports no motion: nothing back
+      (void)tdpa.shape_force(force, 1e-3, out);
+    }
+    const double after_push = tdpa.figures().force_gain;
+    CHECK(after_push < 0.6);
+    for (int t = 0; t < 2000; ++t) {  // 2 s of a still hand
+      tdpa.track_desired(desired);
+      tdpa.commit(desired);
+      tdpa.observe_robot(Vector::Zero(), force);
+      (void)tdpa.shape_force(force, 1e-3, out);
+    }
+    if (recover) {
+      CHECK(tdpa.figures().force_gain ==
+            doctest::Approx(std::min(1.0, after_push + 2.0 * config.gain_recovery_rate)));
+    } else {
+      CHECK(tdpa.figures().force_gain == doctest::Approx(after_push));
+    }
+  }
 }
 
 TEST_CASE("passivity: the energy figures reach the tick log, by column name") {
