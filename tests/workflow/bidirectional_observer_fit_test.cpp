@@ -30,11 +30,10 @@ constexpr double pi = 3.141592653589793;
 // following the truth; `friction` A is added forward and taken backward (an instrument's own);
 // 2 mA noise. `start_top`: the run starts at the top of its stroke, moving back first.
 wf::LoadObserverData grasper(unsigned seed, double load, double hz, double friction,
-                             bool start_top = false) {
+                             bool start_top = false, int n = 20000) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> noise(0.0, 0.002);
   const double w = 2 * pi * hz;
-  const int n = 20000;
   wf::LoadObserverData d;
   d.current.resize(n);
   d.position.resize(n);
@@ -168,6 +167,60 @@ TEST_CASE("bidirectional observer fit: data it cannot fit are refused, saying wh
       "fit_bidirectional_load_observer: every experiment moving forward is at the same load "
       "level (29.7"));
   CHECK(single.ends_with("): the map needs experiments at two levels or more"));
+}
+
+TEST_CASE("bidirectional observer: the constants no physics fixes, by cross-validation") {
+  // Four runs at four levels, 10 s each; two folds of two runs (each fold trains on two levels).
+  std::vector<wf::LoadObserverData> data;
+  unsigned seed = 40;
+  for (const double load : {20.0, 40.0, 60.0, 80.0}) {
+    data.push_back(grasper(seed, load, 0.4, seed % 2 == 0 ? 0.004 : -0.004, false, 10000));
+    ++seed;
+  }
+  const std::vector<std::vector<std::size_t>> folds{{0, 1}, {2, 3}};
+  const est::BidirectionalLoadObserverParameters<double> prior;
+  const wf::BidirectionalSelection chosen =
+      wf::choose_bidirectional_settings(data, folds, prior, 1.0);
+  MESSAGE("held-out RMSE " << chosen.held_out_rmse << " mN m (the research note's constants "
+                           << chosen.prior_rmse << "), " << chosen.candidates
+                           << " settings; correlation time "
+                           << chosen.settings.rule.correlation_time << " s, friction prior x"
+                           << chosen.settings.rule.friction_prior_scale << ", load walk "
+                           << chosen.settings.rule.load_walk << ", cut-off "
+                           << chosen.settings.current_cutoff << " Hz");
+  CHECK(chosen.folds == 2);
+  CHECK(chosen.candidates >= 61);  // the 60 of the noise grid and the research note's rule
+  CHECK(std::isfinite(chosen.held_out_rmse));
+  CHECK(chosen.held_out_rmse <= chosen.prior_rmse);
+  CHECK(chosen.settings.current_cutoff < 500.0);
+  // The fit with the chosen constants scores every held-out run as the search did.
+  double sum = 0.0;
+  for (const auto& fold : folds) {
+    std::vector<wf::LoadObserverData> train;
+    for (std::size_t e = 0; e < data.size(); ++e) {
+      if (std::find(fold.begin(), fold.end(), e) == fold.end()) train.push_back(data[e]);
+    }
+    const auto fit = wf::fit_bidirectional_load_observer(
+        train, wf::with_settings(prior, chosen.settings), 1.0, chosen.settings.rule);
+    for (const std::size_t e : fold) sum += rmse(Observer(fit.parameters), data[e]);
+  }
+  CHECK(sum / 4.0 == doctest::Approx(chosen.held_out_rmse).epsilon(1e-9));
+  // Fewer than two folds: the prior's front end and the research note's rule.
+  const wf::BidirectionalSelection none =
+      wf::choose_bidirectional_settings(data, {{0, 1, 2, 3}}, prior, 1.0);
+  CHECK(none.folds == 0);
+  CHECK(none.settings.rule.correlation_time == 0.2);
+  CHECK(none.settings.current_cutoff == prior.current_cutoff);
+  CHECK(message_of([&] {
+          (void)wf::choose_bidirectional_settings(data, {{0}, {4}}, prior, 1.0);
+        }) == "choose_bidirectional_settings: fold index 4 beyond the 4 experiments");
+  // The encoder's step: none on these smooth angles, the step on quantised ones.
+  CHECK_FALSE(wf::encoder_step(data).has_value());
+  auto counted = data;
+  for (auto& d : counted) d.position = (d.position / 1e-4).array().round() * 1e-4;
+  const auto step = wf::encoder_step(counted);
+  REQUIRE(step.has_value());
+  CHECK(*step == doctest::Approx(1e-4));
 }
 
 TEST_CASE("bidirectional observer on the UMN grasper, one session to the other, scored causally" *

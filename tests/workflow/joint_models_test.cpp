@@ -25,7 +25,9 @@ const std::vector<files::SignalInfo> inputs{{"current", "A"}, {"velocity", "rad/
 const std::vector<files::SignalInfo> outputs{{"force", "N"}};
 
 // Clamp hits at 10 ms (move in with the current ramping negative, stall while it relaxes, move
-// out), the force a stall-hold of gain `gain`, one hit depth per hit; as a prepared log.
+// out), the force a stall-hold of gain `gain`, one hit depth per hit; as a prepared log. The
+// output lag is 0.4 s, a value on the grid of the fit's inner cross-validation (its prior is 0.3
+// s), so that a fit on two files or more must find it to reproduce the force exactly.
 wf::PreparedLog hits_log(double gain, int hits, double first_depth, const std::string& name) {
   const int per_hit = 300;
   Eigen::MatrixXd u(hits * per_hit, 2);
@@ -46,6 +48,7 @@ wf::PreparedLog hits_log(double gain, int hits, double first_depth, const std::s
   truth.sample_time = 0.01;
   truth.side = est::StallHoldSide::negative;
   truth.gain = gain;
+  truth.output_time_constant = 0.4;
   const files::ModelFile model = files::make_joint_model_file(truth, inputs, outputs);
   wf::PreparedLog log;
   log.source = name;
@@ -82,13 +85,14 @@ TEST_CASE("joint models: a stall-hold file simulates as the estimation type, sco
   p.sample_time = 0.01;
   p.side = est::StallHoldSide::negative;
   p.gain = -7.5;
+  p.output_time_constant = 0.4;  // the truth's (hits_log)
   const wf::StallHoldData data{log.segments[0].u.col(0), log.segments[0].u.col(1),
                                log.segments[0].y.col(0)};
   const Eigen::VectorXd direct = wf::simulate_stall_hold(est::StallHold<double>(p), data);
   CHECK(direct.isApprox(log.segments[0].y.col(0)));
   CHECK(direct.maxCoeff() > 3.0);  // the hits carry force
 
-  est::StallHoldParameters<double> clamp{0.2, 0.05, 0.03, 0.3, -7.5, est::StallHoldSide::negative,
+  est::StallHoldParameters<double> clamp{0.2, 0.05, 0.03, 0.4, -7.5, est::StallHoldSide::negative,
                                          0.01};
   const files::ModelFile model = files::make_joint_model_file(clamp, inputs, outputs);
   const wf::FileComparison c = wf::compare_log(model, log);
@@ -117,6 +121,16 @@ TEST_CASE("joint models: fit_joint_model recovers the stall-hold gain and side f
   CHECK(fitted.side == est::StallHoldSide::negative);
   CHECK(fit.model.provenance.files == std::vector<std::string>{"a", "b"});
   CHECK(fit.summary.find("loaded side negative") != std::string::npos);
+  // The lag (and the threshold) by the inner cross-validation over the two files, not the prior.
+  CHECK(fitted.output_time_constant == 0.4);
+  CHECK(fit.summary.find("by 2-fold blocked cross-validation on the training files") !=
+        std::string::npos);
+  // One file: no folds, the priors, said so.
+  const wf::JointModelFit one =
+      wf::fit_joint_model(files::ModelKind::stall_hold, {logs[0]}, inputs, outputs, 0.5);
+  CHECK(files::joint_model_parameters<est::StallHoldParameters<double>>(one.model)
+            .output_time_constant == 0.3);
+  CHECK(one.summary.find("the priors: fewer than two training files") != std::string::npos);
   CHECK(message_of([&] {
           (void)wf::fit_joint_model(files::ModelKind::stall_hold, logs, {inputs[0]}, outputs, 0.5);
         }) ==
@@ -135,6 +149,15 @@ TEST_CASE("joint models: the family is chosen by inner cross-validation on the t
   REQUIRE(seven.size() == 5);
   CHECK(seven[0] == std::vector<std::size_t>{0, 5});
   CHECK(seven[4] == std::vector<std::size_t>{4});
+  // The constants inside a fit: contiguous blocks in the files' order.
+  CHECK(wf::blocked_folds(1).empty());
+  CHECK(wf::blocked_folds(3) == std::vector<std::vector<std::size_t>>{{0}, {1}, {2}});
+  CHECK(wf::blocked_folds(7) ==
+        std::vector<std::vector<std::size_t>>{{0, 1}, {2, 3}, {4}, {5}, {6}});
+  const auto fifty = wf::blocked_folds(50);
+  REQUIRE(fifty.size() == 5);
+  CHECK(fifty[1].front() == 10);
+  CHECK(fifty[1].back() == 19);
 
   std::vector<wf::PreparedLog> logs;
   for (int f = 0; f < 4; ++f) logs.push_back(hits_log(-7.5, 2, 0.5 + 0.1 * f, std::to_string(f)));

@@ -21,7 +21,8 @@ namespace {
 
 // Hits of a clamp at 10 ms: move in (current ramps negative), stall (current relaxes, the force
 // holds), move out. The truth is `gain` x the stall-hold value: the fit must find gain and side.
-wf::StallHoldData synthetic_hits(double gain, int hits) {
+// `lag`: the truth's output time constant.
+wf::StallHoldData synthetic_hits(double gain, int hits, double lag = 0.3) {
   wf::StallHoldData d;
   const int per_hit = 300;
   d.current.resize(hits * per_hit);
@@ -46,6 +47,7 @@ wf::StallHoldData synthetic_hits(double gain, int hits) {
   truth.sample_time = 0.01;
   truth.side = est::StallHoldSide::negative;
   truth.gain = gain;
+  truth.output_time_constant = lag;
   d.force = wf::simulate_stall_hold(est::StallHold<double>(truth), d);
   return d;
 }
@@ -71,6 +73,28 @@ TEST_CASE("fit_stall_hold: recovers the gain and the side of noiseless hits") {
   CHECK(message_of([&] {
           (void)wf::fit_stall_hold(std::vector{quiet}, prior);
         }).starts_with("fit_stall_hold: the current never exceeds the dead zone"));
+}
+
+TEST_CASE("choose_stall_hold_settings: the constants by cross-validation on the training data") {
+  // The truth lags by 0.8 s (the prior says 0.3 s): the held-out fit must find it.
+  const std::vector<wf::StallHoldData> data{
+      synthetic_hits(-7.5, 4, 0.8), synthetic_hits(-7.5, 3, 0.8), synthetic_hits(-7.5, 2, 0.8)};
+  est::StallHoldParameters<double> prior;
+  prior.sample_time = 0.01;
+  const std::vector<std::vector<std::size_t>> folds{{0}, {1}, {2}};
+  const wf::StallHoldSelection chosen = wf::choose_stall_hold_settings(data, folds, prior, 0.5);
+  CHECK(chosen.folds == 3);
+  CHECK(chosen.candidates >= 106);  // the prior, then the 105 of the grid
+  CHECK(chosen.settings.output_time_constant == 0.8);
+  CHECK(chosen.held_out_fit == doctest::Approx(100.0));
+  CHECK(chosen.prior_fit < 95.0);
+  // One fold: nothing to cross-validate, the prior's constants.
+  const wf::StallHoldSelection none = wf::choose_stall_hold_settings(data, {{0, 1, 2}}, prior, 0.5);
+  CHECK(none.folds == 0);
+  CHECK(none.settings.output_time_constant == 0.3);
+  CHECK(message_of([&] {
+          (void)wf::choose_stall_hold_settings(data, {{0}, {3}}, prior, 0.5);
+        }) == "choose_stall_hold_settings: fold index 3 beyond the 3 experiments");
 }
 
 TEST_CASE("fit_stall_hold on the 2016 clamp hits, leave one file out, scored causally" *

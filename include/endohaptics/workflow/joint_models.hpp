@@ -58,16 +58,20 @@ struct JointModelFit {
 //! Fits a joint model of `kind` on `logs` (prepared for scoring: what a controller has; inputs
 //! current and velocity, one output; for the observer optionally a third input, the current
 //! command, to which the current is then referred; every segment longer than the warm-up), at the
-//! logs' sample time. StallHold: the priors of StallHoldParameters (table 5.2's dead zone, 0.05
-//! rad/s, 30 ms, 0.3 s), the gain and the loaded side by least squares (fit_stall_hold).
+//! logs' sample time. StallHold: the dead zone table 5.2's (physical), the velocity threshold and
+//! the two time constants by choose_stall_hold_settings over blocked_folds of the logs (with one
+//! log the priors of StallHoldParameters), the gain and the loaded side by least squares
+//! (fit_stall_hold).
 //! PushLoadObserver: the priors of PushLoadObserverParameters, P0 = the variance of the training
 //! output, Q = (0.03 max |output|)^2 Ts per step (a random walk of 3 % of the range per root
 //! second; 1e-8 (N m)^2 per ms for the UMN grasper, the research note's), both push signs fitted
 //! (fit_push_load_observer), the one in which the motor works against the load kept (the
 //! current's magnitude grows with the load at the training-mean load), then the better causal
-//! training RMSE. BidirectionalLoadObserver: the priors of its parameters and everything else by
-//! fit_bidirectional_load_observer (no sign to choose: forward and backward enter alike). Throws
-//! Error on another kind or unusable data.
+//! training RMSE. BidirectionalLoadObserver: the velocity threshold one encoder step per sample
+//! when the angle is quantised (encoder_step), the noise rule and the other front-end constants
+//! by choose_bidirectional_settings over blocked_folds of the logs (with one log the priors),
+//! everything else by fit_bidirectional_load_observer (no sign to choose: forward and backward
+//! enter alike). Throws Error on another kind or unusable data.
 [[nodiscard]] ENDOHAPTICS_DECL JointModelFit
 fit_joint_model(files::ModelKind kind, const std::vector<PreparedLog>& logs,
                 const std::vector<files::SignalInfo>& inputs,
@@ -86,6 +90,14 @@ struct FamilyScore {
 //! The folds of the inner cross-validation over `files` training files: min(files, 5) folds,
 //! file i held out in fold i mod folds (leave-one-file-out up to 5 files). Empty for < 2 files.
 [[nodiscard]] ENDOHAPTICS_DECL std::vector<std::vector<std::size_t>> inner_folds(std::size_t files);
+
+//! Contiguous folds over `files` training files in the order given: min(files, 5) blocks of
+//! consecutive files (sizes differing by at most one, the larger first). Files given in recording
+//! order then hold out a stretch of the recording, so that a choice must carry over the drift
+//! between stretches (the kind of change another session brings), not only to a neighbouring run.
+//! Empty for < 2 files.
+[[nodiscard]] ENDOHAPTICS_DECL std::vector<std::vector<std::size_t>> blocked_folds(
+    std::size_t files);
 
 }  // namespace endohaptics::workflow
 

@@ -101,13 +101,75 @@ void score_training(JointModelFit& out, const std::vector<LoadObserverData>& dat
 }
 
 // fit_joint_model for kind bidirectional_load_observer, on the segments as the observers see them.
-inline JointModelFit fit_bidirectional(const std::vector<LoadObserverData>& data, double ts,
-                                       double warmup, const std::vector<files::SignalInfo>& inputs,
+// Folds of files as folds of experiments (`file_of[e]`: the file experiment e came from); a fold
+// whose files hold no experiment is left out.
+inline std::vector<std::vector<std::size_t>> experiment_folds(
+    const std::vector<std::vector<std::size_t>>& file_folds,
+    const std::vector<std::size_t>& file_of) {
+  std::vector<std::vector<std::size_t>> folds;
+  for (const auto& held_files : file_folds) {
+    std::vector<std::size_t> fold;
+    for (std::size_t e = 0; e < file_of.size(); ++e) {
+      if (std::find(held_files.begin(), held_files.end(), file_of[e]) != held_files.end()) {
+        fold.push_back(e);
+      }
+    }
+    if (!fold.empty()) folds.push_back(std::move(fold));
+  }
+  return folds;
+}
+
+// `file_of[e]`: the training file experiment e came from (the inner folds hold out whole files).
+inline JointModelFit fit_bidirectional(const std::vector<LoadObserverData>& data,
+                                       const std::vector<std::size_t>& file_of, std::size_t files,
+                                       double ts, double warmup,
+                                       const std::vector<files::SignalInfo>& inputs,
                                        const std::vector<files::SignalInfo>& outputs,
                                        const files::ModelProvenance& provenance) {
   estimation::BidirectionalLoadObserverParameters<double> prior;
   prior.sample_time = ts;
-  const BidirectionalObserverFit fit = fit_bidirectional_load_observer(data, prior, warmup);
+  // The constants no physics fixes (the noise rule, the front end's cut-off, q0, threshold and
+  // stop scale) by cross-validation over the training files, contiguous blocks of whole files
+  // held out (blocked_folds).
+  const std::vector<std::vector<std::size_t>> folds =
+      experiment_folds(blocked_folds(files), file_of);
+  // Rest is slower than one encoder step per sample (the velocity's quantum: below it the
+  // encoder cannot tell motion from rest) when the encoder's step shows in the data; otherwise
+  // the threshold is chosen with the others.
+  const std::optional<double> step = encoder_step(data);
+  if (step) prior.velocity_threshold = *step / ts;
+  const BidirectionalSelection chosen =
+      choose_bidirectional_settings(data, folds, prior, warmup, !step.has_value());
+  const auto& c = chosen.settings;
+  const BidirectionalObserverFit fit =
+      fit_bidirectional_load_observer(data, with_settings(prior, c), warmup, c.rule);
+  const std::string unit = outputs.front().unit;
+  const std::string how =
+      chosen.folds == 0
+          ? std::string(
+                "the research note's constants (fewer than two training files: no inner "
+                "cross-validation)")
+          : "chosen by " + std::to_string(chosen.folds) +
+                "-fold blocked cross-validation on the training files (" +
+                std::to_string(chosen.candidates) + " settings; held-out RMSE " +
+                endohaptics::detail::format_number(chosen.held_out_rmse) + " " + unit +
+                ", the research note's constants " +
+                endohaptics::detail::format_number(chosen.prior_rmse) + ")";
+  const std::string settings =
+      "noise rule: correlation time " +
+      endohaptics::detail::format_number(c.rule.correlation_time) + " s, friction prior " +
+      endohaptics::detail::format_number(c.rule.friction_prior_scale) +
+      " x the runs' forward bias, load walk " +
+      endohaptics::detail::format_number(100.0 * c.rule.load_walk) +
+      " % of the range per root second; front end: current cut-off " +
+      endohaptics::detail::format_number(c.current_cutoff) + " Hz, velocity cut-off " +
+      endohaptics::detail::format_number(c.velocity_cutoff) + " Hz, q0 " +
+      endohaptics::detail::format_number(c.direction_scale) + " rad, velocity threshold " +
+      endohaptics::detail::format_number(c.velocity_threshold) + " rad/s" +
+      (step ? " (one encoder step, " + endohaptics::detail::format_number(*step) +
+                  " rad, per sample)"
+            : std::string()) +
+      ", stop thresholds x " + endohaptics::detail::format_number(c.stop_scale) + "; " + how;
   const auto& p = fit.parameters;
   const auto& reference = fit.reference;
   require_reference("bidirectional_load_observer", inputs, reference.has_value());
@@ -118,7 +180,6 @@ inline JointModelFit fit_bidirectional(const std::vector<LoadObserverData>& data
                  [&](const LoadObserverData& d) {
                    return simulate_bidirectional_observer(fitted, d, reference);
                  });
-  const std::string unit = outputs.front().unit;
   const auto map = [&unit](double g, double g1, double o, double o1) {
     return "(" + endohaptics::detail::format_number(g) + " + " +
            endohaptics::detail::format_number(g1) + " s) A/" + unit + ", offset " +
@@ -136,11 +197,11 @@ inline JointModelFit fit_bidirectional(const std::vector<LoadObserverData>& data
       " (s: the widest stop operator); filter noise sqrt(R) " +
       endohaptics::detail::format_number(std::sqrt(p.forward_variance)) + " / " +
       endohaptics::detail::format_number(std::sqrt(p.backward_variance)) + " " + unit +
-      " forward / backward (the inversions' per-sample sd x sqrt(0.2 s / Ts): they err in "
-      "strokes), "
+      " forward / backward (the inversions' per-sample sd x sqrt(correlation time / Ts): they "
+      "err in strokes), "
       "friction prior " +
       endohaptics::detail::format_number(std::sqrt(p.friction_variance)) + " " + unit + " (" +
-      endohaptics::detail::format_number(bidirectional_friction_prior_scale) +
+      endohaptics::detail::format_number(c.rule.friction_prior_scale) +
       " x the runs' forward bias " + endohaptics::detail::format_number(fit.forward_bias_rms) +
       "), initial load " + endohaptics::detail::format_number(p.initial_load) + " " + unit +
       " (sd " + endohaptics::detail::format_number(std::sqrt(p.initial_variance)) +
@@ -151,7 +212,8 @@ inline JointModelFit fit_bidirectional(const std::vector<LoadObserverData>& data
                        " A per command unit, " + "reference offset " +
                        endohaptics::detail::format_number(reference->reference_offset) + " A"
                  : std::string("current as measured (no command)")) +
-      "; training RMSE " + endohaptics::detail::format_number(fit.mean_rmse) + " " + unit;
+      "; training RMSE " + endohaptics::detail::format_number(fit.mean_rmse) + " " + unit + "; " +
+      settings;
   return out;
 }
 
@@ -198,27 +260,45 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
   for (const PreparedLog& log : logs) provenance.files.push_back(log.source);
   if (kind == files::ModelKind::stall_hold) {
     std::vector<StallHoldData> data;
-    for (const PreparedLog& log : logs) {
-      for (const DataSet& d : log.segments) {
+    std::vector<std::size_t> file_of;
+    for (std::size_t f = 0; f < logs.size(); ++f) {
+      for (const DataSet& d : logs[f].segments) {
         if (d.u.rows() <= skip + 1) continue;
         data.push_back({d.u.col(0), d.u.col(1), d.y.col(0)});
+        file_of.push_back(f);
       }
     }
     if (data.empty()) detail::fail("fit_joint_model: no segment longer than the warm-up");
     estimation::StallHoldParameters<double> prior;
     prior.sample_time = ts;
+    // The threshold and the time constants by cross-validation over the training files.
+    const StallHoldSelection chosen = choose_stall_hold_settings(
+        data, detail::experiment_folds(blocked_folds(logs.size()), file_of), prior, warmup);
+    prior.velocity_threshold = chosen.settings.velocity_threshold;
+    prior.velocity_time_constant = chosen.settings.velocity_time_constant;
+    prior.output_time_constant = chosen.settings.output_time_constant;
     const StallHoldFit fit = fit_stall_hold(data, prior, warmup);
     const auto& p = fit.parameters;
     const std::string side(enumerator_name(p.side));
     provenance.fit_percent = {fit.mean_fit_percent};
     JointModelFit out{.model = files::make_joint_model_file(p, inputs, outputs, provenance),
                       .training_fit = fit.fit_percent};
-    out.summary = "stall_hold: dead zone " + detail::format_number(p.current_deadzone) +
-                  " A, held at |v| <= " + detail::format_number(p.velocity_threshold) +
-                  " rad/s, velocity filter " + detail::format_number(p.velocity_time_constant) +
-                  " s, output lag " + detail::format_number(p.output_time_constant) +
-                  " s (priors); fitted: gain " + detail::format_number(p.gain) + " " +
-                  outputs.front().unit + "/A, loaded side " + side;
+    out.summary =
+        "stall_hold: dead zone " + detail::format_number(p.current_deadzone) +
+        " A, held at |v| <= " + detail::format_number(p.velocity_threshold) +
+        " rad/s, velocity filter " + detail::format_number(p.velocity_time_constant) +
+        " s, output lag " + detail::format_number(p.output_time_constant) + " s (" +
+        (chosen.folds == 0
+             ? std::string("the priors: fewer than two training files, no inner "
+                           "cross-validation")
+             : "the dead zone table 5.2's; the others by " + std::to_string(chosen.folds) +
+                   "-fold blocked cross-validation on the training files, " +
+                   std::to_string(chosen.candidates) + " settings, held-out fit " +
+                   detail::format_number(chosen.held_out_fit) +
+                   " %, the research note's constants " + detail::format_number(chosen.prior_fit) +
+                   " %") +
+        "); fitted: gain " + detail::format_number(p.gain) + " " + outputs.front().unit +
+        "/A, loaded side " + side;
     return out;
   }
   if (kind != files::ModelKind::push_load_observer &&
@@ -227,11 +307,13 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
                  "\" is not a joint model");
   }
   std::vector<LoadObserverData> data;
+  std::vector<std::size_t> file_of;
   double peak = 0.0, sum = 0.0, sum2 = 0.0;
   Eigen::Index count = 0;
-  for (const PreparedLog& log : logs) {
-    for (const DataSet& d : log.segments) {
+  for (std::size_t f = 0; f < logs.size(); ++f) {
+    for (const DataSet& d : logs[f].segments) {
       if (d.u.rows() <= skip + 1) continue;
+      file_of.push_back(f);
       LoadObserverData e = detail::load_observer_data(d.u, d.y.col(0), ts);
       peak = std::max(peak, e.load.cwiseAbs().maxCoeff());
       sum += e.load.sum();
@@ -242,7 +324,8 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
   }
   if (data.empty()) detail::fail("fit_joint_model: no segment longer than the warm-up");
   if (kind == files::ModelKind::bidirectional_load_observer) {
-    return detail::fit_bidirectional(data, ts, warmup, inputs, outputs, provenance);
+    return detail::fit_bidirectional(data, file_of, logs.size(), ts, warmup, inputs, outputs,
+                                     provenance);
   }
   const double mean = sum / static_cast<double>(count);
   const double variance = std::max(sum2 / static_cast<double>(count) - mean * mean, 0.0);
@@ -329,6 +412,19 @@ ENDOHAPTICS_DECL std::vector<std::vector<std::size_t>> inner_folds(std::size_t f
   const std::size_t k = std::min<std::size_t>(files, 5);
   folds.resize(k);
   for (std::size_t i = 0; i < files; ++i) folds[i % k].push_back(i);
+  return folds;
+}
+
+ENDOHAPTICS_DECL std::vector<std::vector<std::size_t>> blocked_folds(std::size_t files) {
+  std::vector<std::vector<std::size_t>> folds;
+  if (files < 2) return folds;
+  const std::size_t k = std::min<std::size_t>(files, 5);
+  std::size_t next = 0;
+  for (std::size_t f = 0; f < k; ++f) {
+    const std::size_t size = files / k + (f < files % k ? 1 : 0);
+    folds.emplace_back();
+    for (std::size_t i = 0; i < size; ++i) folds.back().push_back(next++);
+  }
   return folds;
 }
 

@@ -88,4 +88,111 @@ ENDOHAPTICS_DECL StallHoldFit fit_stall_hold(std::span<const StallHoldData> data
   return best;
 }
 
+namespace detail {
+
+// The mean held-out causal fit of one StallHold setting over `folds`; -infinity when a fold's
+// fit fails.
+inline double held_out_fit(std::span<const StallHoldData> data,
+                           const std::vector<std::vector<std::size_t>>& folds,
+                           estimation::StallHoldParameters<double> p, const StallHoldSettings& s,
+                           double warmup) {
+  const double fail = -std::numeric_limits<double>::infinity();
+  p.velocity_threshold = s.velocity_threshold;
+  p.velocity_time_constant = s.velocity_time_constant;
+  p.output_time_constant = s.output_time_constant;
+  const auto skip = static_cast<Eigen::Index>(std::ceil(warmup / p.sample_time));
+  double sum = 0.0;
+  std::size_t held = 0;
+  for (const auto& fold : folds) {
+    std::vector<StallHoldData> train;
+    for (std::size_t e = 0; e < data.size(); ++e) {
+      if (std::find(fold.begin(), fold.end(), e) == fold.end()) train.push_back(data[e]);
+    }
+    if (train.empty() || fold.empty()) continue;
+#if defined(__cpp_exceptions)
+    try {
+#endif
+      const StallHoldFit fit = fit_stall_hold(train, p, warmup);
+      const estimation::StallHold<double> model(fit.parameters);
+      for (const std::size_t e : fold) {
+        const auto n = data[e].current.size() - skip;
+        const double f =
+            model::fit_percent(data[e].force.tail(n), simulate_stall_hold(model, data[e]).tail(n));
+        if (!std::isfinite(f)) return fail;
+        sum += f;
+        ++held;
+      }
+#if defined(__cpp_exceptions)
+    } catch (const Error&) {
+      return fail;
+    }
+#endif
+  }
+  return held > 0 ? sum / static_cast<double>(held) : fail;
+}
+
+}  // namespace detail
+
+ENDOHAPTICS_DECL StallHoldSelection choose_stall_hold_settings(
+    std::span<const StallHoldData> data, const std::vector<std::vector<std::size_t>>& folds,
+    const estimation::StallHoldParameters<double>& prior, double warmup) {
+  StallHoldSelection out;
+  out.settings = {prior.velocity_threshold, prior.velocity_time_constant,
+                  prior.output_time_constant};
+  for (const auto& fold : folds) {
+    for (const std::size_t e : fold) {
+      if (e >= data.size()) {
+        ENDOHAPTICS_THROW(Error("choose_stall_hold_settings: fold index " + std::to_string(e) +
+                                " beyond the " + std::to_string(data.size()) + " experiments"));
+      }
+    }
+  }
+  if (folds.size() < 2) return out;
+  const auto score = [&](const StallHoldSettings& s) {
+    ++out.candidates;
+    return detail::held_out_fit(data, folds, prior, s, warmup);
+  };
+  out.prior_fit = score(out.settings);
+  StallHoldSettings best = out.settings;
+  double best_fit = -std::numeric_limits<double>::infinity();
+  const double vths[] = {0.0125, 0.025, 0.05, 0.1, 0.2};
+  const double tvs[] = {0.01, 0.03, 0.1};
+  const double tos[] = {0.1, 0.15, 0.2, 0.3, 0.4, 0.6, 0.8};
+  for (const double v : vths) {
+    for (const double tv : tvs) {
+      for (const double to : tos) {
+        const StallHoldSettings s{v, tv, to};
+        const double f = score(s);
+        if (f > best_fit) {
+          best_fit = f;
+          best = s;
+        }
+      }
+    }
+  }
+  if (!std::isfinite(best_fit)) return out;
+  // Beyond the grid's edge, a factor of 2 at a time while the fit improves.
+  const auto walk = [&](double StallHoldSettings::*member, double factor) {
+    for (int i = 0; i < 3; ++i) {
+      StallHoldSettings s = best;
+      s.*member *= factor;
+      const double f = score(s);
+      if (!(f > best_fit)) return;
+      best = s;
+      best_fit = f;
+    }
+  };
+  const auto edge = [&](double StallHoldSettings::*member, double low, double high) {
+    if (best.*member == low) walk(member, 0.5);
+    if (best.*member == high) walk(member, 2.0);
+  };
+  edge(&StallHoldSettings::velocity_threshold, vths[0], vths[4]);
+  edge(&StallHoldSettings::velocity_time_constant, tvs[0], tvs[2]);
+  edge(&StallHoldSettings::output_time_constant, tos[0], tos[6]);
+  out.settings = best;
+  out.held_out_fit = best_fit;
+  out.folds = folds.size();
+  return out;
+}
+
 }  // namespace endohaptics::workflow
