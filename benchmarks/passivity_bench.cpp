@@ -1,12 +1,19 @@
 // The passivity layer's cost per tick (budget <= 50 ns): the TeleopLoop tick over an
 // in-memory canned sbRIO with PassivityMode off and tdpa side by side (same parts, same inputs),
-// and the TimeDomainPassivity calls of one tick alone. docs/performance.md quotes the difference.
+// and the TimeDomainPassivity calls of one tick alone, with the combined observer and with the
+// per-direction observers the sweep runs on the sensorless estimate (with and without an
+// estimate tolerance); beside them, in the same run, one step of the 2016 clamp model through the
+// bridge's ClampForceModel (the yaw2016 preset), the reference docs/performance.md divides by.
 #include <benchmark/benchmark.h>
 
+#include <endohaptics/estimation/bridge_force_models.hpp>
+#include <endohaptics/estimation/force_models_2016.hpp>
 #include <endohaptics/kinematics/cylindrical_mapper.hpp>
 #include <endohaptics/teleop/passivity.hpp>
 #include <endohaptics/teleop/teleop_loop.hpp>
 #include <endohaptics/transport/in_memory_transport.hpp>
+
+#include "joint_signal_sweep.hpp"
 
 namespace passivity_bench {
 
@@ -55,7 +62,8 @@ struct EffortEstimator {
   void reset() noexcept {}
 };
 
-void tick(benchmark::State& st, tp::PassivityMode mode) {
+void tick(benchmark::State& st, tp::PassivityMode mode,
+          tp::PassivityObserver observer = tp::PassivityObserver::combined) {
   transport::RespondingTransport<MovingSbrio> transport{MovingSbrio{}};
   PressingDevice device;
   EffortEstimator estimator;
@@ -64,6 +72,7 @@ void tick(benchmark::State& st, tp::PassivityMode mode) {
   tp::TeleopLoopConfig config;
   config.passivity.mode = mode;
   config.passivity.round_trip_ticks = 100;
+  config.passivity.observer = observer;
   tp::TeleopLoop loop(transport, device, estimator, mapper, clock, config);
   std::uint64_t active = 0;
   for (auto _ : st) {
@@ -79,10 +88,13 @@ void BM_TeleopLoop_tick_passivity_off(benchmark::State& st) { tick(st, tp::Passi
 BENCHMARK(BM_TeleopLoop_tick_passivity_off);
 void BM_TeleopLoop_tick_passivity_tdpa(benchmark::State& st) { tick(st, tp::PassivityMode::tdpa); }
 BENCHMARK(BM_TeleopLoop_tick_passivity_tdpa);
+void BM_TeleopLoop_tick_passivity_tdpa_per_direction(benchmark::State& st) {
+  tick(st, tp::PassivityMode::tdpa, tp::PassivityObserver::per_direction);
+}
+BENCHMARK(BM_TeleopLoop_tick_passivity_tdpa_per_direction);
 
 // The layer alone: the five calls the loop makes per tick, 100 ms round trip, a delayed spring.
-void BM_TimeDomainPassivity_tick(benchmark::State& st) {
-  tp::PassivityConfig config;
+void run_layer(benchmark::State& st, tp::PassivityConfig config) {
   config.mode = tp::PassivityMode::tdpa;
   config.round_trip_ticks = 100;
   tp::TimeDomainPassivity tdpa(config);
@@ -103,7 +115,33 @@ void BM_TimeDomainPassivity_tick(benchmark::State& st) {
     benchmark::DoNotOptimize(rendered);
   }
 }
+void BM_TimeDomainPassivity_tick(benchmark::State& st) { run_layer(st, {}); }
 BENCHMARK(BM_TimeDomainPassivity_tick);
+// As the sweep runs it on the sensorless estimate (sim/passivity_sweep.hpp).
+void BM_TimeDomainPassivity_tick_per_direction(benchmark::State& st) {
+  tp::PassivityConfig config;
+  config.observer = tp::PassivityObserver::per_direction;
+  config.gain_recovery_rate = 0.05;
+  run_layer(st, config);
+}
+BENCHMARK(BM_TimeDomainPassivity_tick_per_direction);
+// ... with an estimate tolerance and the recovery while the hand absorbs.
+void BM_TimeDomainPassivity_tick_per_direction_tolerant(benchmark::State& st) {
+  tp::PassivityConfig config;
+  config.observer = tp::PassivityObserver::per_direction;
+  config.estimate_tolerance = tp::TimeDomainPassivity::Vector::Constant(0.05);
+  config.recover_while_absorbing = true;
+  run_layer(st, config);
+}
+BENCHMARK(BM_TimeDomainPassivity_tick_per_direction_tolerant);
+
+// The reference: one step (advance + force) of the 2016 clamp model (appendix C yaw) through
+// the bridge's ClampForceModel, as the yaw2016 preset runs it.
+void BM_Passivity_reference_ClampForceModel_yaw2016_step(benchmark::State& st) {
+  namespace est = endohaptics::estimation;
+  joint_signal_sweep::run_joint_steps(st, est::ClampForceModel(est::models_2016().clamp1));
+}
+BENCHMARK(BM_Passivity_reference_ClampForceModel_yaw2016_step);
 
 }  // namespace
 
