@@ -1,23 +1,27 @@
 #!/usr/bin/env bash
 # The main job (./run demo; tests/e2e/teleop_e2e.sh identified): loopback teleoperation that
-# identifies its own clamp model first.
-#   1. identification experiment: sbRIO emulator (simulated EndoWrist, clamps closing on tissue)
+# identifies its own force models first, one per motor whose force the stylus renders.
+#   1. identification experiment: sbRIO emulator (simulated EndoWrist; every joint closes on
+#      tissue: the grasp also turns and lifts the wrist, so roll and pitch meet their contacts)
 #      and bridge with the force feedback off, a scripted operator grasping at another depth and
-#      pace than in the runs below; the emulator logs what the sbRIO reports and the true force;
-#   2. endohaptics-identify: a Hammerstein-Wiener clamp model (reported current and velocity ->
-#      force) of order 2 from that log; the bridge runs it in its 6-state clamp type
-#      (model::embed_states). Order 2: the sbRIO's current filter and velocity window are the
-#      fast dynamics between the reported signals and the force. Orders 3-6 fitted this one log
-#      as well or better but generalised worse: at order 6 the identified run's fit ranged
-#      61.5-81.3 % over 19 runs of the 12 s / 6 s pipeline (2 below 70 %), at order 2
-#      77.5-80.7 % over 12 (docs/identification_results.md, "The demo's clamp model");
+#      pace than in the runs below, each grasp to another depth (operator.depth_variation); the
+#      emulator logs what the sbRIO reports and the true force on an exact 1 ms grid;
+#   2. endohaptics-identify, once per motor: a Hammerstein-Wiener model (that motor's reported
+#      current and velocity -> its true force) of order 2, written into a model set
+#      (model_sets/EW/<motor>.json) that the bridge loads by instrument name. Order 2: the sbRIO's
+#      current filter and velocity window are the fast dynamics between the reported signals and
+#      the force (docs/identification_results.md, "The demo's clamp model");
 #   3. teleoperation with the 2016 preset (appendix C), with the 2016 code's clamp estimator as
-#      it ran (preset:clamp2016-as-run, half as long), then with the identified model;
-#   4. endohaptics-force-report: the runs against the emulator's truth, one plot, and as its last
-#      three lines "2016 as run: fit ...", "2016 preset: fit ..." and "identified: fit ...".
+#      it ran (preset:clamp2016-as-run, half as long), with the identified models, with the
+#      identified models over a 50 ms round trip (the emulator holds every answer 50 ms) with
+#      TDPA, and with the identified models in free space (nothing to touch, half as long);
+#   4. endohaptics-force-report: the runs against the emulator's truth (clamp 1), one plot:
+#      "2016 as run: fit ...", "2016 preset: fit ...", "identified: fit ...", "identified, 50 ms
+#      round trip, TDPA: fit ..."; then every rendered joint of the identified run and the stylus
+#      force against the ideal one (the bridge's mapping of the true joint forces), with the
+#      free-space run's stylus force: "identified, roll: ...", ..., "stylus: RMSE ...".
 # Usage: demo.sh BIN_DIR OUT_DIR [SECONDS per teleoperation run, default 10; the identification
-# experiment runs twice as long. With the default the identified model's fit in step 4 was
-# 77.6-81.5 % over six runs of the demo (README, quick start)]
+# experiment runs twice as long]
 set -euo pipefail
 bin=$1
 out=$2
@@ -37,11 +41,15 @@ key="$keydir/link.key"
 "$bin/endohaptics-bridge" --generate-key "$key" >/dev/null
 
 # run NAME [bridge options...]: one emulator + bridge session; NAME.truth.csv, NAME.ticks.csv.
+# $environment and $emulator_options (an array) go to the emulator.
+environment=tissue
+emulator_options=()
 run() {
   local name=$1 port=""
   shift
-  "$bin/endohaptics-sbrio-emulator" --bind 127.0.0.1 --port 0 --environment tissue --key "$key" \
-    --truth-log "$out/$name.truth.csv" --quiet >"$out/$name.emulator.out" 2>&1 &
+  "$bin/endohaptics-sbrio-emulator" --bind 127.0.0.1 --port 0 --environment "$environment" \
+    --key "$key" --truth-log "$out/$name.truth.csv" --quiet ${emulator_options[@]+"${emulator_options[@]}"} \
+    >"$out/$name.emulator.out" 2>&1 &
   emulator=$!
   for _ in $(seq 100); do
     # (the background job may not have created the file yet: not an error under set -e)
@@ -59,38 +67,70 @@ run() {
   tail -n 1 "$out/$name.emulator.out"
 }
 
-echo "== 1. identification experiment: ${experiment_seconds} s, force feedback off, deeper and faster grasps"
+# The operator of every teleoperation run: the grasp turns the wrist 0.8 rad of azimuth (roll)
+# and lifts it 14 cm (pitch) as it closes, so that every joint meets its contact.
+operator='"operator": { "theta_swing": 0.8, "z_swing": 0.14 }'
+
+echo "== 1. identification experiment: ${experiment_seconds} s, force feedback off, deeper and faster grasps of varying depth"
 cat >"$out/experiment.json" <<'JSON'
 { "mapping": { "force_scale": [0, 0, 0] },
   "operator": { "r_closed": 0.010, "open_time": 0.5, "close_time": 0.6, "hold_time": 1.0,
-                "release_time": 0.6 } }
+                "release_time": 0.6, "theta_swing": 0.9, "z_swing": 0.16,
+                "depth_variation": 0.6 } }
 JSON
 duration=$experiment_seconds
 run experiment --config "$out/experiment.json"
 duration=$seconds
 
-echo "== 2. identify the clamp model: reported current and velocity of motor 2 -> true force"
-# A force model from a generic CSV: the force-model formats' near-integrating limit stated
-# (csv has none by default; docs/identification_results.md).
-"$bin/endohaptics-identify" --format csv --log "$out/experiment.truth.csv" \
-  --input reported_current2 --input reported_velocity2 --output force2 --ts 0.001 --order 2 \
-  --deadzone auto --method best --max-time-constant 2 --out "$out/clamp_model.json" | tail -n 3
+echo "== 2. identify a model per motor: its reported current and velocity -> its true force"
+# Generic CSVs: the force-model formats' near-integrating limit stated (csv has none by default;
+# docs/identification_results.md).
+mkdir -p "$out/model_sets/EW"
+motors=(roll pitch clamp1 clamp2)
+for slot in 0 1 2 3; do
+  echo "-- ${motors[$slot]} (motor $slot)"
+  "$bin/endohaptics-identify" --format csv --log "$out/experiment.truth.csv" \
+    --input "reported_current$slot" --input "reported_velocity$slot" --output "force$slot" \
+    --ts 0.001 --order 2 --deadzone auto --method best --max-time-constant 2 \
+    --out "$out/model_sets/EW/${motors[$slot]}.json" | tail -n 2
+done
 
-echo "== 3. teleoperation with the 2016 preset (appendix C yaw model)"
-run preset
+echo "== 3. teleoperation with the 2016 preset (appendix C models)"
+printf '{ %s }\n' "$operator" >"$out/preset.json"
+run preset --config "$out/preset.json"
 # The baseline the 2016 operators felt: the 2016 code's own clamp estimator (docs/models.md, "The
 # 2016 code as it ran"), half as long as the other runs to keep the demo short.
-echo "== 3. teleoperation with the 2016 code as it ran (baseline, $(( (seconds + 1) / 2 )) s)"
-printf '{ "estimator": { "clamp_model": "preset:clamp2016-as-run" } }\n' >"$out/as_run.json"
-duration=$(( (seconds + 1) / 2 ))
+half=$(( (seconds + 1) / 2 ))
+echo "== 3. teleoperation with the 2016 code as it ran (baseline, $half s)"
+printf '{ %s, "estimator": { "clamp_model": "preset:clamp2016-as-run" } }\n' "$operator" \
+  >"$out/as_run.json"
+duration=$half
 run as_run --config "$out/as_run.json"
 duration=$seconds
-echo "== 3. teleoperation with the identified model"
-printf '{ "estimator": { "clamp_model": "clamp_model.json" } }\n' >"$out/identified.json"
+echo "== 3. teleoperation with the identified models (instrument EW)"
+printf '{ %s, "estimator": { "model_sets": "model_sets", "instrument": "EW" } }\n' "$operator" \
+  >"$out/identified.json"
 run identified --config "$out/identified.json"
+echo "== 3. the identified models over a 50 ms round trip (every answer held 50 ms), TDPA on"
+emulator_options=(--delay 50)
+run delayed --config "$out/identified.json" --passivity tdpa --passivity-round-trip 50 \
+  --max-answer-lag 60
+emulator_options=()
+echo "== 3. the identified models in free space (nothing to touch, $half s)"
+environment=free
+duration=$half
+run free --config "$out/identified.json"
+environment=tissue
+duration=$seconds
 
 echo "== 4. force feedback against the emulator's truth (motor 2, clamp 1)"
 "$bin/endohaptics-force-report" --joint 2 --plot-dir "$out" \
   --truth "$out/as_run.truth.csv" --log "$out/as_run.ticks.csv" --label "2016 as run" \
   --truth "$out/preset.truth.csv" --log "$out/preset.ticks.csv" --label "2016 preset" \
-  --truth "$out/identified.truth.csv" --log "$out/identified.ticks.csv" --label identified
+  --truth "$out/identified.truth.csv" --log "$out/identified.ticks.csv" --label identified \
+  --truth "$out/delayed.truth.csv" --log "$out/delayed.ticks.csv" \
+  --label "identified, 50 ms round trip, TDPA"
+echo "== 4. every rendered joint of the identified run, and the stylus"
+"$bin/endohaptics-force-report" --all-joints --config "$out/identified.json" \
+  --truth "$out/identified.truth.csv" --log "$out/identified.ticks.csv" --label identified \
+  --free-log "$out/free.ticks.csv"

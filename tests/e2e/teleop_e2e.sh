@@ -127,9 +127,10 @@ case $scenario in
     echo "PASS: 0 delayed states accepted by default, $complete % complete with --max-answer-lag 40"
     ;;
   identified)
-    # The demo's pipeline (examples/demo.sh), 6 s per run: the clamp model identified on the
-    # emulator must render the force it estimates. Thresholds below the demo's targets (fit 80 %,
-    # correlation 0.95) for a loaded CI machine.
+    # The demo's pipeline (examples/demo.sh), 6 s per run: the models identified on the emulator
+    # must render the forces they estimate. Regression bounds below what the demo reaches (clamp 1
+    # fit 71.8-77.6 %, correlation 0.982-0.986 over 5 runs of 10 s; the issue's target, 85 %, is
+    # not met, docs/identification_results.md) for a loaded CI machine.
     bash "$(dirname "${BASH_SOURCE[0]}")/../../examples/demo.sh" "$bin" "$work/demo" 6 \
       >"$work/demo.out" 2>&1 || fail "demo.sh exited with $?: $(cat "$work/demo.out")"
     cat "$work/demo.out"
@@ -140,8 +141,26 @@ case $scenario in
     fit=$(sed -n 's/^identified: fit \([-0-9.]*\)%.*/\1/p' <<<"$line")
     corr=$(sed -n 's/.*correlation \([-0-9.]*\),.*/\1/p' <<<"$line")
     [[ -n $fit && -n $corr ]] || fail "cannot read fit and correlation from: $line"
-    awk -v f="$fit" -v c="$corr" 'BEGIN { exit !(f >= 70 && c >= 0.9) }' ||
-      fail "identified model: fit $fit % (>= 70 needed), correlation $corr (>= 0.9 needed)"
+    awk -v f="$fit" -v c="$corr" 'BEGIN { exit !(f >= 65 && c >= 0.95) }' ||
+      fail "identified model: fit $fit % (>= 65 needed), correlation $corr (>= 0.95 needed)"
+    # The run over a 50 ms round trip with TDPA: the feedback still tracks the force.
+    delayed=$(grep '^identified, 50 ms round trip, TDPA: fit ' "$work/demo.out" | head -n 1 || true)
+    dcorr=$(sed -n 's/.*correlation \([-0-9.]*\),.*/\1/p' <<<"$delayed")
+    [[ -n $dcorr ]] || fail "no line 'identified, 50 ms round trip, TDPA: fit ...'"
+    awk -v c="$dcorr" 'BEGIN { exit !(c >= 0.9) }' ||
+      fail "50 ms round trip, TDPA: correlation $dcorr (>= 0.9 needed)"
+    # Every rendered joint identified and scored: roll, pitch, clamp 1, clamp 2. Roll's bound is
+    # loose: its estimate varies most between runs (correlation 0.77-0.96 over 6 demo runs: the
+    # joint sticks while the fed-back hand swings, docs/identification_results.md).
+    for joint in roll pitch clamp1 clamp2; do
+      jline=$(grep "^identified, $joint: fit " "$work/demo.out" || true)
+      jcorr=$(sed -n 's/.*correlation \([-0-9.]*\),.*/\1/p' <<<"$jline")
+      [[ -n $jcorr ]] || fail "no line 'identified, $joint: fit ...'"
+      bound=0.9
+      [[ $joint == roll ]] && bound=0.5
+      awk -v c="$jcorr" -v b="$bound" 'BEGIN { exit !(c >= b) }' ||
+        fail "$joint: correlation $jcorr (>= $bound needed): $jline"
+    done
     preset=$(grep -n '^2016 preset: fit ' "$work/demo.out" | head -n 1 | cut -d: -f1)
     identified=$(grep -n '^identified: fit ' "$work/demo.out" | head -n 1 | cut -d: -f1)
     [[ -n $preset && $identified == $((preset + 1)) ]] ||
