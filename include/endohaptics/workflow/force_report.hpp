@@ -306,15 +306,16 @@ inline std::array<std::vector<double>, 4> truth_forces(const files::Log& truth,
   return forces;
 }
 
-//! RMS of the stylus force magnitude over rows [first, end) of `ticks` that `use` accepts.
+//! RMS of the stylus force magnitude over the rows of `ticks` that `use` accepts (N); `count`
+//! says how many (0: NaN).
 template <typename Use>
-double stylus_rms(const files::TickLog& ticks, std::size_t first, Use&& use, std::size_t& count) {
+double stylus_rms(const files::TickLog& ticks, Use&& use, std::size_t& count) {
   const auto& fx = ticks.column("stylus_fx");
   const auto& fy = ticks.column("stylus_fy");
   const auto& fz = ticks.column("stylus_fz");
   double sum = 0.0;
   count = 0;
-  for (std::size_t i = first; i < ticks.rows(); ++i) {
+  for (std::size_t i = 0; i < ticks.rows(); ++i) {
     if (!use(i)) continue;
     sum += fx[i] * fx[i] + fy[i] * fy[i] + fz[i] * fz[i];
     ++count;
@@ -407,7 +408,7 @@ double stylus_rms(const files::TickLog& ticks, std::size_t first, Use&& use, std
     s.replay_rmse = std::sqrt(replay_sum / static_cast<double>(s.ticks));
   }
   s.free_rms = fr::stylus_rms(
-      ticks, 0, [&](std::size_t i) { return contact_free[i]; }, s.free_ticks);
+      ticks, [&](std::size_t i) { return contact_free[i]; }, s.free_ticks);
   s.free_source = "the ticks of " + scores.label + " without contact (every true force 0)";
   return scores;
 }
@@ -422,7 +423,7 @@ inline void free_motion_rms(StylusScore& score, const files::TickLog& free_log, 
   const std::vector<double>& t = free_log.column("time");
   std::size_t count = 0;
   const double rms = detail::force_report::stylus_rms(
-      free_log, 0, [&](std::size_t i) { return t[i] >= t[0] + skip; }, count);
+      free_log, [&](std::size_t i) { return t[i] >= t[0] + skip; }, count);
   if (count == 0) {
     ENDOHAPTICS_THROW(Error(free_log.source + ": no tick after --skip for the free-motion RMS"));
   }
