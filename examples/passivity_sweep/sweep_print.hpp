@@ -123,15 +123,17 @@ inline void trace(const std::string& path, const sim::ClosedLoopConfig& config, 
   if (out == nullptr) throw std::runtime_error("cannot write " + path);
   fmt::print(out,
              "time,stylus_force,commanded_force,contact_force,desired,setpoint,robot,energy,"
-             "damping,force_gain,drift,estimated_force,true_stylus_force\n");
+             "damping,force_gain,drift,estimated_force,true_stylus_force,energy_to_robot,"
+             "energy_to_operator\n");
   for (const auto& s : samples) {
     fmt::print(
         out,
         "{:.4f},{:.5g},{:.5g},{:.5g},{:.6g},{:.6g},{:.6g},{:.6g},{:.5g},{:.4g},{:.5g},{:.5g},"
-        "{:.5g}\n",
+        "{:.5g},{:.6g},{:.6g}\n",
         s.time, s.stylus_force, s.commanded_force, s.contact_force, s.desired, s.setpoint, s.robot,
         s.passivity.energy, s.passivity.damping, s.passivity.force_gain, s.passivity.drift,
-        s.estimated_force, s.true_stylus_force);
+        s.estimated_force, s.true_stylus_force, s.passivity.energy_to_robot,
+        s.passivity.energy_to_operator);
   }
   if (std::fclose(out) != 0) throw std::runtime_error("cannot write " + path);
   fmt::print(
