@@ -214,6 +214,12 @@ TEST_CASE("bidirectional observer: the constants no physics fixes, by cross-vali
   CHECK(message_of([&] {
           (void)wf::choose_bidirectional_settings(data, {{0}, {4}}, prior, 1.0);
         }) == "choose_bidirectional_settings: fold index 4 beyond the 4 experiments");
+  auto short_run = data;
+  short_run[3].load.conservativeResize(500);
+  CHECK(
+      message_of([&] { (void)wf::choose_bidirectional_settings(short_run, folds, prior, 1.0); }) ==
+      "choose_bidirectional_settings: experiment 3: current, position and load must have "
+      "the same length, longer than the warm-up");
   // The encoder's step: none on these smooth angles, the step on quantised ones.
   CHECK_FALSE(wf::encoder_step(data).has_value());
   auto counted = data;

@@ -95,6 +95,11 @@ TEST_CASE("choose_stall_hold_settings: the constants by cross-validation on the 
   CHECK(message_of([&] {
           (void)wf::choose_stall_hold_settings(data, {{0}, {3}}, prior, 0.5);
         }) == "choose_stall_hold_settings: fold index 3 beyond the 3 experiments");
+  auto short_run = data;
+  short_run[2].force.conservativeResize(20);
+  CHECK(message_of([&] { (void)wf::choose_stall_hold_settings(short_run, folds, prior, 0.5); }) ==
+        "choose_stall_hold_settings: experiment 2: current, velocity and force must have one "
+        "length, longer than the warm-up");
 }
 
 TEST_CASE("fit_stall_hold on the 2016 clamp hits, leave one file out, scored causally" *

@@ -416,6 +416,14 @@ ENDOHAPTICS_DECL BidirectionalSelection choose_bidirectional_settings(
     bool vary_velocity_threshold) {
   BidirectionalSelection out;
   out.settings = settings_of(prior);
+  prior.validate();
+  if (!(std::isfinite(warmup) && warmup >= 0.0)) {
+    ENDOHAPTICS_THROW(
+        Error("choose_bidirectional_settings: warmup must be finite and >= 0 s, got " +
+              endohaptics::detail::format_number(warmup)));
+  }
+  check_experiments(data, static_cast<Eigen::Index>(std::ceil(warmup / prior.sample_time)),
+                    "choose_bidirectional_settings");
   for (const auto& fold : folds) {
     for (const std::size_t e : fold) {
       if (e >= data.size()) {

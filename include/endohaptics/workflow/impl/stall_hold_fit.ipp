@@ -139,6 +139,21 @@ ENDOHAPTICS_DECL StallHoldSelection choose_stall_hold_settings(
   StallHoldSelection out;
   out.settings = {prior.velocity_threshold, prior.velocity_time_constant,
                   prior.output_time_constant};
+  prior.validate();
+  if (!(std::isfinite(warmup) && warmup >= 0)) {
+    ENDOHAPTICS_THROW(Error("choose_stall_hold_settings: warmup must be finite and >= 0 s, got " +
+                            endohaptics::detail::format_number(warmup)));
+  }
+  const auto skip = static_cast<Eigen::Index>(std::ceil(warmup / prior.sample_time));
+  for (std::size_t e = 0; e < data.size(); ++e) {
+    const auto& d = data[e];
+    if (d.velocity.size() != d.current.size() || d.force.size() != d.current.size() ||
+        d.current.size() <= skip + 1) {
+      ENDOHAPTICS_THROW(Error("choose_stall_hold_settings: experiment " + std::to_string(e) +
+                              ": current, velocity and force must have one length, longer than "
+                              "the warm-up"));
+    }
+  }
   for (const auto& fold : folds) {
     for (const std::size_t e : fold) {
       if (e >= data.size()) {
