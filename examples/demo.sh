@@ -8,7 +8,9 @@
 #      emulator logs what the sbRIO reports and the true force on an exact 1 ms grid;
 #   2. endohaptics-identify, once per motor: a Hammerstein-Wiener model (that motor's reported
 #      current and velocity -> its true force) of order 2, written into a model set
-#      (model_sets/EW/<motor>.json) that the bridge loads by instrument name. Order 2: the sbRIO's
+#      (model_sets/EW/<motor>.json) that the bridge loads by instrument name, with a free-motion
+#      threshold chosen on the experiment alone (--free-threshold auto: the estimate reads 0 up
+#      to what the model gave there while nothing touched). Order 2: the sbRIO's
 #      current filter and velocity window are the fast dynamics between the reported signals and
 #      the force (docs/identification_results.md, "The demo's clamp model");
 #   3. teleoperation with the 2016 preset (appendix C), with the 2016 code's clamp estimator as
@@ -92,7 +94,7 @@ for slot in 0 1 2 3; do
   "$bin/endohaptics-identify" --format csv --log "$out/experiment.truth.csv" \
     --input "reported_current$slot" --input "reported_velocity$slot" --output "force$slot" \
     --ts 0.001 --order 2 --deadzone auto --method best --max-time-constant 2 \
-    --out "$out/model_sets/EW/${motors[$slot]}.json" | tail -n 2
+    --free-threshold auto --out "$out/model_sets/EW/${motors[$slot]}.json" | tail -n 2
 done
 
 echo "== 3. teleoperation with the 2016 preset (appendix C models)"

@@ -55,6 +55,11 @@ int main(int argc, char** argv) {
                  "slower than the longest segment [format: 2 for endowrist-2016 and "
                  "umn-mis-2018, none for csv]")
       ->check(number_in(1e-6, 1e6));
+  app.add_option("--free-threshold", q.free_threshold,
+                 "auto, none or a value (output units): the estimate reads 0 up to it and is "
+                 "unchanged beyond twice it (auto: the 99th percentile of |estimate| where the "
+                 "training output is 0)")
+      ->check(number_in(0.0, endohaptics::files::ModelFile::max_parameter, {"auto", "none"}));
   app.add_option("--out", out_path, "write the model here (JSON)");
   CLI11_PARSE(app, argc, argv);
 

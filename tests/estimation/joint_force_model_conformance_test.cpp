@@ -90,6 +90,13 @@ struct Factory<est::Clamp2016AsRun<float>> {
   static est::Clamp2016AsRun<float> make() { return est::Clamp2016AsRun<float>(); }
 };
 template <>
+struct Factory<est::IdentifiedHammersteinWiener<double>> {
+  static est::IdentifiedHammersteinWiener<double> make() {
+    return est::IdentifiedHammersteinWiener<double>(est::models_2016<double>().clamp1.model(),
+                                                    endohaptics::model::FreeMotionThreshold(0.2));
+  }
+};
+template <>
 struct Factory<est::ClampForceModel> {
   static est::ClampForceModel make() {
     return est::preset_force_models(est::ClampPreset::clamp2016_as_run).clamp1;
@@ -136,7 +143,7 @@ std::vector<typename M::ScalarType> run(
   est::StallHold<double>, est::StallHold<float>, est::PushLoadObserver<double>, \
       est::BidirectionalLoadObserver<double>, est::ClampModel2016<double>,      \
       est::RollModel2016<double>, AnyClamp, est::Clamp2016AsRun<double>,        \
-      est::Clamp2016AsRun<float>, est::ClampForceModel
+      est::Clamp2016AsRun<float>, est::IdentifiedHammersteinWiener<double>, est::ClampForceModel
 
 TEST_CASE_TEMPLATE("joint force models: a non-finite signal is refused, the state untouched", M,
                    ENDOHAPTICS_JOINT_FORCE_MODELS) {

@@ -162,6 +162,28 @@ TEST_CASE("a loaded yaw Hammerstein-Wiener model drives OpenLoop and the ForceEs
   CHECK(largest > 0.0);  // the clamp estimate is not trivially zero
 }
 
+TEST_CASE("a free-motion threshold round-trips; negative, or on a joint model, is refused") {
+  files::ModelFile file =
+      files::make_model_file(model::yaw_force_2016_hw(0.1), yaw_inputs, yaw_outputs);
+  const TempFile f("free_threshold.json");
+  files::save_model(f.path, file);
+  CHECK(files::load_model(f.path).free_motion_threshold == 0.0);  // absent: none
+  file.free_motion_threshold = 0.125;
+  files::save_model(f.path, file);
+  CHECK(files::load_model(f.path).free_motion_threshold == 0.125);
+  file.free_motion_threshold = -0.1;
+  CHECK(message_of([&] {
+          files::save_model(f.path, file);
+        }).find("free_motion_threshold must be in [0, ") != std::string::npos);
+  nlohmann::json joint = files::to_json(
+      files::make_joint_model_file(est::StallHoldParameters<double>{}, yaw_inputs, yaw_outputs));
+  joint["free_motion_threshold"] = 0.1;
+  write_text(f.path, joint.dump());
+  CHECK(message_of([&] {
+          (void)files::load_model(f.path);
+        }).find("has no field \"free_motion_threshold\"") != std::string::npos);
+}
+
 TEST_CASE("load errors name the file, the field and the value") {
   const std::string src = "model file test";
   auto broken = [](auto edit) {

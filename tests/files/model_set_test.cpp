@@ -84,14 +84,20 @@ TEST_CASE("model set: roll and pitch take identified model files, without the 20
   const TempDir dir("model_set");
   std::filesystem::create_directories(dir.path() / "EW3");
   for (const char* m : {"roll", "pitch", "clamp1", "clamp2"}) {
-    files::save_model(
-        dir.path() / "EW3" / (std::string(m) + ".json"),
+    files::ModelFile file =
         files::make_model_file(endohaptics::model::yaw_force_2016_hw(0.1),
-                               {{"current", "A"}, {"velocity", "rad/s"}}, {{"force", "N"}}));
+                               {{"current", "A"}, {"velocity", "rad/s"}}, {{"force", "N"}});
+    file.free_motion_threshold = std::string(m) == "roll" ? 0.05 : 0.0;
+    files::save_model(dir.path() / "EW3" / (std::string(m) + ".json"), file);
   }
   const files::ModelSet set = files::load_instrument_model_set(dir.path(), "EW3");
   const files::BridgeModelSet b = files::bridge_model_set(set, all_fed);
-  CHECK(b.models.roll.get<est::IdentifiedHammersteinWiener<double>>() != nullptr);
+  REQUIRE(b.models.roll.get<est::IdentifiedHammersteinWiener<double>>() != nullptr);
+  // The file's free-motion threshold runs in the bridge: a force below it reads 0.
+  const auto* roll = b.models.roll.get<est::IdentifiedHammersteinWiener<double>>();
+  CHECK(roll->threshold().threshold() == 0.05);
+  CHECK(b.models.pitch.get<est::IdentifiedHammersteinWiener<double>>()->threshold().threshold() ==
+        0.0);
   CHECK(b.models.pitch.get<est::IdentifiedHammersteinWiener<double>>() != nullptr);
   const auto settings = est::bridge_estimator_settings({}, b.models);
   for (int j = 0; j < 4; ++j) {

@@ -20,6 +20,7 @@ namespace {
 using endohaptics::Error;
 using endohaptics::model::Deadzone;
 using endohaptics::model::Extrapolation;
+using endohaptics::model::FreeMotionThreshold;
 using endohaptics::model::Identity;
 using endohaptics::model::PerChannel;
 using endohaptics::model::PiecewiseLinear;
@@ -66,6 +67,10 @@ Saturation<double> make_example() {
   return Saturation<double>(-1.0, 2.0);
 }
 template <>
+FreeMotionThreshold<double> make_example() {
+  return FreeMotionThreshold<double>(0.2);
+}
+template <>
 PiecewiseLinear<4> make_example() {
   const std::array<double, 3> x{-1.0, 0.0, 2.0};
   const std::array<double, 3> y{1.0, 0.0, 4.0};
@@ -82,7 +87,7 @@ static_assert(!StaticNonlinearity<int>);
 
 TEST_CASE_TEMPLATE("every nonlinearity satisfies the StaticNonlinearity contract", NL,
                    Identity<double>, Deadzone<double>, Deadzone<float>, Saturation<double>,
-                   PiecewiseLinear<4>) {
+                   FreeMotionThreshold<double>, PiecewiseLinear<4>) {
   check_static_nonlinearity_contract(make_example<NL>());
 }
 
@@ -204,6 +209,30 @@ TEST_CASE("PerChannel applies one nonlinearity per element (including N == 0)") 
   const PerChannel<Identity<double>, 2> identity;
   CHECK(identity.apply(Eigen::Vector2d{1.5, -2.5}) == Eigen::Vector2d{1.5, -2.5});
   static_assert(noexcept(identity.apply(std::declval<const Eigen::Vector2d&>())));
+}
+
+TEST_CASE("FreeMotionThreshold: 0 up to t, the estimate beyond 2 t, continuous in between") {
+  const FreeMotionThreshold<double> t(0.2);
+  CHECK(t.threshold() == 0.2);
+  CHECK(t.apply(0.0) == 0.0);
+  CHECK(t.apply(0.2) == 0.0);
+  CHECK(t.apply(-0.19) == 0.0);
+  CHECK(t.apply(0.3) == doctest::Approx(0.2));    // 2 (0.3 - 0.2)
+  CHECK(t.apply(-0.3) == doctest::Approx(-0.2));  // odd
+  CHECK(t.apply(0.4) == 0.4);                     // continuous at 2 t
+  CHECK(t.apply(0.39999) == doctest::Approx(0.39998));
+  CHECK(t.apply(-5.0) == -5.0);
+  // Monotonic: a larger estimate never renders less.
+  double previous = -1e9;
+  for (double u = -1.0; u <= 1.0; u += 1e-3) {
+    CHECK(t.apply(u) >= previous - 1e-12);
+    previous = t.apply(u);
+  }
+  // The default and a threshold of 0 are the identity; a negative or NaN threshold is refused.
+  CHECK(FreeMotionThreshold<double>().apply(0.01) == 0.01);
+  CHECK(FreeMotionThreshold<double>(0.0).apply(-0.01) == -0.01);
+  CHECK_THROWS_AS(FreeMotionThreshold<double>(-0.1), Error);
+  CHECK_THROWS_AS(FreeMotionThreshold<double>{std::numeric_limits<double>::quiet_NaN()}, Error);
 }
 
 }  // namespace model_static_nonlinearity_test

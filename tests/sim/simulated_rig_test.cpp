@@ -68,18 +68,21 @@ struct PushRecord {
 PushRecord push(Environment env, int joint, double depth) {
   sim::SimulatedRig<4> rig(sim::endowrist_2016_rig<4>(env));
   PushRecord r;
+  // Towards the joint's contact (clamp 2's is below, in mirror of clamp 1's); current and
+  // setpoint recorded along that direction.
+  const double dir = rig.config().joints[static_cast<std::size_t>(joint)].contact.direction;
   const double ramp = depth / 0.1;
   for (int k = 0; k <= static_cast<int>(2 * ramp * 1000); ++k) {
     const double t = k * 1e-3;
     const double x = t < ramp ? 0.1 * t : depth - 0.1 * (t - ramp);
     auto s = setpoint_all<4>(0.0, 0x0F);
-    s.position[joint] = x;
+    s.position[joint] = dir * x;
     rig.command(s);
     REQUIRE(rig.advance(1e-3) == SimStatus::ok);
     if (k % 10 == 0) {
       // In the physics' convention (positive current drives positive motion): the 2016 sbRIO
       // reports it negated (reported_current_sign -1).
-      r.current.push_back(rig.config().reported_current_sign * rig.state().current[joint]);
+      r.current.push_back(dir * rig.config().reported_current_sign * rig.state().current[joint]);
       r.force.push_back(rig.truth().contact_force[joint]);
       r.setpoint.push_back(x);
     }

@@ -155,6 +155,48 @@ TEST_CASE("run_identify: a request on two logs of a first-order lag -> a report 
   CHECK(rr.mean_rmse == doctest::Approx(r.mean_rmse).epsilon(1e-9));
 }
 
+TEST_CASE("free-motion threshold: the 99th percentile where the truth is 0, kept by replay") {
+  // Chosen from the training comparisons alone: |estimate| where the true output is exactly 0,
+  // after each segment's warm-up.
+  wf::FileComparison c;
+  c.warmup_samples = 10;
+  Eigen::MatrixXd y = Eigen::MatrixXd::Zero(1010, 1);
+  Eigen::MatrixXd y_hat(1010, 1);
+  for (Eigen::Index i = 0; i < 1010; ++i) y_hat(i, 0) = (i % 2 ? -1.0 : 1.0) * 1e-3 * double(i);
+  y_hat.topRows(10).setConstant(50.0);  // the warm-up: not counted
+  y.bottomRows(500).setOnes();          // touching: not counted either
+  c.y = {y};
+  c.y_hat = {y_hat};
+  // 500 free samples, |y_hat| = 0.010 .. 0.509: the 99th percentile is the 495th of them.
+  CHECK(wf::free_motion_threshold_of({c}) == doctest::Approx(1e-3 * (10 + 495)));
+  c.y = {Eigen::MatrixXd::Ones(1010, 1)};
+  const std::string none = message_of([&] { (void)wf::free_motion_threshold_of({c}); });
+  CHECK(none.find("0 scored samples whose true output is exactly 0 (of 1000") != std::string::npos);
+
+  // A value: the model carries it, identify's scores and replay's agree (both apply it).
+  const TempDir dir;
+  wf::IdentifyRequest q = lag_request(dir);
+  q.free_threshold = "0.05";
+  const wf::IdentifyReport r = wf::run_identify(q, {});
+  CHECK(r.model.free_motion_threshold == 0.05);
+  const auto model_path = dir.path() / "model.json";
+  files::save_model(model_path, r.model);
+  CHECK(files::load_model(model_path).free_motion_threshold == 0.05);
+  wf::ReplayRequest replay;
+  replay.model = model_path.string();
+  replay.logs = q.logs;
+  replay.format = "csv";
+  const wf::ReplayReport rr = wf::run_replay(replay, {});
+  CHECK(rr.mean_fit == doctest::Approx(r.mean_fit).epsilon(1e-9));
+  q.free_threshold = "none";
+  const double without = wf::run_identify(q, {}).mean_fit;
+  CHECK(without != r.mean_fit);  // the threshold changed the estimate and the score says so
+  // auto on logs whose output is never exactly 0: refused, saying why.
+  q.free_threshold = "auto";
+  CHECK(message_of([&] { (void)wf::run_identify(q, {}); }).find("--free-threshold auto") !=
+        std::string::npos);
+}
+
 TEST_CASE("run_identify and run_replay: bad requests name the option") {
   const TempDir dir;
   wf::IdentifyRequest q = lag_request(dir);

@@ -19,6 +19,7 @@
 #include "endohaptics/estimation/push_load_observer.hpp"
 #include "endohaptics/estimation/stall_hold.hpp"
 #include "endohaptics/model/friction_model.hpp"
+#include "endohaptics/model/static_nonlinearity.hpp"
 
 namespace endohaptics::estimation {
 
@@ -28,8 +29,26 @@ namespace endohaptics::estimation {
 //! bridge tells it from the 2016 yaw preset: it runs without the 2016 gate and unit scale
 //! (bridge_estimator_settings).
 template <typename Scalar = double>
-struct IdentifiedHammersteinWiener : ClampModel2016<Scalar> {
-  using ClampModel2016<Scalar>::ClampModel2016;  //!< from the model (OpenLoop's constructor)
+class IdentifiedHammersteinWiener : public ClampModel2016<Scalar> {
+ public:
+  using Base = ClampModel2016<Scalar>;                   //!< the yaw type it runs in
+  using Signals = typename Base::Signals;                //!< one joint's signals for one tick
+  using Threshold = model::FreeMotionThreshold<Scalar>;  //!< on its output
+
+  //! `model` (of the yaw type), its output through `threshold` (the model file's
+  //! free_motion_threshold; the default is none).
+  explicit IdentifiedHammersteinWiener(typename Base::ModelType model, Threshold threshold = {})
+      : Base(std::move(model)), threshold_(threshold) {}
+
+  //! The model's force through the free-motion threshold.
+  [[nodiscard]] Scalar force(const Signals& s) const noexcept {
+    return threshold_.apply(Base::force(s));
+  }
+  //! The free-motion threshold.
+  [[nodiscard]] const Threshold& threshold() const noexcept { return threshold_; }
+
+ private:
+  Threshold threshold_;
 };
 
 //! The force model of one motor slot of the bridge, whichever kind its model file or preset

@@ -93,7 +93,8 @@ namespace endohaptics::files {
       six.state_space = model::embed_states(six.state_space, estimation::bridge_clamp_states);
     }
     return ClampForceModel(estimation::IdentifiedHammersteinWiener<double>(
-        hammerstein_wiener_from<estimation::bridge_clamp_states, 2, 1>(six, where)));
+        hammerstein_wiener_from<estimation::bridge_clamp_states, 2, 1>(six, where),
+        model::FreeMotionThreshold<double>(file.free_motion_threshold)));
   };
   return file.is_joint_model() ? detail::model_file::with_context(where, joint_model)
                                : hammerstein_wiener();

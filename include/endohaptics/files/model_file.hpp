@@ -136,6 +136,13 @@ struct ModelFile {
   std::vector<model::StaticMap> input_nonlinearity{};
   std::vector<model::StaticMap> output_nonlinearity{};  //!< see input_nonlinearity
   ModelProvenance provenance{};                         //!< where it came from
+  //! Output units, >= 0, linear kinds only (0: none): every output of the model goes through
+  //! model::FreeMotionThreshold (0 at or below it, the estimate beyond twice it, continuous in
+  //! between), wherever the model runs (replay, identify's scores, the bridge). identify
+  //! --free-threshold auto sets it to the 99th percentile of |estimate| over the training samples
+  //! whose true output is 0: what the model gives when nothing touches (JSON
+  //! "free_motion_threshold", written when > 0).
+  double free_motion_threshold = 0.0;
   //! A joint-model kind's parameters (std::monostate: a linear kind). Then `state_space` is a
   //! placeholder (one state, all zero) that carries only the sample time (the parameters' own)
   //! and the sizes: 2 inputs (current A; velocity rad/s, for the observers the encoder velocity

@@ -133,6 +133,38 @@ class Saturation {
   Scalar upper_;
 };
 
+//! Free-motion threshold: an estimate whose magnitude is at most `threshold` reads 0 (what a
+//! force model gives when nothing touches), between `threshold` and twice it the output rises
+//! linearly from 0 to the estimate (continuous: no step the operator feels), beyond twice it is
+//! the estimate unchanged. y = 0 for |u| <= t, sign(u) 2 (|u| - t) for t < |u| < 2 t, u for
+//! |u| >= 2 t. A threshold of 0 is the identity. NaN in gives NaN out.
+template <typename Scalar = double>
+class FreeMotionThreshold {
+  static_assert(std::is_floating_point_v<Scalar>, "FreeMotionThreshold Scalar must be floating");
+
+ public:
+  using ScalarType = Scalar;  //!< scalar type of u and y
+
+  //! The identity (threshold 0).
+  FreeMotionThreshold() = default;
+  //! Throws Error unless `threshold` is finite and >= 0.
+  explicit FreeMotionThreshold(Scalar threshold)
+      : threshold_(detail::nl::non_negative(threshold, "FreeMotionThreshold", "threshold")) {}
+
+  [[nodiscard]] Scalar threshold() const noexcept { return threshold_; }  //!< t, >= 0
+
+  //! See the class; NaN stays NaN.
+  [[nodiscard]] Scalar apply(Scalar u) const noexcept {
+    const Scalar m = std::fabs(u);
+    if (!(m < 2 * threshold_)) return u;  // beyond twice the threshold, or NaN
+    if (m <= threshold_) return Scalar(0);
+    return std::copysign(2 * (m - threshold_), u);
+  }
+
+ private:
+  Scalar threshold_ = Scalar(0);
+};
+
 //! What a PiecewiseLinear map does outside its first and last breakpoints.
 enum class Extrapolation : std::uint8_t {
   linear,  //!< continue the first/last segment (MATLAB idPiecewiseLinear); default

@@ -6,6 +6,9 @@
 //! Configuration time: allocates, throws endohaptics::Error.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
 #include <functional>
 #include <optional>
 #include <string>
@@ -43,6 +46,12 @@ struct IdentifyRequest {
   double warmup = ScoringOptions{}.warmup;    //!< s per segment left out of the score
   std::optional<double> max_time_constant{};  //!< s
   bool drop_non_finite = false;               //!< drop rows holding NaN/Inf
+  //! "auto", "none" or a value in output units: the model's free-motion threshold
+  //! (files::ModelFile::free_motion_threshold). auto: the 99th percentile of the chosen model's
+  //! |estimate| over the training samples (after the warm-up) whose true output is exactly 0,
+  //! what the model gives when nothing touches; refused with fewer than 100 such samples. Linear
+  //! kinds only. Empty: none.
+  std::optional<std::string> free_threshold{};
 };
 
 //! The request resolved, the logs prepared and the subspace family fitted: what run_identify
@@ -104,6 +113,13 @@ struct IdentifyHooks {
 //! non-finite ones).
 [[nodiscard]] ENDOHAPTICS_DECL IdentifyReport run_identify(const IdentifyRequest& request,
                                                            const IdentifyHooks& hooks = {});
+
+//! The free-motion threshold identify's --free-threshold auto chooses from the training files'
+//! causal comparisons: the 99th percentile of |estimate| over the scored samples (after each
+//! segment's warm-up) whose true output is exactly 0. Throws Error with fewer than 100 such
+//! samples.
+[[nodiscard]] ENDOHAPTICS_DECL double free_motion_threshold_of(
+    const std::vector<FileComparison>& files);
 
 //! No false success: throws Error when a score of the chosen model is not finite.
 ENDOHAPTICS_DECL void check_scores(const IdentifyReport& report);

@@ -27,6 +27,7 @@
 #include "endohaptics/identification/subspace.hpp"
 #include "endohaptics/model/state_space.hpp"
 #include "endohaptics/model/static_map.hpp"
+#include "endohaptics/model/static_nonlinearity.hpp"
 #include "endohaptics/workflow/error_context.hpp"
 #include "endohaptics/workflow/joint_models.hpp"
 #include "endohaptics/workflow/prepared_log.hpp"

@@ -36,6 +36,11 @@ ENDOHAPTICS_DECL void require_kind(const ModelFile& f, ModelKind kind, const std
 
 ENDOHAPTICS_DECL void validate(const ModelFile& m, const std::string& where) {
   const model::DynamicStateSpace<>& ss = m.state_space;
+  if (!(m.free_motion_threshold >= 0.0 && m.free_motion_threshold <= ModelFile::max_parameter)) {
+    fail(where + ": free_motion_threshold must be in [0, " +
+         format_number(ModelFile::max_parameter) + "] (output units), got " +
+         format_number(m.free_motion_threshold));
+  }
   if (m.current_reference && m.kind() != ModelKind::push_load_observer &&
       m.kind() != ModelKind::bidirectional_load_observer) {
     fail(where + ": kind \"" + std::string(to_string(m.kind())) +
@@ -53,6 +58,9 @@ ENDOHAPTICS_DECL void validate(const ModelFile& m, const std::string& where) {
     }
     if (m.is_hammerstein_wiener()) {
       fail(where + ": kind \"" + kind + "\" has no input or output nonlinearity");
+    }
+    if (m.free_motion_threshold != 0.0) {
+      fail(where + ": kind \"" + kind + "\" has no free_motion_threshold (linear kinds only)");
     }
     if (ss.state_size() != 1 || ss.input_size() != static_cast<Eigen::Index>(nu) ||
         ss.output_size() != 1 || !ss.A().isZero(0.0) || !ss.B().isZero(0.0) ||
@@ -229,6 +237,7 @@ ENDOHAPTICS_DECL void add_linear_block(json& j, const ModelFile& m) {
   j["C"] = matrix_to_json(ss.C());
   j["D"] = matrix_to_json(ss.D());
   j["x0"] = std::vector<double>(ss.state().data(), ss.state().data() + ss.state().size());
+  if (m.free_motion_threshold > 0.0) j["free_motion_threshold"] = m.free_motion_threshold;
   if (m.is_hammerstein_wiener()) {
     j["input_nonlinearity"] = json::array();
     for (const auto& map : m.input_nonlinearity)
@@ -268,8 +277,8 @@ ENDOHAPTICS_DECL ModelFile joint_model_from_json(const json& j, const std::strin
                                                  double sample_time, std::vector<SignalInfo> inputs,
                                                  std::vector<SignalInfo> outputs,
                                                  const std::string& where) {
-  for (const char* linear :
-       {"states", "A", "B", "C", "D", "x0", "input_nonlinearity", "output_nonlinearity"}) {
+  for (const char* linear : {"states", "A", "B", "C", "D", "x0", "input_nonlinearity",
+                             "output_nonlinearity", "free_motion_threshold"}) {
     if (j.contains(linear)) {
       fail(where + ": kind \"" + kind + "\" has no field \"" + linear +
            "\" (its parameters are in \"parameters\")");
@@ -526,6 +535,10 @@ ENDOHAPTICS_DECL ModelFile model_from_json(const nlohmann::json& file, const std
                ": kind \"hammerstein_wiener\" needs input_nonlinearity or "
                "output_nonlinearity entries");
     }
+  }
+  if (j.contains("free_motion_threshold")) {  // its range: validate, below
+    m.free_motion_threshold =
+        mf::number(j["free_motion_threshold"], where, "free_motion_threshold");
   }
   m.provenance = mf::provenance_from_json(j, where);
   mf::validate(m, where);

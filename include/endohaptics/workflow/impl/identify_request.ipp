@@ -168,6 +168,25 @@ ENDOHAPTICS_DECL IdentifyReport run_identify(const IdentifyRequest& request,
   ModelChoice choice =
       choose_family(r.subspace ? &*r.subspace : nullptr, r.joint_kinds, r.fit_logs, r.score_logs,
                     r.joint_logs, r.input_info, r.output_info, r.options);
+  if (request.free_threshold && *request.free_threshold != "none") {
+    if (choice.model.is_joint_model()) {
+      ENDOHAPTICS_THROW(Error("--free-threshold: the chosen family (" + choice.family +
+                              ") is a joint model, which holds its own free-motion behaviour; "
+                              "give it for a subspace family only"));
+    }
+    choice.model.free_motion_threshold =
+        *request.free_threshold == "auto"
+            ? free_motion_threshold_of(choice.files)
+            : parse_number(*request.free_threshold, "--free-threshold", 0.0,
+                           files::ModelFile::max_parameter);
+    // The scores of the model as it now runs (replay and the bridge apply the threshold).
+    double sum = 0.0;
+    for (std::size_t k = 0; k < choice.files.size(); ++k) {
+      choice.files[k] = compare_log(choice.model, r.score_logs[k], r.options.scoring);
+      sum += choice.files[k].mean_fit();
+    }
+    choice.model.provenance.fit_percent = {sum / static_cast<double>(choice.files.size())};
+  }
   files::ModelFile model = choice.model;
   IdentifyReport report{std::move(r), std::move(choice), {}, 0.0, 0.0, std::move(model)};
   const bool joint = report.joint_chosen();
@@ -194,6 +213,35 @@ ENDOHAPTICS_DECL IdentifyReport run_identify(const IdentifyRequest& request,
                                          : "") +
       "\ntool: endohaptics-identify";
   return report;
+}
+
+ENDOHAPTICS_DECL double free_motion_threshold_of(const std::vector<FileComparison>& files) {
+  std::vector<double> free;
+  std::size_t scored = 0;
+  for (const FileComparison& f : files) {
+    for (std::size_t s = 0; s < f.y.size(); ++s) {
+      const Eigen::MatrixXd& y = f.y[s];
+      const Eigen::MatrixXd& y_hat = f.y_hat[s];
+      const Eigen::Index skip = std::min(f.warmup_samples, y.rows() - 1);
+      for (Eigen::Index i = skip; i < y.rows(); ++i) {
+        for (Eigen::Index o = 0; o < y.cols(); ++o) {
+          ++scored;
+          if (y(i, o) == 0.0 && std::isfinite(y_hat(i, o))) free.push_back(std::abs(y_hat(i, o)));
+        }
+      }
+    }
+  }
+  if (free.size() < 100) {
+    ENDOHAPTICS_THROW(
+        Error("--free-threshold auto: the training logs hold " + std::to_string(free.size()) +
+              " scored samples whose true output is exactly 0 (of " + std::to_string(scored) +
+              "; at least 100 needed): record phases where nothing touches, or give "
+              "the threshold as a value"));
+  }
+  const auto at = static_cast<std::ptrdiff_t>(
+      std::min(free.size() - 1, static_cast<std::size_t>(0.99 * static_cast<double>(free.size()))));
+  std::nth_element(free.begin(), free.begin() + at, free.end());
+  return free[static_cast<std::size_t>(at)];
 }
 
 ENDOHAPTICS_DECL void check_scores(const IdentifyReport& report) {

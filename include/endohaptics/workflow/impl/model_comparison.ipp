@@ -108,6 +108,11 @@ ENDOHAPTICS_DECL FileComparison compare_log(const files::ModelFile& model, const
           break;
       }
       y_hat = apply_maps(out_maps, simulate(linear, u, x0));
+      if (model.free_motion_threshold > 0.0) {  // as the bridge runs the model
+        const endohaptics::model::FreeMotionThreshold<double> threshold(
+            model.free_motion_threshold);
+        y_hat = y_hat.unaryExpr([&](double v) { return threshold.apply(v); });
+      }
     }
     const Eigen::Index skip = std::min(c.warmup_samples, d.y.rows() - 1);
     const Eigen::Index keep = d.y.rows() - skip;
