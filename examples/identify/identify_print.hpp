@@ -125,6 +125,11 @@ inline void chosen(const wf::IdentifyReport& r) {
   } else {
     fmt::print("chosen model: order {}, spectral radius {:.5f}\n",
                choice.model.state_space.state_size(), r.subspace_result().chosen().spectral_radius);
+    if (choice.model.free_motion_threshold > 0.0) {
+      fmt::print(
+          "free-motion threshold: {:.4g} (the estimate reads 0 up to it; scores include it)\n",
+          choice.model.free_motion_threshold);
+    }
   }
   for (std::size_t k = 0; k < choice.files.size(); ++k) {
     const wf::FileComparison& f = choice.files[k];
