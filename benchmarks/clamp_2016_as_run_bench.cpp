@@ -27,6 +27,7 @@ namespace est = endohaptics::estimation;
 using joint_signal_sweep::sweep;
 using joint_signal_sweep::sweep_length;
 
+using joint_signal_sweep::run_estimator_ticks;
 using joint_signal_sweep::run_joint_steps;
 
 void BM_Clamp2016_worksheet_step(benchmark::State& st) {
@@ -70,31 +71,14 @@ void BM_ClampForceModel_as_run_step(benchmark::State& st) {
 BENCHMARK(BM_ClampForceModel_as_run_step);
 
 // The whole estimator tick (4 joints, decimation, gates, snapshot) at 1 kHz.
-template <typename Estimator>
-void run_tick(benchmark::State& st, Estimator estimator) {
-  const auto signals = sweep();
-  typename Estimator::Input in;
-  typename Estimator::Forces f;
-  std::size_t k = 0;
-  for (auto _ : st) {
-    const auto& s = signals[k];
-    in.position.setConstant(s.position);
-    in.velocity.setConstant(s.velocity);
-    in.current.setConstant(s.current);
-    benchmark::DoNotOptimize(estimator.step(in, f));
-    benchmark::DoNotOptimize(f);
-    k = (k + 1) % sweep_length;
-  }
-  st.SetItemsProcessed(st.iterations());
-}
 
 void BM_BridgeTick_yaw2016(benchmark::State& st) {
-  run_tick(st, est::preset_force_estimator(est::ClampPreset::yaw2016, 0.001));
+  run_estimator_ticks(st, est::preset_force_estimator(est::ClampPreset::yaw2016, 0.001));
 }
 BENCHMARK(BM_BridgeTick_yaw2016);
 
 void BM_BridgeTick_clamp2016_as_run(benchmark::State& st) {
-  run_tick(st, est::preset_force_estimator(est::ClampPreset::clamp2016_as_run, 0.001));
+  run_estimator_ticks(st, est::preset_force_estimator(est::ClampPreset::clamp2016_as_run, 0.001));
 }
 BENCHMARK(BM_BridgeTick_clamp2016_as_run);
 
@@ -109,9 +93,9 @@ void BM_BridgeTick_yaw2016_variant_before(benchmark::State& st) {
   const auto m = est::models_2016();
   est::ForceEstimatorSettings<double> settings;
   settings.loop_period = 0.001;
-  run_tick(st,
-           Estimator({m.roll, m.pitch, ClampVariantBefore(m.clamp1), ClampVariantBefore(m.clamp2)},
-                     settings));
+  run_estimator_ticks(
+      st, Estimator({m.roll, m.pitch, ClampVariantBefore(m.clamp1), ClampVariantBefore(m.clamp2)},
+                    settings));
 }
 BENCHMARK(BM_BridgeTick_yaw2016_variant_before);
 

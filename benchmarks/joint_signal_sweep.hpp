@@ -1,7 +1,8 @@
 // The input every joint-model benchmark steps through (joint_force_model_bench.cpp,
-// clamp_2016_as_run_bench.cpp), so their figures compare: 256 samples of a slow squeeze whose
-// position, velocity and current cross zero, the dead zones and the stall threshold; and the
-// benchmark loop of one joint step as ForceEstimator drives a model (advance, then force).
+// clamp_2016_as_run_bench.cpp, identified_joint_models_bench.cpp), so their figures compare: 256
+// samples of a slow squeeze whose position, velocity and current cross zero, the dead zones and
+// the stall threshold; the benchmark loop of one joint step as ForceEstimator drives a model
+// (advance, then force); and the loop of the whole estimator tick (every joint on the sweep).
 #pragma once
 
 #include <benchmark/benchmark.h>
@@ -33,6 +34,26 @@ void run_joint_steps(benchmark::State& st, Model model) {
     const auto status = model.advance(signals[k]);
     const double f = model.force(signals[k]);
     benchmark::DoNotOptimize(status);
+    benchmark::DoNotOptimize(f);
+    k = (k + 1) % sweep_length;
+  }
+  st.SetItemsProcessed(st.iterations());
+}
+
+//! One ForceEstimator tick per iteration (4 joints, decimation, gates, snapshot), every joint on
+//! the sweep's next sample.
+template <typename Estimator>
+void run_estimator_ticks(benchmark::State& st, Estimator estimator) {
+  const auto signals = sweep();
+  typename Estimator::Input in;
+  typename Estimator::Forces f;
+  std::size_t k = 0;
+  for (auto _ : st) {
+    const auto& s = signals[k];
+    in.position.setConstant(s.position);
+    in.velocity.setConstant(s.velocity);
+    in.current.setConstant(s.current);
+    benchmark::DoNotOptimize(estimator.step(in, f));
     benchmark::DoNotOptimize(f);
     k = (k + 1) % sweep_length;
   }

@@ -162,7 +162,7 @@ TEST_CASE("a loaded yaw Hammerstein-Wiener model drives OpenLoop and the ForceEs
   CHECK(largest > 0.0);  // the clamp estimate is not trivially zero
 }
 
-TEST_CASE("a free-motion threshold round-trips; negative, or on a joint model, is refused") {
+TEST_CASE("a free-motion threshold round-trips, and is refused negative or on a joint model") {
   files::ModelFile file =
       files::make_model_file(model::yaw_force_2016_hw(0.1), yaw_inputs, yaw_outputs);
   const TempFile f("free_threshold.json");

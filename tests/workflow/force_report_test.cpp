@@ -265,7 +265,7 @@ TEST_CASE("force report: theta from the roll setpoint, unknown at a limit or whi
   CHECK(logged.source[1] == wf::ThetaSource::roll_setpoint);
 }
 
-TEST_CASE("force report: free motion from a free-space log after the skip; option counts") {
+TEST_CASE("force report: free motion from a free-space log after the skip, and option counts") {
   std::ostringstream free;
   free << "time,stylus_fx,stylus_fy,stylus_fz\n";
   for (int k = 0; k < 2000; ++k) {

@@ -1,0 +1,92 @@
+// The identified models the bridge runs on every motor (estimation::IdentifiedHammersteinWiener:
+// the appendix C yaw type at 1 kHz with its free-motion threshold) beside the worksheet's clamp
+// model (ClampModel2016, the 2016 yaw preset) in the same run: one joint step, and the whole
+// 1 kHz tick of the bridge's estimator with an identified model on every joint against the 2016
+// presets; plus the tick with roll and pitch held as their own 2016 types (the bridge before
+// every slot became one BridgeJointModel), to price the common slot type.
+#include <benchmark/benchmark.h>
+
+#include <Eigen/Core>
+#include <array>
+#include <endohaptics/estimation/bridge_force_models.hpp>
+#include <endohaptics/estimation/clamp_presets.hpp>
+#include <endohaptics/estimation/force_models_2016.hpp>
+#include <endohaptics/model/presets_2016.hpp>
+#include <endohaptics/model/static_nonlinearity.hpp>
+
+#include "joint_signal_sweep.hpp"
+
+namespace identified_joint_models_bench {
+
+namespace {
+
+namespace est = endohaptics::estimation;
+namespace model = endohaptics::model;
+
+using joint_signal_sweep::run_estimator_ticks;
+using joint_signal_sweep::run_joint_steps;
+
+// An order-2 model embedded in the 6 states at 1 ms (what endohaptics-identify --order 2 writes
+// and the bridge runs), a dead zone on the current, a free-motion threshold of 0.18 N (the demo's
+// clamp models: 0.166-0.204 N).
+est::IdentifiedHammersteinWiener<double> identified() {
+  using SS = model::StateSpace<6, 2, 1>;
+  SS::MatrixA A = SS::MatrixA::Zero();
+  A.topLeftCorner<2, 2>() << 0.995, 0.01, -0.004, 0.97;
+  SS::MatrixB B = SS::MatrixB::Zero();
+  B.topRows<2>() << 0.02, -0.001, 0.01, 0.002;
+  SS::MatrixC C = SS::MatrixC::Zero();
+  C.leftCols<2>() << -2.5, 0.77;
+  const SS::MatrixD D{{-0.23, -0.096}};
+  using Channels = model::PerChannel<model::Deadzone<double>, 2>;
+  const std::array<model::Deadzone<double>, 2> maps{model::Deadzone<double>(0.099),
+                                                    model::Deadzone<double>(0.0)};
+  return est::IdentifiedHammersteinWiener<double>(
+      model::YawForceHW2016<double>(SS(A, B, C, D, 0.001), Channels(maps)),
+      model::FreeMotionThreshold<double>(0.18));
+}
+
+void BM_IdentifiedHW_step(benchmark::State& st) { run_joint_steps(st, identified()); }
+BENCHMARK(BM_IdentifiedHW_step);
+
+void BM_IdentifiedHW_reference_Clamp2016_worksheet_step(benchmark::State& st) {
+  run_joint_steps(st, est::models_2016().clamp1);
+}
+BENCHMARK(BM_IdentifiedHW_reference_Clamp2016_worksheet_step);
+
+// Every joint an identified model, advanced on every tick (1 ms models: no decimation).
+void BM_BridgeTick_identified_every_joint(benchmark::State& st) {
+  const est::BridgeJointModel m(identified());
+  const est::BridgeForceModels models{m, m, m, m};
+  est::ForceEstimatorSettings<double> settings;
+  settings.loop_period = 0.001;
+  run_estimator_ticks(
+      st, est::BridgeForceEstimator(models, est::bridge_estimator_settings(settings, models)));
+}
+BENCHMARK(BM_BridgeTick_identified_every_joint);
+
+void BM_BridgeTick_identified_reference_yaw2016(benchmark::State& st) {
+  run_estimator_ticks(st, est::preset_force_estimator(est::ClampPreset::yaw2016, 0.001));
+}
+BENCHMARK(BM_BridgeTick_identified_reference_yaw2016);
+
+// Before: roll and pitch as their own 2016 types, the clamps in the 5-kind variant of then.
+using ClampVariantBefore =
+    est::AnyJointForceModel<est::ClampModel2016<double>, est::StallHold<double>,
+                            est::PushLoadObserver<double>, est::BidirectionalLoadObserver<double>,
+                            est::Clamp2016AsRun<double>>;
+void BM_BridgeTick_yaw2016_slots_before(benchmark::State& st) {
+  using Estimator = est::ForceEstimator<est::rate::Decimate, est::RollModel2016<double>,
+                                        est::PitchModel2016<double>, ClampVariantBefore>;
+  const auto m = est::models_2016();
+  est::ForceEstimatorSettings<double> settings;
+  settings.loop_period = 0.001;
+  run_estimator_ticks(
+      st, Estimator({m.roll, m.pitch, ClampVariantBefore(m.clamp1), ClampVariantBefore(m.clamp2)},
+                    settings));
+}
+BENCHMARK(BM_BridgeTick_yaw2016_slots_before);
+
+}  // namespace
+
+}  // namespace identified_joint_models_bench
