@@ -8,6 +8,7 @@
 #include <cmath>
 #include <endohaptics/workflow/workflow.hpp>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "test_support.hpp"
@@ -189,6 +190,96 @@ TEST_CASE("joint models: the family is chosen by inner cross-validation on the t
         }) == "identify: no model family to fit");
 }
 
+TEST_CASE(
+    "joint models: the family choice searches a fit's constants once, on all training files") {
+  std::vector<wf::PreparedLog> logs;
+  for (int f = 0; f < 4; ++f) logs.push_back(hits_log(-7.5, 2, 0.5 + 0.1 * f, std::to_string(f)));
+  using Params = est::StallHoldParameters<double>;
+  // The constants alone: the blocked cross-validation over the four files finds the truth's lag.
+  const wf::JointConstants c =
+      wf::choose_joint_constants(files::ModelKind::stall_hold, logs, inputs, outputs, 0.5);
+  CHECK(c.kind == files::ModelKind::stall_hold);
+  CHECK(c.files == 4);
+  REQUIRE(c.stall_hold.has_value());
+  CHECK(c.stall_hold->folds == 4);
+  CHECK(c.stall_hold->settings.output_time_constant == 0.4);
+  CHECK_FALSE(c.bidirectional.has_value());
+  // Fitted with them on the same files: the model and report of the fit that searches itself,
+  // without a search.
+  const wf::JointModelFit searched =
+      wf::fit_joint_model(files::ModelKind::stall_hold, logs, inputs, outputs, 0.5);
+  const wf::JointModelFit held =
+      wf::fit_joint_model(files::ModelKind::stall_hold, logs, inputs, outputs, 0.5, &c);
+  CHECK(searched.constant_searches == 1);
+  CHECK(held.constant_searches == 0);
+  const auto& a = files::joint_model_parameters<Params>(searched.model);
+  const auto& b = files::joint_model_parameters<Params>(held.model);
+  CHECK(a.gain == b.gain);
+  CHECK(a.side == b.side);
+  CHECK(a.velocity_threshold == b.velocity_threshold);
+  CHECK(a.velocity_time_constant == b.velocity_time_constant);
+  CHECK(a.output_time_constant == b.output_time_constant);
+  CHECK(held.summary == searched.summary);
+  CHECK(held.training_fit == searched.training_fit);
+  // Refitted on one of the files: the constants held (a search on one file would keep the
+  // prior's 0.3 s lag), the gain fitted, and the summary says where the constants came from.
+  const wf::JointModelFit one =
+      wf::fit_joint_model(files::ModelKind::stall_hold, {logs[2]}, inputs, outputs, 0.5, &c);
+  CHECK(one.constant_searches == 0);
+  CHECK(files::joint_model_parameters<Params>(one.model).output_time_constant == 0.4);
+  CHECK(files::joint_model_parameters<Params>(one.model).gain == doctest::Approx(-7.5));
+  CHECK(one.summary.find("chosen on 4 training files, held in this refit on 1") !=
+        std::string::npos);
+  // The push observer has nothing to choose: no search, whether or not constants are given.
+  const wf::JointConstants none =
+      wf::choose_joint_constants(files::ModelKind::push_load_observer, logs, inputs, outputs, 0.5);
+  CHECK_FALSE(none.stall_hold.has_value());
+  CHECK_FALSE(none.bidirectional.has_value());
+  // Constants of another kind, or a kind's constants missing, are refused by name.
+  CHECK(message_of([&] {
+          (void)wf::fit_joint_model(files::ModelKind::push_load_observer, logs, inputs, outputs,
+                                    0.5, &c);
+        }) ==
+        "fit_joint_model: the constants given are for kind \"stall_hold\", the fit is of kind "
+        "\"push_load_observer\"");
+  wf::JointConstants empty = c;
+  empty.stall_hold.reset();
+  CHECK(message_of([&] {
+          (void)wf::fit_joint_model(files::ModelKind::stall_hold, logs, inputs, outputs, 0.5,
+                                    &empty);
+        }) ==
+        "fit_joint_model: the constants given are for kind \"stall_hold\" but hold none of its "
+        "constants, the fit is of kind \"stall_hold\"");
+  CHECK(message_of([&] {
+          (void)wf::choose_joint_constants(files::ModelKind::stall_hold, {}, inputs, outputs, 0.5);
+        }) == "choose_joint_constants: no logs");
+
+  // The family choice: stall_hold refitted in each of 4 folds and once on all files, the push
+  // observer in 4 folds; one constant search in all (stall_hold's, on the 4 training files). Run
+  // again in each fold, as the constants once were, it would count 4 more.
+  std::vector<std::string> lines;
+  wf::WorkflowOptions options;
+  options.progress = [&lines](std::string_view line) { lines.emplace_back(line); };
+  const wf::ModelChoice choice = wf::choose_family(
+      nullptr, {files::ModelKind::push_load_observer, files::ModelKind::stall_hold}, {}, {}, logs,
+      inputs, outputs, options);
+  CHECK(choice.family == "stall_hold");
+  CHECK(choice.folds.size() == 4);
+  CHECK(choice.constant_searches == 1);
+  CHECK(std::count_if(lines.begin(), lines.end(), [](const std::string& l) {
+          return l ==
+                 "family stall_hold: constants chosen on all 4 training files, held in the "
+                 "folds' refits";
+        }) == 1);
+  // The chosen model is the fit on every training file with those constants.
+  const auto& chosen = files::joint_model_parameters<Params>(choice.model);
+  CHECK(chosen.gain == a.gain);
+  CHECK(chosen.output_time_constant == a.output_time_constant);
+  CHECK(choice.joint_summary == searched.summary);
+  // Each fold's refit holds the lag the truth has: the held-out hits are reproduced.
+  CHECK(choice.families[1].mean_fit == doctest::Approx(100.0));
+}
+
 TEST_CASE("joint models: an observer with the current command third, and hostile input lists") {
   // A grasper at 1 kHz sweeping +-0.5 rad at 0.5 Hz against a load that steps per run; the
   // amplifier makes the current follow the command, i = -2.06 u, measured 0.01 A high.
@@ -307,6 +398,30 @@ TEST_CASE("joint models: the bidirectional observer through the workflow, with t
   // The truth is the level +-3 mN m by direction: after the first cycle the estimate follows it.
   const auto& truth = logs[1].segments[0].y;
   CHECK(std::sqrt((y.tail(4000) - truth.col(0).tail(4000)).squaredNorm() / 4000.0) < 1.0);
+  // With the constants it chose given back: the same observer, no search; refitted on two of the
+  // files with them, the front end and the noise rule held.
+  CHECK(fit.constant_searches == 1);
+  REQUIRE(fit.constants.bidirectional.has_value());
+  CHECK(fit.constants.files == 3);
+  const wf::JointModelFit again = wf::fit_joint_model(files::ModelKind::bidirectional_load_observer,
+                                                      logs, three, load, 0.5, &fit.constants);
+  CHECK(again.constant_searches == 0);
+  CHECK(again.summary == fit.summary);
+  using Observer = est::BidirectionalLoadObserverParameters<double>;
+  const auto& p = files::joint_model_parameters<Observer>(fit.model);
+  CHECK(files::joint_model_parameters<Observer>(again.model).forward_gain == p.forward_gain);
+  CHECK(files::joint_model_parameters<Observer>(again.model).forward_variance ==
+        p.forward_variance);
+  const wf::JointModelFit two =
+      wf::fit_joint_model(files::ModelKind::bidirectional_load_observer, {logs[0], logs[2]}, three,
+                          load, 0.5, &fit.constants);
+  const auto& q = files::joint_model_parameters<Observer>(two.model);
+  CHECK(q.current_cutoff == p.current_cutoff);
+  CHECK(q.velocity_cutoff == p.velocity_cutoff);
+  CHECK(q.direction_scale == p.direction_scale);
+  CHECK(q.velocity_threshold == p.velocity_threshold);
+  CHECK(two.summary.find("chosen on 3 training files, held in this refit on 2") !=
+        std::string::npos);
   CHECK(message_of([&] {
           (void)wf::fit_joint_model(files::ModelKind::bidirectional_load_observer, logs,
                                     {three[0], three[2], three[1]}, load, 0.5);

@@ -48,12 +48,43 @@ namespace endohaptics::workflow {
 [[nodiscard]] ENDOHAPTICS_DECL Eigen::VectorXd simulate_joint_model(const files::ModelFile& model,
                                                                     const Eigen::MatrixXd& u);
 
+//! The constants of a joint-model fit that no physics fixes, as chosen by cross-validation on one
+//! set of training files (choose_joint_constants). fit_joint_model takes them to refit the least-
+//! squares parts on a subset of those files without searching again: choose_family's inner folds
+//! do so, as they refit the subspace family with its structure chosen on all training files.
+struct JointConstants {
+  files::ModelKind kind = files::ModelKind::stall_hold;  //!< the joint-model kind they are for
+  std::size_t files = 0;  //!< how many training files they were chosen on
+  //! Kind stall_hold: the velocity threshold and the two time constants, and how they were chosen.
+  std::optional<StallHoldSelection> stall_hold{};
+  //! Kind bidirectional_load_observer: the noise rule and the front end, and how they were chosen.
+  std::optional<BidirectionalSelection> bidirectional{};
+  //! Kind bidirectional_load_observer: the encoder's step, rad, when the angle is quantised (the
+  //! velocity threshold is then one step per sample, not searched).
+  std::optional<double> encoder_step{};
+};
+
 //! A joint model fitted on logs, with its causal training score.
 struct JointModelFit {
   files::ModelFile model;              //!< a joint-model kind
   std::vector<double> training_fit{};  //!< causal fit % per experiment (segment) after the warm-up
   std::string summary{};               //!< one line: the fitted values, for identify's report
+  JointConstants constants{};          //!< the constants the fit used (given or chosen)
+  //! Constant searches this fit ran: 1 when it chose the constants itself (stall_hold and
+  //! bidirectional_load_observer without given constants), else 0 (given, or none to choose:
+  //! push_load_observer). Counted by choose_family (ModelChoice::constant_searches).
+  std::size_t constant_searches = 0;
 };
+
+//! The constants fit_joint_model would choose for `kind` on `logs` (same arguments and checks as
+//! fit_joint_model; see there), without the final fit: the blocked cross-validation over the
+//! logs (choose_stall_hold_settings, choose_bidirectional_settings; with one log the priors). For
+//! push_load_observer there is nothing to choose (its priors come from the training output) and
+//! only the kind and the file count are set. Throws Error on another kind or unusable data.
+[[nodiscard]] ENDOHAPTICS_DECL JointConstants
+choose_joint_constants(files::ModelKind kind, const std::vector<PreparedLog>& logs,
+                       const std::vector<files::SignalInfo>& inputs,
+                       const std::vector<files::SignalInfo>& outputs, double warmup);
 
 //! Fits a joint model of `kind` on `logs` (prepared for scoring: what a controller has; inputs
 //! current and velocity, one output; for the observer optionally a third input, the current
@@ -71,11 +102,14 @@ struct JointModelFit {
 //! when the angle is quantised (encoder_step), the noise rule and the other front-end constants
 //! by choose_bidirectional_settings over blocked_folds of the logs (with one log the priors),
 //! everything else by fit_bidirectional_load_observer (no sign to choose: forward and backward
-//! enter alike). Throws Error on another kind or unusable data.
-[[nodiscard]] ENDOHAPTICS_DECL JointModelFit
-fit_joint_model(files::ModelKind kind, const std::vector<PreparedLog>& logs,
-                const std::vector<files::SignalInfo>& inputs,
-                const std::vector<files::SignalInfo>& outputs, double warmup);
+//! enter alike). With `constants` (from choose_joint_constants, or a fit's `constants`, for the
+//! same kind; e.g. chosen on a superset of `logs`) those are used and nothing is searched: only
+//! the least-squares parts (and the observers' data-derived priors) are fitted on `logs`.
+//! Throws Error on another kind, constants of another kind, or unusable data.
+[[nodiscard]] ENDOHAPTICS_DECL JointModelFit fit_joint_model(
+    files::ModelKind kind, const std::vector<PreparedLog>& logs,
+    const std::vector<files::SignalInfo>& inputs, const std::vector<files::SignalInfo>& outputs,
+    double warmup, const JointConstants* constants = nullptr);
 
 //! One model family scored by the inner cross-validation of `choose_family`.
 struct FamilyScore {

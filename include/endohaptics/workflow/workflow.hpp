@@ -150,6 +150,10 @@ struct ModelChoice {
   std::vector<std::vector<std::size_t>> folds{};  //!< training files held out per inner fold
   std::vector<FileComparison> files{};  //!< the chosen model on each training file, causal
   std::string joint_summary{};          //!< the fitted values when a joint model was chosen
+  //! Joint-model constant searches run: choose_joint_constants once per joint family with
+  //! constants to choose (on all training files), plus JointModelFit::constant_searches of every
+  //! fit (0: the inner folds and the final fit are given those constants).
+  std::size_t constant_searches = 0;
 };
 
 //! Chooses the model family by the causal score on the training files only (never a held-out
@@ -159,7 +163,14 @@ struct ModelChoice {
 //! family on the other folds and scores it causally on the held-out one; the highest mean fit
 //! over the folds wins (a family that fails or is refused on a fold loses). The subspace family
 //! is refitted in each fold with the structure chosen on all training files (method, order, dead
-//! zones fixed: cheaper, and if anything in its favour). Otherwise the only family is chosen.
+//! zones fixed: cheaper, and if anything in its favour). So is a joint family: its constants that
+//! no physics fixes (the stall-hold's threshold and time constants, the bidirectional observer's
+//! noise rule and front end) are chosen once, by the blocked cross-validation inside the fit on
+//! all training files (choose_joint_constants), and each fold refits only its least-squares parts
+//! with them held (fit_joint_model with constants); the final fit on every training file uses the
+//! same constants, so the chosen model is the one fit_joint_model makes on them. The held-out
+//! files of an outer evaluation are never among the training files, so they choose nothing.
+//! Otherwise the only family is chosen.
 //! `fit_logs`/`score_logs`: the subspace grid, prepared for fitting and for scoring; `joint_logs`:
 //! the joint models' grid, prepared for scoring (all three: the same files, same order). The
 //! chosen family is then fitted on every training file. Throws Error when nothing can be fitted.

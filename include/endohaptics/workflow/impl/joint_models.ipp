@@ -119,27 +119,141 @@ inline std::vector<std::vector<std::size_t>> experiment_folds(
   return folds;
 }
 
-// `file_of[e]`: the training file experiment e came from (the inner folds hold out whole files).
-inline JointModelFit fit_bidirectional(const std::vector<LoadObserverData>& data,
-                                       const std::vector<std::size_t>& file_of, std::size_t files,
-                                       double ts, double warmup,
+// The joint models' data from logs prepared for scoring, after fit_joint_model's checks: one
+// entry per segment longer than the warm-up, `file_of[e]` the file experiment e came from (the
+// folds of the constant search hold out whole files).
+struct JointData {
+  std::vector<StallHoldData> stall_hold{};   // kind stall_hold
+  std::vector<LoadObserverData> observer{};  // the observer kinds
+  std::vector<std::size_t> file_of{};        // per experiment
+  double ts = 0.0;                           // the logs' sample time, s
+  double peak = 0.0, sum = 0.0, sum2 = 0.0;  // of the observers' training load
+  Eigen::Index count = 0;                    // load samples summed
+};
+
+inline JointData joint_data(files::ModelKind kind, const std::vector<PreparedLog>& logs,
+                            const std::vector<files::SignalInfo>& inputs,
+                            const std::vector<files::SignalInfo>& outputs, double warmup,
+                            const char* who) {
+  const std::string name(who);
+  if (logs.empty()) fail(name + ": no logs");
+  if (kind != files::ModelKind::stall_hold && kind != files::ModelKind::push_load_observer &&
+      kind != files::ModelKind::bidirectional_load_observer) {
+    fail(name + ": kind \"" + std::string(files::to_string(kind)) + "\" is not a joint model");
+  }
+  const std::size_t most = kind == files::ModelKind::stall_hold ? 2 : 3;
+  if (inputs.size() < 2 || inputs.size() > most || outputs.size() != 1) {
+    fail(name + ": " + std::string(files::to_string(kind)) + " needs 2 inputs (current, velocity" +
+         (most == 3 ? std::string("; a third, the current command, is optional") : std::string()) +
+         ") and 1 output, got " + std::to_string(inputs.size()) + " and " +
+         std::to_string(outputs.size()));
+  }
+  // The roles are positional: current, velocity, and for the observer the current command
+  // third (named so: a velocity or any other signal there would be taken for the command).
+  if (inputs.size() == 3 && (inputs[2].name.find("command") == std::string::npos ||
+                             inputs[1].name.find("command") != std::string::npos)) {
+    fail(name + ": " + std::string(files::to_string(kind)) +
+         " takes (current, velocity, current command) in that order; got (" + inputs[0].name +
+         ", " + inputs[1].name + ", " + inputs[2].name + ")");
+  }
+  for (const PreparedLog& log : logs) {
+    for (const DataSet& d : log.segments) {
+      if (d.u.cols() != static_cast<Eigen::Index>(inputs.size()) || d.y.cols() != 1) {
+        fail(name + ": " + log.source + ": a segment of " + std::to_string(d.u.cols()) +
+             " input and " + std::to_string(d.y.cols()) + " output columns, for " +
+             std::to_string(inputs.size()) + " inputs and 1 output");
+      }
+    }
+  }
+  JointData out;
+  out.ts = logs.front().sample_time;
+  const auto skip = static_cast<Eigen::Index>(std::ceil(warmup / out.ts));
+  for (std::size_t f = 0; f < logs.size(); ++f) {
+    for (const DataSet& d : logs[f].segments) {
+      if (d.u.rows() <= skip + 1) continue;
+      out.file_of.push_back(f);
+      if (kind == files::ModelKind::stall_hold) {
+        out.stall_hold.push_back({d.u.col(0), d.u.col(1), d.y.col(0)});
+        continue;
+      }
+      LoadObserverData e = load_observer_data(d.u, d.y.col(0), out.ts);
+      out.peak = std::max(out.peak, e.load.cwiseAbs().maxCoeff());
+      out.sum += e.load.sum();
+      out.sum2 += e.load.squaredNorm();
+      out.count += e.load.size();
+      out.observer.push_back(std::move(e));
+    }
+  }
+  if (out.file_of.empty()) fail(name + ": no segment longer than the warm-up");
+  return out;
+}
+
+// The search of choose_joint_constants on data from `files` training files: contiguous blocks
+// of whole files held out (blocked_folds).
+inline JointConstants search_constants(files::ModelKind kind, const JointData& data,
+                                       std::size_t files, double warmup) {
+  JointConstants out{.kind = kind, .files = files};
+  const std::vector<std::vector<std::size_t>> folds =
+      experiment_folds(blocked_folds(files), data.file_of);
+  if (kind == files::ModelKind::stall_hold) {
+    estimation::StallHoldParameters<double> prior;
+    prior.sample_time = data.ts;
+    // The threshold and the time constants (the dead zone is table 5.2's, physical).
+    out.stall_hold = choose_stall_hold_settings(data.stall_hold, folds, prior, warmup);
+  } else if (kind == files::ModelKind::bidirectional_load_observer) {
+    estimation::BidirectionalLoadObserverParameters<double> prior;
+    prior.sample_time = data.ts;
+    // Rest is slower than one encoder step per sample (the velocity's quantum: below it the
+    // encoder cannot tell motion from rest) when the encoder's step shows in the data; otherwise
+    // the threshold is chosen with the others (the noise rule, the cut-offs, q0, the stop scale).
+    out.encoder_step = encoder_step(data.observer);
+    if (out.encoder_step) prior.velocity_threshold = *out.encoder_step / data.ts;
+    out.bidirectional = choose_bidirectional_settings(data.observer, folds, prior, warmup,
+                                                      !out.encoder_step.has_value());
+  }
+  return out;
+}
+
+// The constants a fit of `kind` on `files` files uses: `given` (checked against the kind), else
+// the search on `data`; `searched` counts the search.
+inline JointConstants constants_for(files::ModelKind kind, const JointData& data, std::size_t files,
+                                    double warmup, const JointConstants* given,
+                                    std::size_t& searched) {
+  if (given == nullptr) {
+    searched = kind == files::ModelKind::push_load_observer ? 0 : 1;
+    return search_constants(kind, data, files, warmup);
+  }
+  const bool complete =
+      given->kind == kind && (kind != files::ModelKind::stall_hold || given->stall_hold) &&
+      (kind != files::ModelKind::bidirectional_load_observer || given->bidirectional);
+  if (!complete) {
+    fail("fit_joint_model: the constants given are for kind \"" +
+         std::string(files::to_string(given->kind)) + "\"" +
+         (given->kind == kind ? std::string(" but hold none of its constants") : std::string()) +
+         ", the fit is of kind \"" + std::string(files::to_string(kind)) + "\"");
+  }
+  searched = 0;
+  return *given;
+}
+
+// For the summary of a refit with constants chosen on more files than it uses: which; else "".
+inline std::string held_constants(const JointConstants& c, std::size_t files) {
+  if (c.files == files) return {};
+  return "; chosen on " + std::to_string(c.files) + " training files, held in this refit on " +
+         std::to_string(files);
+}
+
+inline JointModelFit fit_bidirectional(const JointData& joint, const JointConstants& constants,
+                                       std::size_t files, double warmup,
                                        const std::vector<files::SignalInfo>& inputs,
                                        const std::vector<files::SignalInfo>& outputs,
                                        const files::ModelProvenance& provenance) {
+  const std::vector<LoadObserverData>& data = joint.observer;
+  const double ts = joint.ts;
   estimation::BidirectionalLoadObserverParameters<double> prior;
   prior.sample_time = ts;
-  // The constants no physics fixes (the noise rule, the front end's cut-off, q0, threshold and
-  // stop scale) by cross-validation over the training files, contiguous blocks of whole files
-  // held out (blocked_folds).
-  const std::vector<std::vector<std::size_t>> folds =
-      experiment_folds(blocked_folds(files), file_of);
-  // Rest is slower than one encoder step per sample (the velocity's quantum: below it the
-  // encoder cannot tell motion from rest) when the encoder's step shows in the data; otherwise
-  // the threshold is chosen with the others.
-  const std::optional<double> step = encoder_step(data);
-  if (step) prior.velocity_threshold = *step / ts;
-  const BidirectionalSelection chosen =
-      choose_bidirectional_settings(data, folds, prior, warmup, !step.has_value());
+  const std::optional<double>& step = constants.encoder_step;
+  const BidirectionalSelection& chosen = *constants.bidirectional;
   const auto& c = chosen.settings;
   const BidirectionalObserverFit fit =
       fit_bidirectional_load_observer(data, with_settings(prior, c), warmup, c.rule);
@@ -154,7 +268,8 @@ inline JointModelFit fit_bidirectional(const std::vector<LoadObserverData>& data
                 std::to_string(chosen.candidates) + " settings; held-out RMSE " +
                 endohaptics::detail::format_number(chosen.held_out_rmse) + " " + unit +
                 ", the research note's constants " +
-                endohaptics::detail::format_number(chosen.prior_rmse) + ")";
+                endohaptics::detail::format_number(chosen.prior_rmse) +
+                held_constants(constants, files) + ")";
   const std::string settings =
       "noise rule: correlation time " +
       endohaptics::detail::format_number(c.rule.correlation_time) + " s, friction prior " +
@@ -173,8 +288,9 @@ inline JointModelFit fit_bidirectional(const std::vector<LoadObserverData>& data
   const auto& p = fit.parameters;
   const auto& reference = fit.reference;
   require_reference("bidirectional_load_observer", inputs, reference.has_value());
-  JointModelFit out{.model =
-                        files::make_joint_model_file(p, inputs, outputs, provenance, reference)};
+  JointModelFit out{
+      .model = files::make_joint_model_file(p, inputs, outputs, provenance, reference),
+      .constants = constants};
   const estimation::BidirectionalLoadObserver<double> fitted(p);
   score_training(out, data, static_cast<Eigen::Index>(std::ceil(warmup / ts)),
                  [&](const LoadObserverData& d) {
@@ -219,61 +335,37 @@ inline JointModelFit fit_bidirectional(const std::vector<LoadObserverData>& data
 
 }  // namespace detail
 
+ENDOHAPTICS_DECL JointConstants
+choose_joint_constants(files::ModelKind kind, const std::vector<PreparedLog>& logs,
+                       const std::vector<files::SignalInfo>& inputs,
+                       const std::vector<files::SignalInfo>& outputs, double warmup) {
+  const detail::JointData data =
+      detail::joint_data(kind, logs, inputs, outputs, warmup, "choose_joint_constants");
+  return detail::search_constants(kind, data, logs.size(), warmup);
+}
+
 ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
                                                const std::vector<PreparedLog>& logs,
                                                const std::vector<files::SignalInfo>& inputs,
                                                const std::vector<files::SignalInfo>& outputs,
-                                               double warmup) {
-  if (logs.empty()) detail::fail("fit_joint_model: no logs");
-  const std::size_t most = kind == files::ModelKind::stall_hold ? 2 : 3;
-  if (inputs.size() < 2 || inputs.size() > most || outputs.size() != 1) {
-    detail::fail(
-        "fit_joint_model: " + std::string(files::to_string(kind)) +
-        " needs 2 inputs (current, velocity" +
-        (most == 3 ? std::string("; a third, the current command, is optional") : std::string()) +
-        ") and 1 output, got " + std::to_string(inputs.size()) + " and " +
-        std::to_string(outputs.size()));
-  }
-  // The roles are positional: current, velocity, and for the observer the current command
-  // third (named so: a velocity or any other signal there would be taken for the command).
-  if (inputs.size() == 3 && (inputs[2].name.find("command") == std::string::npos ||
-                             inputs[1].name.find("command") != std::string::npos)) {
-    detail::fail("fit_joint_model: " + std::string(files::to_string(kind)) +
-                 " takes (current, velocity, current command) in that order; got (" +
-                 inputs[0].name + ", " + inputs[1].name + ", " + inputs[2].name + ")");
-  }
-  for (const PreparedLog& log : logs) {
-    for (const DataSet& d : log.segments) {
-      if (d.u.cols() != static_cast<Eigen::Index>(inputs.size()) || d.y.cols() != 1) {
-        detail::fail("fit_joint_model: " + log.source + ": a segment of " +
-                     std::to_string(d.u.cols()) + " input and " + std::to_string(d.y.cols()) +
-                     " output columns, for " + std::to_string(inputs.size()) +
-                     " inputs and 1 "
-                     "output");
-      }
-    }
-  }
-  const double ts = logs.front().sample_time;
+                                               double warmup, const JointConstants* given) {
+  const detail::JointData joint =
+      detail::joint_data(kind, logs, inputs, outputs, warmup, "fit_joint_model");
+  std::size_t searched = 0;
+  // The constants no physics fixes: given (chosen on these files or a superset), or chosen here
+  // by cross-validation over the training files.
+  const JointConstants constants =
+      detail::constants_for(kind, joint, logs.size(), warmup, given, searched);
+  const double ts = joint.ts;
   const auto skip = static_cast<Eigen::Index>(std::ceil(warmup / ts));
   files::ModelProvenance provenance;
   provenance.method = std::string(files::to_string(kind));
   for (const PreparedLog& log : logs) provenance.files.push_back(log.source);
   if (kind == files::ModelKind::stall_hold) {
-    std::vector<StallHoldData> data;
-    std::vector<std::size_t> file_of;
-    for (std::size_t f = 0; f < logs.size(); ++f) {
-      for (const DataSet& d : logs[f].segments) {
-        if (d.u.rows() <= skip + 1) continue;
-        data.push_back({d.u.col(0), d.u.col(1), d.y.col(0)});
-        file_of.push_back(f);
-      }
-    }
-    if (data.empty()) detail::fail("fit_joint_model: no segment longer than the warm-up");
+    const std::vector<StallHoldData>& data = joint.stall_hold;
     estimation::StallHoldParameters<double> prior;
     prior.sample_time = ts;
-    // The threshold and the time constants by cross-validation over the training files.
-    const StallHoldSelection chosen = choose_stall_hold_settings(
-        data, detail::experiment_folds(blocked_folds(logs.size()), file_of), prior, warmup);
+    const StallHoldSelection& chosen = *constants.stall_hold;
     prior.velocity_threshold = chosen.settings.velocity_threshold;
     prior.velocity_time_constant = chosen.settings.velocity_time_constant;
     prior.output_time_constant = chosen.settings.output_time_constant;
@@ -282,7 +374,9 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
     const std::string side(enumerator_name(p.side));
     provenance.fit_percent = {fit.mean_fit_percent};
     JointModelFit out{.model = files::make_joint_model_file(p, inputs, outputs, provenance),
-                      .training_fit = fit.fit_percent};
+                      .training_fit = fit.fit_percent,
+                      .constants = constants,
+                      .constant_searches = searched};
     out.summary =
         "stall_hold: dead zone " + detail::format_number(p.current_deadzone) +
         " A, held at |v| <= " + detail::format_number(p.velocity_threshold) +
@@ -296,37 +390,20 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
                    std::to_string(chosen.candidates) + " settings, held-out fit " +
                    detail::format_number(chosen.held_out_fit) +
                    " %, the research note's constants " + detail::format_number(chosen.prior_fit) +
-                   " %") +
+                   " %" + detail::held_constants(constants, logs.size())) +
         "); fitted: gain " + detail::format_number(p.gain) + " " + outputs.front().unit +
         "/A, loaded side " + side;
     return out;
   }
-  if (kind != files::ModelKind::push_load_observer &&
-      kind != files::ModelKind::bidirectional_load_observer) {
-    detail::fail("fit_joint_model: kind \"" + std::string(files::to_string(kind)) +
-                 "\" is not a joint model");
-  }
-  std::vector<LoadObserverData> data;
-  std::vector<std::size_t> file_of;
-  double peak = 0.0, sum = 0.0, sum2 = 0.0;
-  Eigen::Index count = 0;
-  for (std::size_t f = 0; f < logs.size(); ++f) {
-    for (const DataSet& d : logs[f].segments) {
-      if (d.u.rows() <= skip + 1) continue;
-      file_of.push_back(f);
-      LoadObserverData e = detail::load_observer_data(d.u, d.y.col(0), ts);
-      peak = std::max(peak, e.load.cwiseAbs().maxCoeff());
-      sum += e.load.sum();
-      sum2 += e.load.squaredNorm();
-      count += e.load.size();
-      data.push_back(std::move(e));
-    }
-  }
-  if (data.empty()) detail::fail("fit_joint_model: no segment longer than the warm-up");
+  const std::vector<LoadObserverData>& data = joint.observer;
   if (kind == files::ModelKind::bidirectional_load_observer) {
-    return detail::fit_bidirectional(data, file_of, logs.size(), ts, warmup, inputs, outputs,
-                                     provenance);
+    JointModelFit out = detail::fit_bidirectional(joint, constants, logs.size(), warmup, inputs,
+                                                  outputs, provenance);
+    out.constant_searches = searched;
+    return out;
   }
+  const double peak = joint.peak, sum = joint.sum, sum2 = joint.sum2;
+  const Eigen::Index count = joint.count;
   const double mean = sum / static_cast<double>(count);
   const double variance = std::max(sum2 / static_cast<double>(count) - mean * mean, 0.0);
   estimation::PushLoadObserverParameters<double> prior;
@@ -367,8 +444,9 @@ ENDOHAPTICS_DECL JointModelFit fit_joint_model(files::ModelKind kind,
   const auto& p = best->parameters;
   const auto& reference = best->reference;
   detail::require_reference("push_load_observer", inputs, reference.has_value());
-  JointModelFit out{.model =
-                        files::make_joint_model_file(p, inputs, outputs, provenance, reference)};
+  JointModelFit out{
+      .model = files::make_joint_model_file(p, inputs, outputs, provenance, reference),
+      .constants = constants};
   const estimation::PushLoadObserver<double> fitted(p);
   detail::score_training(out, data, skip, [&](const LoadObserverData& d) {
     return simulate_load_observer(fitted, d, reference);

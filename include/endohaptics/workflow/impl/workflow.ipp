@@ -474,6 +474,34 @@ ENDOHAPTICS_DECL ModelChoice choose_family(
     }
 #endif
   };
+  // Each joint family's constants, chosen once on all training files (on first use) and held
+  // in its fold refits and its final fit; a search that fails fails every fold the same way.
+  std::vector<std::optional<JointConstants>> joint_constants(joint_kinds.size());
+  std::vector<std::string> constants_failure(joint_kinds.size());
+  std::size_t constant_searches = 0;
+  const auto constants_of = [&](std::size_t k) -> const JointConstants& {
+    if (!joint_constants[k] && constants_failure[k].empty()) {
+#if defined(__cpp_exceptions)
+      try {
+#endif
+        joint_constants[k] = choose_joint_constants(joint_kinds[k], joint_logs, inputs, outputs,
+                                                    options.scoring.warmup);
+        if (joint_kinds[k] != files::ModelKind::push_load_observer) ++constant_searches;
+#if defined(__cpp_exceptions)
+      } catch (const Error& e) {
+        constants_failure[k] = e.what();
+      }
+#endif
+      if (joint_constants[k] && options.progress &&
+          joint_kinds[k] != files::ModelKind::push_load_observer) {
+        options.progress("family " + std::string(files::to_string(joint_kinds[k])) +
+                         ": constants chosen on all " + std::to_string(n_files) +
+                         " training files, held in the folds' refits");
+      }
+    }
+    if (!joint_constants[k]) wf::fail(constants_failure[k]);
+    return *joint_constants[k];
+  };
   const auto fit_family = [&](std::size_t family,
                               const std::vector<std::size_t>& train) -> files::ModelFile {
     if (subspace != nullptr && family == 0) {
@@ -491,11 +519,15 @@ ENDOHAPTICS_DECL ModelChoice choose_family(
       }
       return identify_logs(f, s, inputs, outputs, fixed).chosen().model;
     }
+    // The constants first: their search on all files runs before the fold's copy is made.
+    const std::size_t k = family - (subspace != nullptr ? 1 : 0);
+    const JointConstants& constants = constants_of(k);
     std::vector<PreparedLog> j;
     for (const std::size_t i : train) j.push_back(joint_logs[i]);
-    return fit_joint_model(joint_kinds[family - (subspace != nullptr ? 1 : 0)], j, inputs, outputs,
-                           options.scoring.warmup)
-        .model;
+    JointModelFit fit =
+        fit_joint_model(joint_kinds[k], j, inputs, outputs, options.scoring.warmup, &constants);
+    constant_searches += fit.constant_searches;
+    return std::move(fit.model);
   };
   const auto logs_of = [&](std::size_t family) -> const std::vector<PreparedLog>& {
     return subspace != nullptr && family == 0 ? score_logs : joint_logs;
@@ -570,16 +602,20 @@ ENDOHAPTICS_DECL ModelChoice choose_family(
                        .families = std::move(scores),
                        .best = best,
                        .folds = std::move(inner),
-                       .files = subspace->chosen().files};
+                       .files = subspace->chosen().files,
+                       .constant_searches = constant_searches};
   }
-  const files::ModelKind kind = joint_kinds[best - (subspace != nullptr ? 1 : 0)];
-  JointModelFit fit = fit_joint_model(kind, joint_logs, inputs, outputs, options.scoring.warmup);
+  const std::size_t joint = best - (subspace != nullptr ? 1 : 0);
+  JointModelFit fit = fit_joint_model(joint_kinds[joint], joint_logs, inputs, outputs,
+                                      options.scoring.warmup, &constants_of(joint));
+  constant_searches += fit.constant_searches;
   ModelChoice choice{.model = std::move(fit.model),
                      .family = scores[best].family,
                      .families = std::move(scores),
                      .best = best,
                      .folds = std::move(inner),
-                     .joint_summary = std::move(fit.summary)};
+                     .joint_summary = std::move(fit.summary),
+                     .constant_searches = constant_searches};
   for (const PreparedLog& log : joint_logs) {
     choice.files.push_back(compare_log(choice.model, log, options.scoring));
   }
