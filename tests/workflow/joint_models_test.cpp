@@ -278,6 +278,16 @@ TEST_CASE(
   CHECK(choice.joint_summary == searched.summary);
   // Each fold's refit holds the lag the truth has: the held-out hits are reproduced.
   CHECK(choice.families[1].mean_fit == doctest::Approx(100.0));
+  // Nested (the search again in each fold, on its 3 training files, and once for the final fit):
+  // 5 searches, the same model.
+  options.nested_joint_constants = true;
+  const wf::ModelChoice nested = wf::choose_family(
+      nullptr, {files::ModelKind::push_load_observer, files::ModelKind::stall_hold}, {}, {}, logs,
+      inputs, outputs, options);
+  CHECK(nested.constant_searches == 5);
+  CHECK(nested.family == "stall_hold");
+  CHECK(files::joint_model_parameters<Params>(nested.model).gain == a.gain);
+  CHECK(nested.joint_summary == searched.summary);
 }
 
 TEST_CASE("joint models: an observer with the current command third, and hostile input lists") {

@@ -170,7 +170,9 @@ struct ModelChoice {
 //! with them held (fit_joint_model with constants); the final fit on every training file uses the
 //! same constants, so the chosen model is the one fit_joint_model makes on them. The held-out
 //! files of an outer evaluation are never among the training files, so they choose nothing.
-//! Otherwise the only family is chosen.
+//! Held so, the constants have seen each fold's held-out files (a leak in the joint family's
+//! favour, as in the subspace family's); options.nested_joint_constants searches them again in
+//! each fold instead (the old, slower way). Otherwise the only family is chosen.
 //! `fit_logs`/`score_logs`: the subspace grid, prepared for fitting and for scoring; `joint_logs`:
 //! the joint models' grid, prepared for scoring (all three: the same files, same order). The
 //! chosen family is then fitted on every training file. Throws Error when nothing can be fitted.

@@ -519,13 +519,14 @@ ENDOHAPTICS_DECL ModelChoice choose_family(
       }
       return identify_logs(f, s, inputs, outputs, fixed).chosen().model;
     }
-    // The constants first: their search on all files runs before the fold's copy is made.
+    // The constants first (held unless nested): their search on all files runs before the
+    // fold's copy is made.
     const std::size_t k = family - (subspace != nullptr ? 1 : 0);
-    const JointConstants& constants = constants_of(k);
+    const JointConstants* constants = options.nested_joint_constants ? nullptr : &constants_of(k);
     std::vector<PreparedLog> j;
     for (const std::size_t i : train) j.push_back(joint_logs[i]);
     JointModelFit fit =
-        fit_joint_model(joint_kinds[k], j, inputs, outputs, options.scoring.warmup, &constants);
+        fit_joint_model(joint_kinds[k], j, inputs, outputs, options.scoring.warmup, constants);
     constant_searches += fit.constant_searches;
     return std::move(fit.model);
   };
