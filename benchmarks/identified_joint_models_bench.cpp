@@ -76,14 +76,7 @@ using ClampVariantBefore =
                             est::PushLoadObserver<double>, est::BidirectionalLoadObserver<double>,
                             est::Clamp2016AsRun<double>>;
 void BM_BridgeTick_yaw2016_slots_before(benchmark::State& st) {
-  using Estimator = est::ForceEstimator<est::rate::Decimate, est::RollModel2016<double>,
-                                        est::PitchModel2016<double>, ClampVariantBefore>;
-  const auto m = est::models_2016();
-  est::ForceEstimatorSettings<double> settings;
-  settings.loop_period = 0.001;
-  run_estimator_ticks(
-      st, Estimator({m.roll, m.pitch, ClampVariantBefore(m.clamp1), ClampVariantBefore(m.clamp2)},
-                    settings));
+  joint_signal_sweep::run_2016_ticks_with_clamp_slot<ClampVariantBefore>(st);
 }
 BENCHMARK(BM_BridgeTick_yaw2016_slots_before);
 

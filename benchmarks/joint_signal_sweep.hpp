@@ -10,6 +10,8 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <endohaptics/estimation/force_estimator.hpp>
+#include <endohaptics/estimation/force_models_2016.hpp>
 #include <endohaptics/estimation/joint_force_model.hpp>
 
 namespace joint_signal_sweep {
@@ -58,6 +60,21 @@ void run_estimator_ticks(benchmark::State& st, Estimator estimator) {
     k = (k + 1) % sweep_length;
   }
   st.SetItemsProcessed(st.iterations());
+}
+
+//! run_estimator_ticks with the 2016 presets, roll and pitch as their own 2016 types and both
+//! clamps in `ClampSlot` (an AnyJointForceModel holding ClampModel2016): the bridge's tick as it
+//! was before a change of its slot types, for a benchmark to price the change against.
+template <typename ClampSlot>
+void run_2016_ticks_with_clamp_slot(benchmark::State& st) {
+  namespace est = endohaptics::estimation;
+  using Estimator = est::ForceEstimator<est::rate::Decimate, est::RollModel2016<double>,
+                                        est::PitchModel2016<double>, ClampSlot>;
+  const auto m = est::models_2016();
+  est::ForceEstimatorSettings<double> settings;
+  settings.loop_period = 0.001;
+  run_estimator_ticks(
+      st, Estimator({m.roll, m.pitch, ClampSlot(m.clamp1), ClampSlot(m.clamp2)}, settings));
 }
 
 }  // namespace joint_signal_sweep
