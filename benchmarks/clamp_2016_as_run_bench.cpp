@@ -1,6 +1,6 @@
 // The 2016 clamp estimator as it ran (estimation/clamp_2016_as_run.hpp) beside the worksheet's
 // clamp model (ClampModel2016, the appendix C yaw Hammerstein-Wiener preset) in the same run:
-// one joint step (advance + force), the step through the bridge's ClampForceModel, and the whole
+// one joint step (advance + force), the step through the bridge's BridgeJointModel, and the whole
 // 1 kHz tick of the bridge's estimator with each clamp preset (estimation/clamp_presets.hpp);
 // plus that tick with the clamp variant as it was before it could hold the as-run model (State
 // 23 numbers instead of 42), to price the larger snapshot every tick takes.
@@ -60,15 +60,15 @@ void BM_Clamp2016_as_run_force(benchmark::State& st) {
 }
 BENCHMARK(BM_Clamp2016_as_run_force);
 
-void BM_ClampForceModel_worksheet_step(benchmark::State& st) {
-  run_joint_steps(st, est::ClampForceModel(est::models_2016().clamp1));
+void BM_BridgeJointModel_worksheet_step(benchmark::State& st) {
+  run_joint_steps(st, est::BridgeJointModel(est::models_2016().clamp1));
 }
-BENCHMARK(BM_ClampForceModel_worksheet_step);
+BENCHMARK(BM_BridgeJointModel_worksheet_step);
 
-void BM_ClampForceModel_as_run_step(benchmark::State& st) {
-  run_joint_steps(st, est::ClampForceModel(est::Clamp2016AsRun<double>()));
+void BM_BridgeJointModel_as_run_step(benchmark::State& st) {
+  run_joint_steps(st, est::BridgeJointModel(est::Clamp2016AsRun<double>()));
 }
-BENCHMARK(BM_ClampForceModel_as_run_step);
+BENCHMARK(BM_BridgeJointModel_as_run_step);
 
 // The whole estimator tick (4 joints, decimation, gates, snapshot) at 1 kHz.
 

@@ -3,7 +3,7 @@
 // and the TimeDomainPassivity calls of one tick alone, with the combined observer and with the
 // per-direction observers the sweep runs on the sensorless estimate (with and without an
 // estimate tolerance); beside them, in the same run, one step of the 2016 clamp model through the
-// bridge's ClampForceModel (the yaw2016 preset), the reference docs/performance.md divides by.
+// bridge's BridgeJointModel (the yaw2016 preset), the reference docs/performance.md divides by.
 #include <benchmark/benchmark.h>
 
 #include <endohaptics/estimation/bridge_force_models.hpp>
@@ -136,12 +136,12 @@ void BM_TimeDomainPassivity_tick_per_direction_tolerant(benchmark::State& st) {
 BENCHMARK(BM_TimeDomainPassivity_tick_per_direction_tolerant);
 
 // The reference: one step (advance + force) of the 2016 clamp model (appendix C yaw) through
-// the bridge's ClampForceModel, as the yaw2016 preset runs it.
-void BM_Passivity_reference_ClampForceModel_yaw2016_step(benchmark::State& st) {
+// the bridge's BridgeJointModel, as the yaw2016 preset runs it.
+void BM_Passivity_reference_BridgeJointModel_yaw2016_step(benchmark::State& st) {
   namespace est = endohaptics::estimation;
-  joint_signal_sweep::run_joint_steps(st, est::ClampForceModel(est::models_2016().clamp1));
+  joint_signal_sweep::run_joint_steps(st, est::BridgeJointModel(est::models_2016().clamp1));
 }
-BENCHMARK(BM_Passivity_reference_ClampForceModel_yaw2016_step);
+BENCHMARK(BM_Passivity_reference_BridgeJointModel_yaw2016_step);
 
 }  // namespace
 

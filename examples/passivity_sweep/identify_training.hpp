@@ -3,7 +3,7 @@
 // presses than the sweep's), then endohaptics-identify's workflow (workflow::run_identify) on
 // their logs: a Hammerstein-Wiener model of order 2, inputs the reported current and velocity
 // of clamp 1, output its true force; loaded as the bridge loads a clamp model file
-// (files::clamp_force_model). The sweep's own cases are never seen. Allocates, writes files,
+// (files::bridge_joint_model). The sweep's own cases are never seen. Allocates, writes files,
 // throws endohaptics::Error.
 #pragma once
 
@@ -39,7 +39,7 @@ namespace workflow = endohaptics::workflow;
 
 //! Writes the training logs into `dir` (created), identifies, writes the model file
 //! `dir`/clamp_model.json and returns the model as the bridge runs it.
-[[nodiscard]] inline endohaptics::estimation::ClampForceModel identify_sweep_clamp_model(
+[[nodiscard]] inline endohaptics::estimation::BridgeJointModel identify_sweep_clamp_model(
     const std::filesystem::path& dir) {
   std::filesystem::create_directories(dir);
   std::vector<std::string> logs;
@@ -53,7 +53,7 @@ namespace workflow = endohaptics::workflow;
   workflow::check_scores(report);
   const auto model_path = dir / "clamp_model.json";
   endohaptics::files::save_model(model_path, report.model);
-  return endohaptics::files::clamp_force_model(report.model, "identified clamp model");
+  return endohaptics::files::bridge_joint_model(report.model, "identified clamp model");
 }
 
 }  // namespace sweep_identify

@@ -92,7 +92,7 @@ int main(int argc, char** argv) {
     if (source_name == "identified") {
       src.source = sim::ForceSource::identified;
       if (!model_path.empty()) {
-        src.clamp_model = endohaptics::files::load_clamp_force_model(model_path);
+        src.clamp_model = endohaptics::files::load_bridge_joint_model(model_path);
       } else {
         const std::filesystem::path dir =
             training_dir.empty()

@@ -20,8 +20,8 @@ namespace tp = endohaptics::teleop;
 
 //! Where the force comes from: the source and, for identified, the clamp model.
 struct Source {
-  sim::ForceSource source = sim::ForceSource::sensor;                   //!< what is fed back
-  std::optional<endohaptics::estimation::ClampForceModel> clamp_model;  //!< identified's
+  sim::ForceSource source = sim::ForceSource::sensor;                    //!< what is fed back
+  std::optional<endohaptics::estimation::BridgeJointModel> clamp_model;  //!< identified's
   std::optional<tp::PassivityObserver> observer;  //!< replaces the sweep's choice when given
   std::optional<double> tolerance;                //!< N on the clamps, replaces the sweep's
   std::optional<bool> return_needs_motion;        //!< replaces the sweep's choice when given

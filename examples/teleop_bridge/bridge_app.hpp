@@ -148,7 +148,7 @@ int run_loop(Transport& transport, Device& device, endohaptics::SteadyClock& clo
              std::uint16_t port, Observer& observer) {
   // The 2016 models run at their own rates (rate::Decimate) on a 1 kHz grid; PacedEstimator
   // keeps that grid whatever the loop rate (--rate max) and through lost packets. The clamp model
-  // file may be of any kind the library runs (estimation::ClampForceModel).
+  // file may be of any kind the library runs (estimation::BridgeJointModel).
   endohaptics::workflow::BridgeAssembly bridge(transport, device, clock, cfg, loop_settings(opt));
   auto& loop = bridge.loop();
   const auto& paced = bridge.paced();

@@ -97,8 +97,8 @@ struct Factory<est::IdentifiedHammersteinWiener<double>> {
   }
 };
 template <>
-struct Factory<est::ClampForceModel> {
-  static est::ClampForceModel make() {
+struct Factory<est::BridgeJointModel> {
+  static est::BridgeJointModel make() {
     return est::preset_force_models(est::ClampPreset::clamp2016_as_run).clamp1;
   }
 };
@@ -143,7 +143,7 @@ std::vector<typename M::ScalarType> run(
   est::StallHold<double>, est::StallHold<float>, est::PushLoadObserver<double>, \
       est::BidirectionalLoadObserver<double>, est::ClampModel2016<double>,      \
       est::RollModel2016<double>, AnyClamp, est::Clamp2016AsRun<double>,        \
-      est::Clamp2016AsRun<float>, est::IdentifiedHammersteinWiener<double>, est::ClampForceModel
+      est::Clamp2016AsRun<float>, est::IdentifiedHammersteinWiener<double>, est::BridgeJointModel
 
 TEST_CASE_TEMPLATE("joint force models: a non-finite signal is refused, the state untouched", M,
                    ENDOHAPTICS_JOINT_FORCE_MODELS) {

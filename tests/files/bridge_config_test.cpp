@@ -353,7 +353,7 @@ TEST_CASE("estimator.clamp_model loads an identified model file, relative to the
   const files::BridgeConfig c = files::load_bridge_config(dir.path() / "bridge.json");
   CHECK(c.clamp_model == dir.path() / "clamp.json");
   const auto models =
-      endohaptics::estimation::bridge_force_models(files::load_clamp_force_model(c.clamp_model));
+      endohaptics::estimation::bridge_force_models(files::load_bridge_joint_model(c.clamp_model));
   REQUIRE(models.clamp1.get<endohaptics::estimation::IdentifiedHammersteinWiener<double>>() !=
           nullptr);
   REQUIRE(models.clamp2.get<endohaptics::estimation::IdentifiedHammersteinWiener<double>>() !=
@@ -411,7 +411,7 @@ TEST_CASE("estimator.clamp_model of a lower order runs in the bridge's 6 states,
   file.output_nonlinearity = {{}};
   files::save_model(dir.path() / "clamp.json", file);
   write_text(dir.path() / "bridge.json", R"({"estimator": {"clamp_model": "clamp.json"}})");
-  const auto models = endohaptics::estimation::bridge_force_models(files::load_clamp_force_model(
+  const auto models = endohaptics::estimation::bridge_force_models(files::load_bridge_joint_model(
       files::load_bridge_config(dir.path() / "bridge.json").clamp_model));
   REQUIRE(models.clamp1.get<endohaptics::estimation::IdentifiedHammersteinWiener<double>>() !=
           nullptr);

@@ -446,7 +446,7 @@ TEST_CASE("bridge: a model file of each kind configures the clamps and runs in t
                std::string(R"({"estimator": {"clamp_model": ")") + name + "\"}}");
     const files::BridgeConfig config = files::load_bridge_config(dir.path() / "bridge.json");
     const est::BridgeForceModels models =
-        est::bridge_force_models(files::load_clamp_force_model(config.clamp_model));
+        est::bridge_force_models(files::load_bridge_joint_model(config.clamp_model));
     CHECK(models.clamp1.index() != 0);
     CHECK(models.clamp1.get<est::ClampModel2016<double>>() == nullptr);
     auto settings = est::bridge_estimator_settings(config.estimator, models);
@@ -486,9 +486,9 @@ TEST_CASE("bridge: a model file of each kind configures the clamps and runs in t
     estimator.reset();
     CHECK(estimator.joint_model<est::Motor::clamp1>().state() == models.clamp1.state());
     // A snapshot restores the model exactly (a failed tick leaves the estimator untouched).
-    est::ClampForceModel model = models.clamp1;
+    est::BridgeJointModel model = models.clamp1;
     for (int k = 0; k < 30; ++k) (void)model.advance({0.001 * k, 0.1, -0.02 * k, 0.0});
-    const est::ClampForceModel::State saved = model.state();
+    const est::BridgeJointModel::State saved = model.state();
     (void)model.advance({0.05, 0.1, -0.7, 0.0});
     model.reset(saved);
     CHECK(model.state() == saved);

@@ -66,10 +66,6 @@ using BridgeJointModel =
 
 static_assert(JointForceModel<BridgeJointModel>);
 
-//! The clamps' slot: the same type as every slot (kept as the name the clamp presets and the
-//! passivity sweep use).
-using ClampForceModel = BridgeJointModel;
-
 //! The models the bridge's ForceEstimator runs: a BridgeJointModel per joint.
 using BridgeForceModels = ForceModels<BridgeJointModel, BridgeJointModel, BridgeJointModel>;
 //! The bridge's ForceEstimator: the 2016 rates (rate::Decimate) and BridgeForceModels.

@@ -42,14 +42,14 @@ enum class ClampPreset : std::uint8_t {
       Error("unknown clamp preset '" + std::string(name) + "' (valid: yaw2016, clamp2016-as-run)"));
 }
 
-//! The models of `preset` as the bridge runs them (BridgeForceModels, its ClampForceModel on
+//! The models of `preset` as the bridge runs them (BridgeForceModels, its BridgeJointModel on
 //! both clamps). yaw2016: models_2016() (clamp 1 with the 0.21 A dead zone of table 5.2's yaw
 //! row, clamp 2 with the 0.20 A of its clamp row). clamp2016-as-run: Clamp2016AsRun on both
 //! clamps with input sign -1 (the code's clamp motor 1; the code's + on motor 4 is the mirrored
 //! clamp 2 setpoint, which ForceEstimator's per-joint convention already carries).
 [[nodiscard]] inline BridgeForceModels preset_force_models(ClampPreset preset) {
   if (preset == ClampPreset::clamp2016_as_run) {
-    return bridge_force_models(ClampForceModel(Clamp2016AsRun<double>{}));
+    return bridge_force_models(BridgeJointModel(Clamp2016AsRun<double>{}));
   }
   return bridge_force_models();
 }

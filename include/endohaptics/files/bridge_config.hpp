@@ -354,7 +354,7 @@ void with_prefix(std::string_view source, std::string_view key, F&& validate) {
   }
   if (!name.empty()) {
     const ModelFile file = load_model(config.clamp_model);
-    return {estimation::bridge_force_models(clamp_force_model(file, "model file " + name)),
+    return {estimation::bridge_force_models(bridge_joint_model(file, "model file " + name)),
             "clamp model " + std::string(to_string(file.kind())) + " (" + name +
                 ") on both clamps, roll preset:roll2016, pitch preset:pitch2016"};
   }

@@ -27,9 +27,9 @@ namespace endohaptics::files {
 //! `file` as the bridge's clamp model; `where` names it in messages ("model file X"). Throws
 //! Error when it is of another size, unstable, holds a number beyond 1e6 or refers its current
 //! to the command (the sbRIO protocol does not carry it).
-[[nodiscard]] inline estimation::ClampForceModel clamp_force_model(const ModelFile& file,
-                                                                   const std::string& where) {
-  using estimation::ClampForceModel;
+[[nodiscard]] inline estimation::BridgeJointModel bridge_joint_model(const ModelFile& file,
+                                                                     const std::string& where) {
+  using estimation::BridgeJointModel;
   const auto joint_model = [&] {
     if (file.current_reference) {
       ENDOHAPTICS_THROW(Error(  // with_context below adds the file's name
@@ -42,14 +42,14 @@ namespace endohaptics::files {
         [](const auto& p) {
           using P = std::decay_t<decltype(p)>;
           if constexpr (std::is_same_v<P, estimation::StallHoldParameters<double>>) {
-            return ClampForceModel(estimation::StallHold<double>(p));
+            return BridgeJointModel(estimation::StallHold<double>(p));
           } else if constexpr (std::is_same_v<P, estimation::PushLoadObserverParameters<double>>) {
-            return ClampForceModel(estimation::PushLoadObserver<double>(p));
+            return BridgeJointModel(estimation::PushLoadObserver<double>(p));
           } else if constexpr (std::is_same_v<
                                    P, estimation::BidirectionalLoadObserverParameters<double>>) {
-            return ClampForceModel(estimation::BidirectionalLoadObserver<double>(p));
+            return BridgeJointModel(estimation::BidirectionalLoadObserver<double>(p));
           } else {
-            return ClampForceModel(estimation::models_2016<double>().clamp1);  // not reached
+            return BridgeJointModel(estimation::models_2016<double>().clamp1);  // not reached
           }
         },
         file.parameters);
@@ -92,7 +92,7 @@ namespace endohaptics::files {
     if (six.state_space.state_size() < estimation::bridge_clamp_states) {
       six.state_space = model::embed_states(six.state_space, estimation::bridge_clamp_states);
     }
-    return ClampForceModel(estimation::IdentifiedHammersteinWiener<double>(
+    return BridgeJointModel(estimation::IdentifiedHammersteinWiener<double>(
         hammerstein_wiener_from<estimation::bridge_clamp_states, 2, 1>(six, where),
         model::FreeMotionThreshold<double>(file.free_motion_threshold)));
   };
@@ -100,10 +100,10 @@ namespace endohaptics::files {
                                : hammerstein_wiener();
 }
 
-//! The model file at `path` (load_model) as the bridge's clamp model (clamp_force_model).
-[[nodiscard]] inline estimation::ClampForceModel load_clamp_force_model(
+//! The model file at `path` (load_model) as the bridge's clamp model (bridge_joint_model).
+[[nodiscard]] inline estimation::BridgeJointModel load_bridge_joint_model(
     const std::filesystem::path& path) {
-  return clamp_force_model(load_model(path), "model file " + path.string());
+  return bridge_joint_model(load_model(path), "model file " + path.string());
 }
 
 }  // namespace endohaptics::files

@@ -230,7 +230,7 @@ struct BridgeModelSet {
 };
 
 //! The models of `set` (its motors fed back per `fed_back`, force_feedback_motors): a motor's
-//! model file as clamp_force_model runs it (any motor: an identified model gives the force it was
+//! model file as bridge_joint_model runs it (any motor: an identified model gives the force it was
 //! fitted to), or its preset (a clamp: preset:yaw2016 or preset:clamp2016-as-run; roll and pitch:
 //! preset:roll2016, preset:pitch2016). Refuses a set that misses a fed-back motor (naming them
 //! all) and an unknown preset. Throws Error "<set>: models.<motor>: ...".
@@ -285,7 +285,7 @@ struct BridgeModelSet {
     } else {
       try {
         const ModelFile file = load_model(entry);
-        slot = clamp_force_model(file, "model file " + entry);
+        slot = bridge_joint_model(file, "model file " + entry);
         said = std::string(to_string(file.kind())) + " (" + entry + ")";
       } catch (const Error& e) {
         detail::model_set::fail(where, e.what());

@@ -95,7 +95,7 @@ struct ClosedLoopConfig {
   ForceSource force_source = ForceSource::sensor;  //!< what the loop renders
   //! ForceSource::identified: the clamp model both clamps run (as the bridge runs a clamp model
   //! file); required then, ignored otherwise.
-  std::optional<estimation::ClampForceModel> clamp_model{};
+  std::optional<estimation::BridgeJointModel> clamp_model{};
 
   //! Throws Error naming the field and value.
   void validate() const {
@@ -198,7 +198,7 @@ class LoopForceEstimator {
   //! `newest`: the sensor's tag (ForceSource::sensor). Throws Error on a model the bridge's
   //! estimator refuses.
   LoopForceEstimator(const estimation::MotorVector* newest, ForceSource source,
-                     const std::optional<estimation::ClampForceModel>& clamp, Clock& clock)
+                     const std::optional<estimation::BridgeJointModel>& clamp, Clock& clock)
       : sensor_{newest} {
     if (source == ForceSource::sensor) return;
     const auto models = source == ForceSource::identified

@@ -61,7 +61,7 @@ inline constexpr double sensorless_gain_recovery_rate = 0.05;
 [[nodiscard]] inline ClosedLoopConfig press_scenario(
     int round_trip_ms, double loss, ContactKind contact, teleop::PassivityMode mode,
     ForceSource source = ForceSource::sensor,
-    const std::optional<estimation::ClampForceModel>& clamp_model = std::nullopt) {
+    const std::optional<estimation::BridgeJointModel>& clamp_model = std::nullopt) {
   ClosedLoopConfig c;
   c.force_source = source;
   c.clamp_model = clamp_model;

@@ -1,7 +1,7 @@
 //! @file
 //! The bridge assembled from its configuration (files/bridge_config.hpp) and its loop settings
 //! (--rate, --passivity, --max-answer-lag): the force models (the instrument's model set, or the
-//! clamp model file, as estimation::ClampForceModel), the 2016 force estimator paced at 1 kHz, the
+//! clamp model file, as estimation::BridgeJointModel), the 2016 force estimator paced at 1 kHz, the
 //! cylindrical mapping (eqs. 5.8/5.9) and the TeleopLoop over any transport, device and clock.
 //! Rates in Hz, times in s. Configuration time: throws endohaptics::Error; the loop it holds is the
 //! real-time part.
