@@ -40,7 +40,7 @@ constexpr double max_drift = sim::PressCriteria{}.max_drift;
 sim::ClosedLoopConfig scenario(
     int ms, double loss, sim::ContactKind contact, tp::PassivityMode mode,
     sim::ForceSource source = sim::ForceSource::sensor,
-    const std::optional<endohaptics::estimation::ClampForceModel>& model = std::nullopt) {
+    const std::optional<endohaptics::estimation::BridgeJointModel>& model = std::nullopt) {
   return sim::press_scenario(ms, loss, contact, mode, source, model);
 }
 
@@ -73,8 +73,8 @@ void check_row(int ms) {
 
 // The clamp model identified on the training runs, once per test process (its own directory:
 // CTest runs test cases in parallel processes).
-const endohaptics::estimation::ClampForceModel& identified_model() {
-  static const endohaptics::estimation::ClampForceModel model = [] {
+const endohaptics::estimation::BridgeJointModel& identified_model() {
+  static const endohaptics::estimation::BridgeJointModel model = [] {
     const auto dir = std::filesystem::temp_directory_path() /
                      ("endohaptics-sweep-test-" + std::to_string(::getpid()));
     auto m = sweep_identify::identify_sweep_clamp_model(dir);
@@ -84,15 +84,20 @@ const endohaptics::estimation::ClampForceModel& identified_model() {
   return model;
 }
 
+// One case of the sweep with the identified model and TDPA.
+sim::PressReport identified_with_tdpa(int ms, double loss, sim::ContactKind contact) {
+  return run(scenario(ms, loss, contact, tp::PassivityMode::tdpa, sim::ForceSource::identified,
+                      identified_model()),
+             seconds_with);
+}
+
 // Every setting of one round trip with the identified model and TDPA: every criterion of the
 // sweep, the felt / true hold force included up to 100 ms.
 void check_identified_row(int ms) {
   for (const double loss : {0.0, 0.1}) {
     for (const auto contact : {sim::ContactKind::soft_tissue, sim::ContactKind::stiff_stop}) {
       CAPTURE(name(ms, loss, contact));
-      const sim::PressReport r = run(scenario(ms, loss, contact, tp::PassivityMode::tdpa,
-                                              sim::ForceSource::identified, identified_model()),
-                                     seconds_with);
+      const sim::PressReport r = identified_with_tdpa(ms, loss, contact);
       CAPTURE(r.felt_ratio());
       CAPTURE(r.decay_amplitude);
       CAPTURE(r.hold_force);
@@ -166,9 +171,7 @@ TEST_CASE("passivity sweep: identified model with TDPA passive in every case, 0 
     for (const double loss : {0.0, 0.1}) {
       for (const auto contact : {sim::ContactKind::soft_tissue, sim::ContactKind::stiff_stop}) {
         CAPTURE(name(ms, loss, contact));
-        const sim::PressReport r = run(scenario(ms, loss, contact, tp::PassivityMode::tdpa,
-                                                sim::ForceSource::identified, identified_model()),
-                                       seconds_with);
+        const sim::PressReport r = identified_with_tdpa(ms, loss, contact);
         REQUIRE(r.contact);
         CHECK(r.min_energy > -epsilon);
         CHECK(r.max_force < 3.0);

@@ -120,7 +120,7 @@ class SbrioEmulator {
   //! Waits up to `timeout` for a setpoint packet, runs the rig up to the clock's now (tripping the
   //! watchdog on the way if due), applies the packet and answers it with the rig's state.
   [[nodiscard]] PollEvent poll(std::chrono::nanoseconds timeout) noexcept {
-    return poll(timeout, [](std::chrono::nanoseconds, const auto&, const Rig&) noexcept {});
+    return poll(timeout, NoSampler{});
   }
 
   //! poll(timeout), and with `EmulatorConfig::sample_period` > 0 the rig is stopped at each grid
@@ -171,7 +171,7 @@ class SbrioEmulator {
 
   //! Runs the rig up to `now` without receiving (e.g. between polls in a test).
   void advance_to(std::chrono::nanoseconds now) noexcept {
-    auto none = [](std::chrono::nanoseconds, const auto&, const Rig&) noexcept {};
+    NoSampler none;
     advance_to(now, none);
   }
 
@@ -202,6 +202,12 @@ class SbrioEmulator {
   [[nodiscard]] std::chrono::nanoseconds time() const noexcept { return last_time_; }
 
  private:
+  // The sampler of the calls without one.
+  struct NoSampler {
+    void operator()(std::chrono::nanoseconds, const typename Codec::Setpoint&,
+                    const Rig&) const noexcept {}
+  };
+
   static void count_rejection(EmulatorCounters& c, protocol::CodecStatus status) noexcept {
     ++c.rejected;
     if (status == protocol::CodecStatus::mask_out_of_range) {
