@@ -129,8 +129,9 @@ case $scenario in
   identified)
     # The demo's pipeline (examples/demo.sh), 6 s per run: the models identified on the emulator
     # must render the forces they estimate. Regression bounds below what the demo reaches (clamp 1
-    # fit 71.8-77.6 %, correlation 0.982-0.986 over 5 runs of 10 s; the issue's target, 85 %, is
-    # not met, docs/identification_results.md) for a loaded CI machine.
+    # fit 71.4-74.0 %, correlation 0.975-0.978 over 5 runs of 10 s; the target, 85 %, is not met,
+    # docs/identification_results.md) for a loaded CI machine; free motion as the demo reaches it
+    # (0.000-0.005 N RMS), within the 0.05 N goal.
     bash "$(dirname "${BASH_SOURCE[0]}")/../../examples/demo.sh" "$bin" "$work/demo" 6 \
       >"$work/demo.out" 2>&1 || fail "demo.sh exited with $?: $(cat "$work/demo.out")"
     cat "$work/demo.out"
@@ -150,8 +151,9 @@ case $scenario in
     awk -v c="$dcorr" 'BEGIN { exit !(c >= 0.9) }' ||
       fail "50 ms round trip, TDPA: correlation $dcorr (>= 0.9 needed)"
     # Every rendered joint identified and scored: roll, pitch, clamp 1, clamp 2. Roll's bound is
-    # loose: its estimate varies most between runs (correlation 0.77-0.96 over 6 demo runs: the
-    # joint sticks while the fed-back hand swings, docs/identification_results.md).
+    # loose: its estimate varies most between runs (correlation 0.905-0.963 over 5 demo runs,
+    # 0.773 in one run before the free-motion threshold: the joint sticks while the fed-back hand
+    # swings, docs/identification_results.md).
     for joint in roll pitch clamp1 clamp2; do
       jline=$(grep "^identified, $joint: fit " "$work/demo.out" || true)
       jcorr=$(sed -n 's/.*correlation \([-0-9.]*\),.*/\1/p' <<<"$jline")
@@ -171,6 +173,9 @@ case $scenario in
       stylus=$(tail -n 1 "$work/demo.out")
       [[ $stylus =~ ^stylus:\ RMSE\ [0-9.]+\ N\ against\ the\ ideal\ force,\ free\ motion\ RMS\ [0-9.]+\ N$ ]] ||
         fail "the demo scores every joint but does not end with the stylus line: $stylus"
+      free=$(sed -n 's/.*free motion RMS \([0-9.]*\) N$/\1/p' <<<"$stylus")
+      awk -v f="$free" 'BEGIN { exit !(f <= 0.05) }' ||
+        fail "free motion: the stylus renders $free N RMS (<= 0.05 N needed)"
       stylus="; $stylus"
     fi
     echo "PASS: identified clamp model: fit $fit %, correlation $corr$stylus"
