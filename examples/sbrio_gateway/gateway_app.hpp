@@ -45,6 +45,8 @@ struct Options {
   std::string rig_name = std::string(protocol::default_rig_name);
   double watchdog_ms = 100.0;
   double max_round_trip_ms = 0.0;
+  double joint_range = protocol::endowrist_joint_range;
+  double max_setpoint_rate = protocol::endowrist_max_joint_rate;
   bool stats = false;
   double duration = 0.0;
 };
@@ -77,6 +79,16 @@ inline void add_options(CLI::App& app, Options& o) {
                  "watchdog)")
       ->check(examples::number_in(0.0, 10000.0))
       ->capture_default_str();
+  app.add_option("--joint-range", o.joint_range,
+                 "rad: every relayed position is kept in [-this, this] on every motor, whatever "
+                 "the console sends (the robot side's own envelope)")
+      ->check(examples::number_in(1e-3, 3.14159))
+      ->capture_default_str();
+  app.add_option("--max-setpoint-rate", o.max_setpoint_rate,
+                 "rad/s: a relayed position moves at most this fast from the one relayed before "
+                 "it (from the sbRIO's measured position after silence)")
+      ->check(examples::number_in(1e-3, 1000.0))
+      ->capture_default_str();
   app.add_flag("--stats", o.stats, "print the counters every second");
   app.add_option("--duration", o.duration, "seconds to run (0: until SIGINT/SIGTERM)")
       ->check(examples::number_in(0.0, 1e7))
@@ -97,6 +109,8 @@ inline int run(const Options& o) {
       endohaptics::workflow::parse_endpoint(o.sbrio, "--sbrio", false);
   transport::GatewayConfig gateway_config;
   gateway_config.watchdog = from_ms(o.watchdog_ms);
+  gateway_config.joint_range = o.joint_range;
+  gateway_config.max_setpoint_rate = o.max_setpoint_rate;
   gateway_config.validate();
   protocol::ResponderConfig session;
   session.rig = protocol::make_rig_id(o.rig_name);
@@ -128,10 +142,10 @@ inline int run(const Options& o) {
   const auto endpoint = network.local_endpoint();
   fmt::print(
       "sbrio-gateway: protocol v2 on {}:{} (rig '{}', keys {}; round trips up to {:.0f} ms) -> "
-      "2016 sbRIO {}:{}; watchdog {} ms\n",
+      "2016 sbRIO {}:{}; watchdog {} ms; setpoints kept in +-{} rad, {} rad/s\n",
       endpoint.address().to_string(), endpoint.port(), o.rig_name, ids,
       std::chrono::duration<double, std::milli>(session.max_round_trip).count(), sbrio_host,
-      sbrio_port, o.watchdog_ms);
+      sbrio_port, o.watchdog_ms, o.joint_range, o.max_setpoint_rate);
 
   const auto start = clock.now();
   auto next_report = start + std::chrono::seconds(1);
@@ -141,10 +155,11 @@ inline int run(const Options& o) {
     fmt::print(
         "sbrio-gateway: {}{} setpoints relayed, {} states returned, {} disabled setpoints sent "
         "on silence, {} sbRIO datagrams refused, {} unanswered, {} watchdog trips, {} "
-        "transport errors (v2 {}, sbRIO {}); v2 refused {}\n",
+        "transport errors (v2 {}, sbRIO {}); v2 refused {}; {} relayed setpoints moved into the "
+        "envelope\n",
         prefix, c.relayed, c.returned, c.disabled, c.sbrio_refused, c.unanswered, c.watchdog_trips,
         c.network_errors + c.sbrio_errors, c.network_errors, c.sbrio_errors,
-        secure.counters().rejected());
+        secure.counters().rejected(), c.limited);
   };
   // 1 ms receives at most: a signal ends the run well within 1 s.
   while (!g_stop.load()) {

@@ -213,6 +213,12 @@ def main():
     wrong_size = number(v2_line, "wrong size")
     if relayed == 0 or returned == 0:
         fail(f"nothing relayed: {relay_line}")
+    # The gateway's own envelope (joint range, rate) never touches a bridge within the same limits.
+    final_line = [line for line in gw_text.splitlines() if "done after" in line][-1:]
+    moved = number(final_line[0] if final_line else gw_text,
+                   "relayed setpoints moved into the envelope")
+    if moved != 0:
+        fail(f"the gateway moved {moved} of the bridge's setpoints into its envelope: {final_line}")
     if relayed > len(setpoints):
         fail(f"the gateway relayed {relayed} setpoints, the bridge sent {len(setpoints)}")
     if forged < injected["forged"]:

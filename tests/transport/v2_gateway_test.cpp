@@ -2,9 +2,12 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "alloc_counter.hpp"
@@ -43,10 +46,11 @@ Legacy::SetpointBytes setpoint_bytes(std::uint8_t mask, double position = 0.5) {
 }
 
 // The 2016 sbRIO on the other end of the point-to-point link: records every setpoint it is sent
-// and answers each with a state (positions 1, 2, 3, 4 rad; active bits = the enable bits), or
-// with `junk` bytes, or not at all.
+// and answers each with a state (positions `measured`; active bits = the enable bits), or with
+// `junk` bytes, or not at all.
 struct FakeSbrio {
   std::vector<Legacy::Setpoint> received;
+  Legacy::State::Vector measured{0.4, -0.4, 0.2, 0.1};  // rad
   bool answer = true;
   bool junk = false;
 };
@@ -64,7 +68,7 @@ struct SbrioResponder {
       return;
     }
     Legacy::State state;
-    state.position << 1.0, 2.0, 3.0, 4.0;
+    state.position = sbrio->measured;
     state.active_mask = s.enable_mask;
     Legacy::StateBytes bytes{};
     (void)Legacy::encode_state(state, bytes);
@@ -87,6 +91,15 @@ protocol::ResponderConfig robot_config() {
   return c;
 }
 
+// The gateway's envelope wide open (almost the whole circle, 1000 rad/s): for the tests of
+// relaying; the envelope's own tests take the defaults.
+transport::GatewayConfig open_envelope() {
+  transport::GatewayConfig c;
+  c.joint_range = 3.14;
+  c.max_setpoint_rate = 1000.0;
+  return c;
+}
+
 struct Rig {
   FakeSbrio sbrio;
   Link network;
@@ -94,9 +107,12 @@ struct Rig {
   Console console{network.a(), protocol::SecureInitiator<4>(key(), console_config())};
   RobotSide robot{network.b(), protocol::SecureResponder<4>(key(), robot_config())};
   SbrioLink link{SbrioResponder{&sbrio}};
-  Gateway gateway{robot, link, clock, transport::GatewayConfig{}};
+  Gateway gateway;
 
-  Rig() { sbrio.received.reserve(20000); }
+  explicit Rig(const transport::GatewayConfig& config = open_envelope())
+      : gateway(robot, link, clock, config) {
+    sbrio.received.reserve(20000);
+  }
 
   // The handshake: the console's first send is the HELLO, the gateway's step answers it.
   void connect() {
@@ -207,7 +223,7 @@ TEST_CASE("V2Gateway: silence sends the disabled setpoint once a period, held wh
   REQUIRE(rig.exchange(0x0F));
   CHECK_FALSE(rig.gateway.silent());
   // The watchdog (100 ms) runs out: from then on one disabled setpoint per 1 ms period, at the
-  // positions the sbRIO measured last (1, 2, 3, 4 rad), not the commanded 0.5 rad.
+  // positions the sbRIO measured last (0.4, -0.4, 0.2, 0.1 rad), not the commanded ones.
   rig.clock.advance(99ms);
   (void)rig.gateway.step(0ns);
   CHECK(rig.sbrio.received.size() == 1);
@@ -224,8 +240,8 @@ TEST_CASE("V2Gateway: silence sends the disabled setpoint once a period, held wh
   REQUIRE(rig.sbrio.received.size() == 11);
   for (std::size_t i = 1; i < rig.sbrio.received.size(); ++i) {
     CHECK(rig.sbrio.received[i].enable_mask == 0);
-    CHECK(rig.sbrio.received[i].position[0] == doctest::Approx(1.0));
-    CHECK(rig.sbrio.received[i].position[3] == doctest::Approx(4.0));
+    CHECK(rig.sbrio.received[i].position[0] == doctest::Approx(0.4));
+    CHECK(rig.sbrio.received[i].position[3] == doctest::Approx(0.1));
   }
   // A late step sends one, not a burst.
   rig.clock.advance(50ms);
@@ -284,6 +300,141 @@ TEST_CASE("V2Gateway: a step allocates nothing") {
   CHECK(rig.gateway.counters().disabled > 0);
 }
 
+TEST_CASE("V2Gateway: relayed setpoints stay in the joint range and the rate limit") {
+  // +-1.028 rad, 4 rad/s: 4 mrad per millisecond since the last setpoint, plus one period's 4
+  // mrad of slack for the console's timing.
+  Rig rig(transport::GatewayConfig{});
+  rig.connect();  // the sbRIO answered the disabled setpoints: 0.4, -0.4, ...
+  rig.sbrio.received.clear();
+  // The first setpoint moves one period's step (and the slack) from where the sbRIO measured the
+  // tool.
+  CHECK(rig.exchange(0x0F, 0.5));  // 0.5, -0.5, 0.25, 0.125
+  REQUIRE(rig.sbrio.received.size() == 1);
+  const auto first = rig.sbrio.received[0].position;
+  CHECK(first[0] == doctest::Approx(0.408).epsilon(1e-6));
+  CHECK(first[1] == doctest::Approx(-0.408).epsilon(1e-6));
+  CHECK(first[2] == doctest::Approx(0.208).epsilon(1e-6));
+  CHECK(first[3] == doctest::Approx(0.108).epsilon(1e-6));
+  CHECK(rig.sbrio.received[0].enable_mask == 0x0F);  // the rest of the setpoint untouched
+  CHECK(rig.gateway.counters().limited == 1);
+  // 1 ms apart: 8 mrad each, motor 0's target reached at the 12th (0.408 + 11 * 8 mrad = 0.496
+  // short of 0.5), then relayed as sent: 11 more limited.
+  for (int i = 0; i < 30; ++i) {
+    rig.clock.advance(1ms);
+    CHECK(rig.exchange(0x0F, 0.5));
+  }
+  CHECK(rig.sbrio.received.back().position[0] == doctest::Approx(0.5).epsilon(1e-6));
+  CHECK(rig.sbrio.received.back().position[3] == doctest::Approx(0.125).epsilon(1e-6));
+  const auto limited = rig.gateway.counters().limited;
+  CHECK(limited == 12);
+  rig.clock.advance(1ms);
+  CHECK(rig.exchange(0x0F, 0.5));
+  CHECK(rig.gateway.counters().limited == limited);
+  // Three setpoints at once (a burst): each may still move the slack's step, no more.
+  for (int i = 0; i < 3; ++i) CHECK(rig.exchange(0x0F, 0.4));
+  CHECK(rig.sbrio.received.back().position[0] == doctest::Approx(0.488).epsilon(1e-6));
+  // Beyond the range, however slowly: never past 1.028 rad.
+  for (int i = 0; i < 400; ++i) {
+    rig.clock.advance(1ms);
+    (void)rig.exchange(0x0F, 50.0);
+    REQUIRE(rig.sbrio.received.back().position.maxCoeff() <= 1.028 + 1e-6);
+  }
+  CHECK(rig.sbrio.received.back().position[0] == doctest::Approx(1.028).epsilon(1e-6));
+  // After silence the step is taken from the measured position again, not the last setpoint.
+  rig.clock.advance(200ms);
+  (void)rig.gateway.step(0ns);  // the disabled setpoint; the sbRIO answers 0.4, -0.4, ...
+  REQUIRE(rig.gateway.silent());
+  CHECK(rig.exchange(0x0F, -1.0));  // -1, +1, 0.25, 0.125
+  CHECK(rig.sbrio.received.back().position[0] == doctest::Approx(0.392).epsilon(1e-6));
+  CHECK(rig.sbrio.received.back().position[1] == doctest::Approx(-0.392).epsilon(1e-6));
+  // A tool measured outside the range (moved by hand while released, a narrower range than the
+  // instrument's) is brought back at the rate, not by a jump to the range's edge.
+  rig.sbrio.measured << 1.2, -1.2, 0.2, 0.1;
+  rig.clock.advance(200ms);
+  (void)rig.gateway.step(0ns);
+  CHECK(rig.exchange(0x0F, 0.0));
+  CHECK(rig.sbrio.received.back().position[0] == doctest::Approx(1.192).epsilon(1e-6));
+  CHECK(rig.sbrio.received.back().position[1] == doctest::Approx(-1.192).epsilon(1e-6));
+  rig.clock.advance(1ms);
+  CHECK(rig.exchange(0x0F, 2.0));  // further out: held where it is
+  CHECK(rig.sbrio.received.back().position[0] == doctest::Approx(1.192).epsilon(1e-6));
+}
+
+TEST_CASE("V2Gateway: property: no setpoint sequence leaves the envelope") {
+  // Random and hostile setpoints (huge, sign flips, the largest floats, small steps) at random
+  // times, with silences and a sbRIO that measures anywhere, also outside the range: every
+  // relayed position lies in the range (or, from a tool measured outside it, no further out than
+  // the tool), within the rate times its time since the one relayed before
+  // plus one period's slack, for a motor enabled in that one, else within two periods' step of
+  // where the sbRIO measured it, to the float wire's rounding.
+  transport::GatewayConfig config;
+  config.joint_range = 0.8;
+  config.max_setpoint_rate = 3.0;
+  Rig rig(config);
+  rig.connect();
+  std::uint64_t state = 20161220;
+  const auto next = [&state] {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<double>(state >> 11) / 9007199254740992.0;  // [0, 1)
+  };
+  const double wire = 1e-6;  // float32 rounding of positions near 1 rad
+  Legacy::Setpoint::Vector previous = Legacy::Setpoint::Vector::Zero();
+  bool have_previous = false;
+  std::uint8_t previous_mask = 0;
+  double outside = rig.sbrio.measured.cwiseAbs().maxCoeff();  // where the tool was measured
+  auto previous_time = rig.clock.now();
+  std::uint64_t relayed = rig.gateway.counters().relayed;
+  for (int i = 0; i < 20000; ++i) {
+    if (next() < 0.001) {
+      rig.clock.advance(150ms);  // silence: the watchdog trips
+      if (next() < 0.5) rig.sbrio.measured.setConstant((next() - 0.5) * 3.0);
+      (void)rig.gateway.step(0ns);
+      have_previous = false;
+      outside = rig.sbrio.measured.cwiseAbs().maxCoeff();
+    } else {
+      rig.clock.advance(std::chrono::microseconds(static_cast<int>(next() * 3000)));
+    }
+    Legacy::Setpoint s;
+    for (int m = 0; m < 4; ++m) {
+      const double kind = next();
+      s.position[m] = kind < 0.05  ? 3.0e38 * (next() < 0.5 ? -1 : 1)
+                      : kind < 0.5 ? (next() - 0.5) * 20.0
+                                   : previous[m] + (next() - 0.5) * 0.02;
+    }
+    s.enable_mask = static_cast<std::uint8_t>(next() * 16);
+    Legacy::SetpointBytes b{};
+    REQUIRE(Legacy::encode_setpoint(s, b) == protocol::CodecStatus::ok);
+    REQUIRE(rig.console.send(b) == TransportStatus::ok);
+    (void)rig.gateway.step(0ns);
+    std::array<std::byte, Legacy::state_packet_size + 1> back{};
+    (void)rig.console.receive(back, 0ns);
+    if (rig.gateway.counters().relayed != relayed) {
+      relayed = rig.gateway.counters().relayed;
+      const auto& r = rig.sbrio.received.back();
+      REQUIRE(r.position.cwiseAbs().maxCoeff() <= std::max(config.joint_range, outside) + wire);
+      const auto now = rig.clock.now();
+      // The time since the setpoint before (at most the watchdog) and the period's slack.
+      const double dt =
+          std::clamp(std::chrono::duration<double>(now - previous_time).count(), 0.0, 0.1) + 1e-3;
+      for (int m = 0; m < 4; ++m) {
+        if (have_previous && ((previous_mask >> m) & 1u) != 0) {  // from the setpoint before
+          REQUIRE(std::abs(r.position[m] - previous[m]) <= config.max_setpoint_rate * dt + wire);
+        } else {  // after silence, or released before: a period (and the slack) from where it was
+          REQUIRE(std::abs(r.position[m] - rig.sbrio.measured[m]) <=
+                  config.max_setpoint_rate * 2e-3 + wire);
+        }
+      }
+      previous = r.position;
+      previous_mask = r.enable_mask;
+      previous_time = now;
+      have_previous = true;
+    }
+    rig.sbrio.received.clear();
+  }
+  CHECK(rig.gateway.counters().relayed > 15000);
+  CHECK(rig.gateway.counters().limited > 3000);
+}
+
 TEST_CASE("GatewayConfig: out-of-range timing is refused naming the field") {
   transport::GatewayConfig c;
   CHECK_NOTHROW(c.validate());
@@ -301,6 +452,23 @@ TEST_CASE("GatewayConfig: out-of-range timing is refused naming the field") {
   c = {};
   c.answer_timeout = -1ns;
   CHECK_THROWS_WITH_AS(c.validate(), doctest::Contains("answer_timeout"), endohaptics::Error);
+}
+
+TEST_CASE("GatewayConfig: an envelope outside the physical range is refused naming the field") {
+  for (const double range : {0.0, -1.0, 3.2, std::numeric_limits<double>::quiet_NaN(),
+                             std::numeric_limits<double>::infinity()}) {
+    transport::GatewayConfig c;
+    c.joint_range = range;
+    CHECK_THROWS_WITH_AS(c.validate(), doctest::Contains("joint_range must be in (0, pi] rad"),
+                         endohaptics::Error);
+  }
+  for (const double rate : {0.0, 1001.0, std::numeric_limits<double>::quiet_NaN()}) {
+    transport::GatewayConfig c;
+    c.max_setpoint_rate = rate;
+    CHECK_THROWS_WITH_AS(c.validate(),
+                         doctest::Contains("max_setpoint_rate must be in (0, 1000] rad/s"),
+                         endohaptics::Error);
+  }
 }
 
 }  // namespace transport_v2_gateway_test

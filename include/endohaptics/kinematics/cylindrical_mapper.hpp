@@ -88,8 +88,9 @@ struct CylindricalMapperConfig {
   //! motor_order[m]: the tool joint driven by motor slot m (a permutation).
   std::array<Motor, 4> motor_order = {Motor::roll, Motor::pitch, Motor::clamp1, Motor::clamp2};
   //! rad, per tool joint (index = Motor); assumption: the +-1.028 rad of the 2016 tuning logs.
-  Vector4 lower = Vector4::Constant(Scalar(-1.028));
-  Vector4 upper = Vector4::Constant(Scalar(1.028));  //!< rad, per tool joint
+  Vector4 lower = Vector4::Constant(Scalar(-protocol::endowrist_joint_range));
+  //! rad, per tool joint
+  Vector4 upper = Vector4::Constant(Scalar(protocol::endowrist_joint_range));
   Scalar min_radius = Scalar(1e-3);  //!< m; at r <= min_radius theta is held (undefined at 0)
   //! rad, in [-pi, pi]: theta is reported in (neutral - pi, neutral + pi], and held at this
   //! value until the first position with r > min_radius.

@@ -15,6 +15,15 @@ enum class Motor : std::uint8_t { roll = 0, pitch = 1, clamp1 = 2, clamp2 = 3 };
 //! Motors of one EndoWrist (the 2016 rig drives four of the sbRIO's seven channels).
 inline constexpr int endowrist_motors = 4;
 
+//! rad: every joint of the EndoWrist stays in [-endowrist_joint_range, endowrist_joint_range]
+//! (motor side; the +-1.028 rad of the 2016 tuning logs): the default range of everything that
+//! guards a setpoint (teleop::SafetyConfig, kinematics::CylindricalMapperConfig,
+//! transport::GatewayConfig).
+inline constexpr double endowrist_joint_range = 1.028;
+//! rad/s per joint (motor side): the tool cannot go faster; the default setpoint rate limit
+//! (teleop::SafetyConfig, transport::GatewayConfig).
+inline constexpr double endowrist_max_joint_rate = 4.0;
+
 //! Human-readable name of a motor.
 [[nodiscard]] constexpr std::string_view to_string(Motor motor) noexcept {
   switch (motor) {

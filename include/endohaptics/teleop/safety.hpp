@@ -105,8 +105,9 @@ struct SafetyConfig {
   //! s: with hold_position or zero_force, the motors are released (enable mask 0) once the link
   //! has been lost this long: a lost link never keeps the tool powered indefinitely.
   double max_hold_time = 2.0;
-  double force_ramp_time = 0.5;     //!< s, force scale 0 -> 1 after recovery (and at start)
-  double max_setpoint_rate = 4.0;   //!< rad/s per joint (motor side); the tool cannot go faster
+  double force_ramp_time = 0.5;  //!< s, force scale 0 -> 1 after recovery (and at start)
+  //! rad/s per joint (motor side); the tool cannot go faster
+  double max_setpoint_rate = protocol::endowrist_max_joint_rate;
   double max_stylus_force = 3.0;    //!< N, last guard before the device (Touch peak: 3.3 N)
   std::uint8_t enable_mask = 0x0F;  //!< motors to enable while the link is usable
   //! s: a motor enabled in every setpoint sent for longer than this must be reported active. A
@@ -116,8 +117,9 @@ struct SafetyConfig {
   //! rad, motor order: every setpoint the loop sends lies in [joint_lower, joint_upper],
   //! whatever the stylus, the mapper or the robot's reported state say. Default: the +-1.028 rad
   //! of the 2016 tuning logs (CylindricalMapperConfig's range).
-  JointVector joint_lower = JointVector::Constant(-1.028);
-  JointVector joint_upper = JointVector::Constant(1.028);  //!< rad, motor order
+  JointVector joint_lower = JointVector::Constant(-protocol::endowrist_joint_range);
+  //! rad, motor order
+  JointVector joint_upper = JointVector::Constant(protocol::endowrist_joint_range);
   StatePlausibility plausibility{};  //!< what a reported state may say (else: a fault)
 
   //! `position` (rad, motor order) limited to [joint_lower, joint_upper], joint by joint.

@@ -5,20 +5,27 @@
 //! answer back to the console. When no setpoint was relayed for the watchdog time (silence, or
 //! nothing but forgeries and replays, which never get through) it sends the 2016 "all disabled"
 //! setpoint to the sbRIO itself, once a period. Nothing from the network reaches the sbRIO unless
-//! the v2 layer accepted it. Every call of step() is noexcept and allocation-free.
+//! the v2 layer accepted it, and nothing it relays leaves the robot side's own envelope: every
+//! position within the joint range, every step within the rate limit from the setpoint before
+//! (from the sbRIO's measured position after silence), behind the console's same limits (a
+//! console with the key but a bug, or a stolen key, still cannot command a jump). Every call of
+//! step() is noexcept and allocation-free.
 #pragma once
 
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <concepts>
 #include <cstddef>
 #include <cstdint>
+#include <numbers>
 #include <span>
 #include <string>
 
 #include "endohaptics/core/clock.hpp"
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/protocol/motor_order.hpp"
 #include "endohaptics/protocol/packet_codec.hpp"
 #include "endohaptics/transport/transport.hpp"
 
@@ -33,6 +40,14 @@ struct GatewayConfig {
   std::chrono::nanoseconds period = std::chrono::milliseconds(1);
   //! How long a relayed setpoint waits for the sbRIO's answer before it is given up (counted).
   std::chrono::nanoseconds answer_timeout = std::chrono::milliseconds(2);
+  //! rad: every relayed position is kept in [-joint_range, joint_range] (motor side, every
+  //! motor; a tool the sbRIO measures outside it is brought back at max_setpoint_rate, never
+  //! further out); at most pi.
+  double joint_range = protocol::endowrist_joint_range;
+  //! rad/s: a relayed position moves at most this fast from the setpoint relayed before it
+  //! (from the sbRIO's measured position after silence), with one `period` of slack per setpoint
+  //! for the console's timing (at 1 kHz a step of twice the rate's millisecond); in (0, 1000].
+  double max_setpoint_rate = protocol::endowrist_max_joint_rate;
 
   //! Throws Error naming the field, its value and its range.
   void validate() const {
@@ -48,6 +63,15 @@ struct GatewayConfig {
     check(watchdog, milliseconds(1), std::chrono::seconds(10), "watchdog", "[1 ms, 10 s]");
     check(period, microseconds(100), milliseconds(100), "period", "[0.1, 100] ms");
     check(answer_timeout, microseconds(10), milliseconds(100), "answer_timeout", "[0.01, 100] ms");
+    const auto check_number = [](double v, double lo, double hi, const char* field,
+                                 const char* range) {
+      if (!(v > lo && v <= hi)) {  // NaN fails too
+        ENDOHAPTICS_THROW(Error(std::string("GatewayConfig: ") + field + " must be in " + range +
+                                ", got " + std::to_string(v)));
+      }
+    };
+    check_number(joint_range, 0.0, std::numbers::pi, "joint_range", "(0, pi] rad");
+    check_number(max_setpoint_rate, 0.0, 1000.0, "max_setpoint_rate", "(0, 1000] rad/s");
     if (period > watchdog) {
       ENDOHAPTICS_THROW(Error("GatewayConfig: period (" + std::to_string(period.count()) +
                               " ns) must not exceed watchdog (" + std::to_string(watchdog.count()) +
@@ -66,6 +90,9 @@ struct GatewayCounters {
   std::uint64_t watchdog_trips = 0;  //!< times relaying stopped for the watchdog time
   std::uint64_t network_errors = 0;  //!< v2 side receive or send failures
   std::uint64_t sbrio_errors = 0;    //!< sbRIO side receive or send failures
+  //! relayed setpoints the gateway moved back into its envelope (range or rate) on a motor they
+  //! enable
+  std::uint64_t limited = 0;
 };
 
 //! What one step did.
@@ -173,15 +200,65 @@ class V2Gateway {
     return !obeyed_ || now - last_obeyed_ >= config_.watchdog;
   }
 
+  // `setpoint` kept in the envelope at `now`, motor by motor: the joint range, and one step of
+  // max_setpoint_rate from a reference. The reference is the last relayed setpoint's position if
+  // the motor was enabled in it, the step the time since then (at most the watchdog); else
+  // (after silence, or a motor that was released) where the sbRIO measured it, the step one
+  // period; with neither (nothing relayed, nothing measured) the range alone. Every step has one
+  // period more: the console times its steps by its own clock, the gateway by when they arrive.
+  // A tool measured outside the range is brought back at the rate, never by a jump to the range's
+  // edge. True if a motor this setpoint enables was moved.
+  [[nodiscard]] bool limit(typename Codec::Setpoint& setpoint,
+                           std::chrono::nanoseconds now) const noexcept {
+    const bool fresh = !silent_at(now);
+    const double range = config_.joint_range;
+    const double rate = config_.max_setpoint_rate;
+    const double period = std::chrono::duration<double>(config_.period).count();
+    const double since_last =
+        std::chrono::duration<double>(
+            std::clamp(now - last_obeyed_, std::chrono::nanoseconds(0), config_.watchdog))
+            .count();
+    bool moved = false;
+    for (int i = 0; i < N; ++i) {
+      const auto bit = static_cast<std::uint8_t>(1u << static_cast<unsigned>(i));
+      double ref = 0.0;
+      double step = 2.0 * range;  // no reference: the range alone
+      if (fresh && (last_relayed_.enable_mask & bit) != 0) {
+        ref = last_relayed_.position[i];
+        step = rate * (since_last + period);
+      } else if (have_measured_) {
+        ref = measured_[i];
+        step = rate * (period + period);
+      } else if (obeyed_) {
+        ref = last_relayed_.position[i];
+        step = rate * (since_last + period);
+      }
+      const double kept =
+          std::clamp(setpoint.position[i], std::max(std::min(-range, ref), ref - step),
+                     std::min(std::max(range, ref), ref + step));
+      if (kept != setpoint.position[i]) {
+        setpoint.position[i] = kept;
+        moved = moved || (setpoint.enable_mask & bit) != 0;
+      }
+    }
+    return moved;
+  }
+
   void relay(GatewayStep& out) noexcept {
-    const auto bytes = std::span<const std::byte>(setpoint_rx_.data(), Codec::setpoint_packet_size);
+    const auto received =
+        std::span<const std::byte>(setpoint_rx_.data(), Codec::setpoint_packet_size);
     typename Codec::Setpoint decoded;
-    if (Codec::decode_setpoint(bytes, decoded) != protocol::CodecStatus::ok) return;  // filtered
+    if (Codec::decode_setpoint(received, decoded) != protocol::CodecStatus::ok) return;  // filtered
+    const bool limited = limit(decoded, clock_->now());
+    // What is sent is what was kept (re-encoded: a released motor's position may have moved too).
+    if (Codec::encode_setpoint(decoded, limited_tx_) != protocol::CodecStatus::ok) return;
+    const auto bytes = std::span<const std::byte>(limited_tx_);
     if (link_->send(bytes) != TransportStatus::ok) {
       ++counters_.sbrio_errors;
       out.error = true;
       return;
     }
+    if (limited) ++counters_.limited;
     const auto now = clock_->now();
     last_relayed_ = decoded;
     ++counters_.relayed;
@@ -263,6 +340,7 @@ class V2Gateway {
   // One byte longer than the packets: a longer datagram never decodes as its first bytes.
   std::array<std::byte, Codec::setpoint_packet_size + 1> setpoint_rx_{};
   std::array<std::byte, Codec::state_packet_size + 1> state_rx_{};
+  typename Codec::SetpointBytes limited_tx_{};  // the setpoint relayed, as kept in the envelope
 };
 
 }  // namespace endohaptics::transport
