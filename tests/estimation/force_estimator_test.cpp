@@ -405,6 +405,61 @@ TEST_CASE("output dead zone and saturation per joint") {
   CHECK(f[0] == doctest::Approx(0.070));
 }
 
+TEST_CASE(
+    "stiction memory: the estimate is held while the motor backs off within the stuck travel") {
+  // Roll, its gate open: the 2016 roll model is 0.070 N m/A x current, so the estimate follows
+  // the current at once. Positive estimate: the motor pressed along -1 and backs off along +1.
+  est::ForceEstimatorSettings<double> settings;
+  settings.friction[0] = m::JointFriction<double>::simplified(0.0);
+  settings.stick_travel[0] = 0.03;  // rad
+  settings.stick_play[0] = 0.02;    // rad, added below stick_force
+  settings.stick_force[0] = 0.02;   // N m
+  auto roll_at = [](double current, double position) {
+    JointState<double> s;
+    s.current[0] = current;
+    s.position[0] = position;
+    return s;
+  };
+  Decimated estimator(settings);
+  auto step = [&](double current, double position) {
+    Forces f;
+    REQUIRE(estimator.step(roll_at(current, position), f) == NumericStatus::ok);
+    return f[0];
+  };
+  SUBCASE("held within the travel, followed beyond it") {
+    CHECK(step(1.0, 0.50) == doctest::Approx(0.070));
+    CHECK(step(0.5, 0.51) == doctest::Approx(0.070));    // backed off 0.01 rad: held
+    CHECK(step(0.0, 0.525) == doctest::Approx(0.070));   // down to 0: still held
+    CHECK(step(0.1, 0.535) == doctest::Approx(0.007));   // 0.035 > 0.03: the joint slides out
+    CHECK(step(0.05, 0.536) == doctest::Approx(0.007));  // stuck again where it slid to
+    CHECK(step(0.0, 0.586) == doctest::Approx(0.0));     // 0.007 < stick_force: 0.05 rad, beyond
+  }
+  SUBCASE("a fall with the motor not backed off is followed (a transient, not an unloading)") {
+    CHECK(step(1.0, 0.50) == doctest::Approx(0.070));
+    CHECK(step(0.5, 0.50) == doctest::Approx(0.035));
+    CHECK(step(0.2, 0.49) == doctest::Approx(0.014));   // pressed further: followed
+    CHECK(step(0.1, 0.495) == doctest::Approx(0.014));  // then backed off from 0.50: held
+  }
+  SUBCASE("below stick_force the play adds to the travel") {
+    CHECK(step(0.2, 0.50) == doctest::Approx(0.014));  // 0.014 N m < 0.02: travel 0.05
+    CHECK(step(0.0, 0.54) == doctest::Approx(0.014));  // 0.04 < 0.05: held
+    CHECK(step(0.0, 0.551) == doctest::Approx(0.0));   // beyond: followed
+  }
+  SUBCASE("the other side is followed; reset forgets the hold") {
+    CHECK(step(1.0, 0.50) == doctest::Approx(0.070));
+    CHECK(step(-0.5, 0.51) == doctest::Approx(-0.035));
+    CHECK(step(1.0, 0.50) == doctest::Approx(0.070));
+    estimator.reset();
+    CHECK(step(0.5, 0.51) == doctest::Approx(0.035));
+  }
+  SUBCASE("off by default: the estimate is passed on as it is") {
+    settings.stick_travel[0] = 0.0;
+    estimator = Decimated(settings);
+    CHECK(step(1.0, 0.50) == doctest::Approx(0.070));
+    CHECK(step(0.5, 0.51) == doctest::Approx(0.035));
+  }
+}
+
 TEST_CASE("NaN or Inf anywhere in the joint state: status, output and state untouched") {
   Decimated a;
   for (int k = 0; k < 137; ++k) {  // mid-window: the decimation phase must survive too
@@ -691,6 +746,13 @@ TEST_CASE("settings are validated, errors name the field, the joint and the valu
         std::string::npos);
   CHECK(error_for([](auto& s) { s.friction[1].static_level = -0.1; }) ==
         "ForceEstimator: friction_level[1] must be finite and >= 0 A, got -0.1");
+  CHECK(error_for([](auto& s) { s.stick_travel[1] = -1.0; }) ==
+        "ForceEstimator: stick_travel[1] must be finite and >= 0 rad, got -1");
+  CHECK(error_for([](auto& s) {
+          s.stick_play[2] = std::numeric_limits<double>::infinity();
+        }).find("ForceEstimator: stick_play[2] must be finite and >= 0 rad, got ") == 0);
+  CHECK(error_for([](auto& s) { s.stick_force[3] = -0.5; }) ==
+        "ForceEstimator: stick_force[3] must be finite and >= 0, got -0.5");
 }
 
 TEST_CASE("TeleopLoop interface: estimate() = step() on the packet, forces in motor order") {

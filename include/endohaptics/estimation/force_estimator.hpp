@@ -98,6 +98,21 @@ struct ForceEstimatorSettings {
   //! > 0, output units: symmetric saturation. Roll 0.084 N m (1.2 A of figure E.8 x 0.070 N m/A);
   //! pitch and clamps 9.80665 N (the 1 kg load cell the models were identified with).
   Vector output_limit = Vector(Scalar(0.084), Scalar(9.80665), Scalar(9.80665), Scalar(9.80665));
+  //! >= 0, rad of motor (gear-output) travel: the stiction memory. A cable-driven joint pressed
+  //! into an object stays where it is while its motor backs off, until the tendon's torque has
+  //! fallen through the static-friction band, 2 tau_s / k_t of travel: its contact force does not
+  //! change, but the motor current relaxes and a model of current and velocity reads less, down
+  //! to 0. So once the estimate falls on the same side while the motor backs off, the estimate it
+  //! had is held until the motor has backed off more than the stuck travel from where it last
+  //! pressed (then the joint slides out and the estimate is followed again). 0: off (the estimate
+  //! is passed on as it is).
+  Vector stick_travel = Vector::Zero();
+  //! >= 0, rad: the play the stuck travel adds while the held force is below `stick_force`: a
+  //! contact whose torque is below the static friction cannot push the joint out, so the tendon
+  //! must go slack through the play and pull it out from the other side.
+  Vector stick_play = Vector::Zero();
+  //! >= 0, output units (N): tau_s / lever, the force below which `stick_play` is added.
+  Vector stick_force = Vector::Zero();
 
   //! The per-joint settings by their configuration names, with their bounds (core/parameter.hpp;
   //! the friction by its static levels): the one list ForceEstimator's validation and the bridge
@@ -110,6 +125,9 @@ struct ForceEstimatorSettings {
     v("friction_level", model::StaticFrictionLevels(p.friction), Bound::in(0, inf, "A"));
     v("output_deadzone", p.output_deadzone, Bound::in(0, inf));
     v("output_limit", p.output_limit, Bound::above(0, inf));
+    v("stick_travel", p.stick_travel, Bound::in(0, inf, "rad"));
+    v("stick_play", p.stick_play, Bound::in(0, inf, "rad"));
+    v("stick_force", p.stick_force, Bound::in(0, inf));
   }
 };
 
@@ -211,7 +229,8 @@ class ForceEstimator {
     raw_ = raw;
     for (int j = 0; j < joints; ++j) {
       const auto js = static_cast<std::size_t>(j);
-      forces[j] = saturation_[js].apply(deadzone_[js].apply(gated[j]));
+      const ScalarType held = stick_hold(j, gated[j], signals[js].position);
+      forces[j] = saturation_[js].apply(deadzone_[js].apply(held));
     }
     return NumericStatus::ok;
   }
@@ -245,11 +264,13 @@ class ForceEstimator {
     return motor;
   }
 
-  //! Zero model states, empty decimation windows, closed gates.
+  //! Zero model states, empty decimation windows, closed gates, nothing held.
   void reset() noexcept {
     std::apply([](auto&... stepper) { (stepper.reset(), ...); }, steppers_);
     friction_.reset();
     raw_.setZero();
+    held_.setZero();
+    anchor_.setZero();
   }
 
   [[nodiscard]] const Settings& settings() const noexcept { return settings_; }  //!< as given
@@ -298,6 +319,30 @@ class ForceEstimator {
     (std::make_index_sequence<4>{});
   }
 
+  // The stiction memory of tool joint `j` (Settings::stick_travel): `f` this tick's estimate,
+  // `position` the motor's (rad). The external force pushes along sign(held), so the motor
+  // pressed against it along -sign(held) and backs off along +sign(held). Held only while the
+  // motor has backed off from where it last pressed: a fall with the motor not backed off is the
+  // model's own transient (a stop in free motion), not a tendon unloading in front of a stuck
+  // joint, and is followed.
+  ScalarType stick_hold(int j, ScalarType f, ScalarType position) noexcept {
+    if (!(settings_.stick_travel[j] > ScalarType(0))) return f;
+    ScalarType& held = held_[j];
+    ScalarType& anchor = anchor_[j];
+    const bool fell_same_side =
+        held != ScalarType(0) && f * held >= ScalarType(0) && std::fabs(f) < std::fabs(held);
+    if (fell_same_side) {
+      const ScalarType travel =
+          settings_.stick_travel[j] +
+          (std::fabs(held) < settings_.stick_force[j] ? settings_.stick_play[j] : ScalarType(0));
+      const ScalarType backed_off = held > ScalarType(0) ? position - anchor : anchor - position;
+      if (backed_off > ScalarType(0) && backed_off < travel) return held;  // the force stays
+    }
+    held = f;
+    anchor = position;
+    return f;
+  }
+
   static Settings validated(const Settings& s) {
     auto name = [](int j) { return std::string(protocol::to_string(static_cast<Motor>(j))); };
     std::array<bool, 4> seen{};
@@ -325,6 +370,8 @@ class ForceEstimator {
   std::array<model::Saturation<ScalarType>, 4> saturation_;
   Forces gain_;
   Forces raw_ = Forces::Zero();
+  Forces held_ = Forces::Zero();    // per tool joint: the estimate the stiction memory holds
+  Forces anchor_ = Forces::Zero();  // per tool joint: motor position where it was last set, rad
   std::array<int, 4> tool_joint_of_motor_{};
   NumericStatus last_status_ = NumericStatus::ok;
 };
