@@ -14,7 +14,8 @@
 #      current filter and velocity window are the fast dynamics between the reported signals and
 #      the force (docs/identification_results.md, "The demo's clamp model");
 #   3. teleoperation with the 2016 preset (appendix C), with the 2016 code's clamp estimator as
-#      it ran (preset:clamp2016-as-run, half as long), with the identified models, with the
+#      it ran (preset:clamp2016-as-run, half as long), with the identified models (and the
+#      estimator's stiction memory, docs/models.md), with the
 #      identified models over a 50 ms round trip (the emulator holds every answer 50 ms) with
 #      TDPA, and with the identified models in free space (nothing to touch, half as long);
 #   4. endohaptics-force-report: the runs against the emulator's truth (clamp 1), one plot:
@@ -110,8 +111,17 @@ duration=$half
 run as_run --config "$out/as_run.json"
 duration=$seconds
 echo "== 3. teleoperation with the identified models (instrument EW)"
-printf '{ %s, "estimator": { "model_sets": "model_sets", "instrument": "EW" } }\n' "$operator" \
-  >"$out/identified.json"
+# The stiction memory (estimator.stick_*, per joint; docs/models/sim.md, "Parameters"): a joint
+# pressed into an object stays put while its motor backs off through the static-friction band of
+# the tendon's torque, 2 K_s k_tau / k_t (K_s 0.13, 0.17, 0.21, 0.20 A; k_tau 0.0171 N m/A x
+# 76000/2048; k_t 5, 5, 8.5, 8.5 N m/rad): stick_travel; below the force the static friction
+# holds against, K_s k_tau / lever (lever 0.18, 0.18, 0.32, 0.32 m): stick_force, also through
+# the play (0.01745 rad): stick_play. So its force stays while its current relaxes.
+stick='"stick_travel": [0.0330, 0.0432, 0.0314, 0.0299], '
+stick+='"stick_play": [0.01745, 0.01745, 0.01745, 0.01745], '
+stick+='"stick_force": [0.458, 0.599, 0.416, 0.397]'
+printf '{ %s, "estimator": { "model_sets": "model_sets", "instrument": "EW", %s } }\n' \
+  "$operator" "$stick" >"$out/identified.json"
 run identified --config "$out/identified.json"
 echo "== 3. the identified models over a 50 ms round trip (every answer held 50 ms), TDPA on"
 emulator_options=(--delay 50)
