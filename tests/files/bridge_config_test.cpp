@@ -168,7 +168,7 @@ TEST_CASE("unknown keys are errors that list the allowed keys") {
   CHECK(error_of(R"({"estimator": {"loop_period": 0.002}})")
             .rfind("bridge.json: unknown key 'estimator.loop_period' (allowed in 'estimator': "
                    "current_sign, unit_scale, friction_level, output_deadzone, output_limit, "
-                   "clamp_model, model_sets, instrument)",
+                   "stick_travel, stick_play, stick_force, clamp_model, model_sets, instrument)",
                    0) == 0);
 }
 
