@@ -2,8 +2,9 @@
 // the appendix C yaw type at 1 kHz with its free-motion threshold) beside the worksheet's clamp
 // model (ClampModel2016, the 2016 yaw preset) in the same run: one joint step, and the whole
 // 1 kHz tick of the bridge's estimator with an identified model on every joint against the 2016
-// presets; plus the tick with roll and pitch held as their own 2016 types (the bridge before
-// every slot became one BridgeJointModel), to price the common slot type.
+// presets (and with the estimator's stiction memory on every joint); plus the tick with roll and
+// pitch held as their own 2016 types (the bridge before every slot became one BridgeJointModel),
+// to price the common slot type.
 #include <benchmark/benchmark.h>
 
 #include <Eigen/Core>
@@ -64,6 +65,21 @@ void BM_BridgeTick_identified_every_joint(benchmark::State& st) {
       st, est::BridgeForceEstimator(models, est::bridge_estimator_settings(settings, models)));
 }
 BENCHMARK(BM_BridgeTick_identified_every_joint);
+
+// The same with the stiction memory on every joint (ForceEstimatorSettings::stick_*: the demo's
+// constants, examples/demo.sh).
+void BM_BridgeTick_identified_every_joint_stiction_memory(benchmark::State& st) {
+  const est::BridgeJointModel m(identified());
+  const est::BridgeForceModels models{m, m, m, m};
+  est::ForceEstimatorSettings<double> settings;
+  settings.loop_period = 0.001;
+  settings.stick_travel << 0.0330, 0.0432, 0.0314, 0.0299;
+  settings.stick_play.setConstant(0.01745);
+  settings.stick_force << 0.458, 0.599, 0.416, 0.397;
+  run_estimator_ticks(
+      st, est::BridgeForceEstimator(models, est::bridge_estimator_settings(settings, models)));
+}
+BENCHMARK(BM_BridgeTick_identified_every_joint_stiction_memory);
 
 void BM_BridgeTick_identified_reference_yaw2016(benchmark::State& st) {
   run_estimator_ticks(st, est::preset_force_estimator(est::ClampPreset::yaw2016, 0.001));
