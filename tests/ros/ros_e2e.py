@@ -7,7 +7,8 @@ Every case starts its own roscore on a free port with its own ROS_HOME and log f
 every process it started (by process group). Cases (each prints "PASS: ..." or "FAIL: ..."):
   topics      CRTK stylus stand-in (1 kHz, every 500th message NaN or in a wrong frame), emulator
               (protocol v2), bridge: `rostopic hz` on /EW/measured_js, a 3 s bag of every topic
-              read back (the topic table: type, messages, rate), the bag's tick log converted to
+              read back (the topic table: type, messages, rate; every tick the recorder kept of
+              the stand-in's 1 kHz topic, at least 99 %, is there), the bag's tick log converted to
               the bridge's CSV and scored by endohaptics-force-report against the emulator's
               truth; the refused stylus messages counted; stylus message -> setpoint on the wire
   drop-in     the 2016 phantom_omni driver stand-in (TF base -> arm -> tip, /omni1_joint_states,
@@ -251,8 +252,20 @@ def case_topics(work):
     problems = []
     if hz_rate < 990:
         problems.append(f"rostopic hz {hz_rate:.1f} Hz < 990")
-    if duration < 3.0 or len(rows) < 0.99 * 1000 * duration:
-        problems.append(f"{len(rows)} ticks in a {duration:.2f} s bag")
+    # `rosbag record` is a third party: a stall of it (its subscriptions queue 100 messages each)
+    # drops every topic alike, the stand-in's 1 kHz stylus too (seen once: 3245 of each in a
+    # 3.49 s bag while the rig page's test ran beside it). The bridge's ticks are judged against
+    # what the same recorder kept of the stand-in's topic; the recorder itself may lose 10 %.
+    standin_messages = table.get("/touch/measured_cp", ("", 0, 0.0))[1]
+    if standin_messages < 0.99 * 1000 * duration:
+        print(f"note: the recorder kept {standin_messages} of the stand-in's 1 kHz messages in a "
+              f"{duration:.2f} s bag")
+    if duration < 3.0 or len(rows) < 0.99 * min(1000 * duration, standin_messages):
+        problems.append(f"{len(rows)} ticks in a {duration:.2f} s bag (the stand-in's topic: "
+                        f"{standin_messages})")
+    if standin_messages < 0.9 * 1000 * duration:
+        problems.append(f"the recorder kept {standin_messages} of the stand-in's messages in a "
+                        f"{duration:.2f} s bag (less than 90 %)")
     if refused < 1 or wrong < 1:
         problems.append("the NaN and wrong-frame stylus messages were not counted")
     if not rt or int(rt.group(1)) < 1000:
