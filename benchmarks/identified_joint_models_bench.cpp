@@ -55,29 +55,30 @@ void BM_IdentifiedHW_reference_Clamp2016_worksheet_step(benchmark::State& st) {
 }
 BENCHMARK(BM_IdentifiedHW_reference_Clamp2016_worksheet_step);
 
-// Every joint an identified model, advanced on every tick (1 ms models: no decimation).
-void BM_BridgeTick_identified_every_joint(benchmark::State& st) {
+// Every joint an identified model, advanced on every tick (1 ms models: no decimation), the
+// bridge's estimator settings over `settings`.
+void run_identified_every_joint(benchmark::State& st,
+                                est::ForceEstimatorSettings<double> settings) {
   const est::BridgeJointModel m(identified());
   const est::BridgeForceModels models{m, m, m, m};
-  est::ForceEstimatorSettings<double> settings;
   settings.loop_period = 0.001;
   run_estimator_ticks(
       st, est::BridgeForceEstimator(models, est::bridge_estimator_settings(settings, models)));
+}
+
+void BM_BridgeTick_identified_every_joint(benchmark::State& st) {
+  run_identified_every_joint(st, {});
 }
 BENCHMARK(BM_BridgeTick_identified_every_joint);
 
 // The same with the stiction memory on every joint (ForceEstimatorSettings::stick_*: the demo's
 // constants, examples/demo.sh).
 void BM_BridgeTick_identified_every_joint_stiction_memory(benchmark::State& st) {
-  const est::BridgeJointModel m(identified());
-  const est::BridgeForceModels models{m, m, m, m};
   est::ForceEstimatorSettings<double> settings;
-  settings.loop_period = 0.001;
   settings.stick_travel << 0.0330, 0.0432, 0.0314, 0.0299;
   settings.stick_play.setConstant(0.01745);
   settings.stick_force << 0.458, 0.599, 0.416, 0.397;
-  run_estimator_ticks(
-      st, est::BridgeForceEstimator(models, est::bridge_estimator_settings(settings, models)));
+  run_identified_every_joint(st, settings);
 }
 BENCHMARK(BM_BridgeTick_identified_every_joint_stiction_memory);
 
