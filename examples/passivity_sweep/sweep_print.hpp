@@ -28,6 +28,7 @@ struct Source {
   std::optional<double> reserve;                  //!< J, replaces the sweep's energy reserve
   std::optional<double> recovery;                 //!< 1/s, replaces the sweep's gain recovery
   std::optional<bool> recover_absorbing;          //!< replaces recover_while_absorbing
+  std::optional<bool> stiction_memory;            //!< replaces the estimator's stiction memory
   //! The scenario with this source and the overrides.
   [[nodiscard]] sim::ClosedLoopConfig scenario(int ms, double loss, sim::ContactKind contact,
                                                tp::PassivityMode mode) const {
@@ -37,6 +38,7 @@ struct Source {
     if (reserve) c.passivity.energy_reserve = *reserve;
     if (recovery) c.passivity.gain_recovery_rate = *recovery;
     if (recover_absorbing) c.passivity.recover_while_absorbing = *recover_absorbing;
+    if (stiction_memory) c.stiction_memory = *stiction_memory;
     if (tolerance) {
       for (const int j : {2, 3}) c.passivity.estimate_tolerance[j] = *tolerance;
     }

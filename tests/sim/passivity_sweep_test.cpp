@@ -197,6 +197,26 @@ TEST_CASE("passivity sweep: identified with TDPA, 20 to 200 ms, every criterion 
   for (const int ms : {20, 50, 100, 200}) check_identified_row(ms);
 }
 
+TEST_CASE("passivity closed loop: the stiction memory's settings are the instrument's constants") {
+  // The demo's numbers for the emulator's instrument (examples/demo.sh: 2 K_s k_tau N / k_t,
+  // the play, K_s k_tau N / lever), here derived from the simulated rig's parameters.
+  endohaptics::estimation::ForceEstimatorSettings<double> s;
+  sim::stiction_memory_settings(sim::endowrist_2016_rig<4>(), s);
+  const std::array<double, 4> travel{0.0330, 0.0432, 0.0314, 0.0299};
+  const std::array<double, 4> force{0.458, 0.599, 0.416, 0.397};
+  for (int j = 0; j < 4; ++j) {
+    CAPTURE(j);
+    CHECK(s.stick_travel[j] == doctest::Approx(travel[static_cast<std::size_t>(j)]).epsilon(2e-3));
+    CHECK(s.stick_play[j] == doctest::Approx(0.01745));
+    CHECK(s.stick_force[j] == doctest::Approx(force[static_cast<std::size_t>(j)]).epsilon(2e-3));
+  }
+  // The sweep runs its sensorless sources without it (docs/passivity.md: it lost cases).
+  for (const auto source : {sim::ForceSource::identified, sim::ForceSource::preset_2016}) {
+    CHECK_FALSE(scenario(0, 0.0, sim::ContactKind::soft_tissue, tp::PassivityMode::tdpa, source)
+                    .stiction_memory);
+  }
+}
+
 TEST_CASE("passivity closed loop: the preset-2016 estimate runs from the sbRIO's reports only") {
   // The estimator sees the decoded state: zero contact, zero force held; the sensor's tag is
   // never read (a scenario with the sensor source and one with the preset differ).

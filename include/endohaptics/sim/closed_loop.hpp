@@ -28,6 +28,7 @@
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/estimation/bridge_force_models.hpp"
 #include "endohaptics/estimation/clamp_presets.hpp"
+#include "endohaptics/estimation/force_estimator.hpp"
 #include "endohaptics/estimation/paced_estimator.hpp"
 #include "endohaptics/kinematics/cylindrical_mapper.hpp"
 #include "endohaptics/model/human_arm_model.hpp"
@@ -96,6 +97,11 @@ struct ClosedLoopConfig {
   //! ForceSource::identified: the clamp model both clamps run (as the bridge runs a clamp model
   //! file); required then, ignored otherwise.
   std::optional<estimation::BridgeJointModel> clamp_model{};
+  //! Sensorless sources: the estimator's stiction memory (ForceEstimatorSettings::stick_travel,
+  //! stick_play, stick_force) on every joint, with the simulated instrument's own constants
+  //! (stiction_memory_settings), as the demo sets it for the emulator's instrument. Off: the
+  //! estimate is passed on as the model gives it.
+  bool stiction_memory = false;
 
   //! Throws Error naming the field and value.
   void validate() const {
@@ -189,16 +195,40 @@ struct TaggedForceSensor {
   void reset() noexcept {}  //!< stateless
 };
 
+//! The estimator's stiction memory for the simulated instrument `rig` (docs/models.md,
+//! "Stiction memory"; the demo's numbers for the emulator's instrument, examples/demo.sh), per
+//! joint from its physical constants only: a joint pressed into an object stays put while its
+//! motor backs off through the static-friction band of the tendon's torque, 2 K_s k_tau N / k_t
+//! of travel (stick_travel, rad); below the force the static friction holds against,
+//! K_s k_tau N / lever (stick_force, N at the tool), also through the play (stick_play, the
+//! transmission's backlash, rad). Writes those three into `settings` (index = Motor; the rig's
+//! joints are in motor order).
+template <int N>
+void stiction_memory_settings(const RigConfig<N, double>& rig,
+                              estimation::ForceEstimatorSettings<double>& settings) noexcept {
+  static_assert(N >= 4, "roll, pitch and both clamps");
+  for (int j = 0; j < 4; ++j) {
+    const auto& joint = rig.joints[static_cast<std::size_t>(j)];
+    const double static_torque = joint.transmission.static_friction * joint.motor.torque_constant *
+                                 joint.motor.gear_ratio;  // N m
+    settings.stick_travel[j] = 2.0 * static_torque / joint.transmission.tendon_stiffness;
+    settings.stick_play[j] = joint.transmission.backlash;
+    settings.stick_force[j] = static_torque / joint.transmission.lever_arm;
+  }
+}
+
 //! The loop's estimator: the ideal sensor, or the bridge's (BridgeForceEstimator paced at 1 kHz
 //! on the loop's clock, estimation::PacedEstimator, from the decoded sbRIO state only).
 //! estimation::JointForceEstimator; neither copied nor moved (the pacer holds its address).
 class LoopForceEstimator {
  public:
   using Clock = ManualClock;  //!< the loop's virtual clock
-  //! `newest`: the sensor's tag (ForceSource::sensor). Throws Error on a model the bridge's
+  //! `newest`: the sensor's tag (ForceSource::sensor); `stiction`: the stiction memory's
+  //! settings (stiction_memory_settings), or null for none. Throws Error on a model the bridge's
   //! estimator refuses.
   LoopForceEstimator(const estimation::MotorVector* newest, ForceSource source,
-                     const std::optional<estimation::BridgeJointModel>& clamp, Clock& clock)
+                     const std::optional<estimation::BridgeJointModel>& clamp, Clock& clock,
+                     const estimation::ForceEstimatorSettings<double>* stiction = nullptr)
       : sensor_{newest} {
     if (source == ForceSource::sensor) return;
     const auto models = source == ForceSource::identified
@@ -206,6 +236,11 @@ class LoopForceEstimator {
                             : estimation::preset_force_models(estimation::ClampPreset::yaw2016);
     estimation::ForceEstimatorSettings<double> settings;
     settings.loop_period = 1e-3;
+    if (stiction != nullptr) {
+      settings.stick_travel = stiction->stick_travel;
+      settings.stick_play = stiction->stick_play;
+      settings.stick_force = stiction->stick_force;
+    }
     estimator_.emplace(models, estimation::bridge_estimator_settings(settings, models));
     paced_.emplace(*estimator_, clock, std::chrono::milliseconds(1));
   }
@@ -306,7 +341,9 @@ class ClosedLoop {
         sbrio_transport_(sbrio_end_, loss_rates(config.loss), config.seed + 3),
         emulator_(sbrio_transport_, rig_, clock_),
         device_(clock_, press_script(config), config.device, config.arm),
-        sensor_(&newest_force_, config.force_source, config.clamp_model, clock_),
+        stiction_(stiction_settings(rig_.config())),
+        sensor_(&newest_force_, config.force_source, config.clamp_model, clock_,
+                config.stiction_memory ? &stiction_ : nullptr),
         mapper_(mapping(config)),
         loop_(pc_transport_, device_, sensor_, mapper_, clock_, loop_config(config)),
         start_(clock_.now()) {}
@@ -383,6 +420,12 @@ class ClosedLoop {
       if (c.stiffness > 0.0) contact.tissue_stiffness = c.stiffness;
     }
     return rig;
+  }
+
+  static estimation::ForceEstimatorSettings<double> stiction_settings(const Rig::Config& rig) {
+    estimation::ForceEstimatorSettings<double> s;
+    stiction_memory_settings(rig, s);
+    return s;
   }
 
   static Mapper::Config mapping(const ClosedLoopConfig& c) {
@@ -472,6 +515,7 @@ class ClosedLoop {
   Emulator emulator_;
   Device device_;
   estimation::MotorVector newest_force_ = estimation::MotorVector::Zero();
+  estimation::ForceEstimatorSettings<double> stiction_;  // the instrument's stiction memory
   LoopForceEstimator sensor_;
   Mapper mapper_;
   Loop loop_;

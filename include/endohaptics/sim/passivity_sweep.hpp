@@ -73,6 +73,11 @@ inline constexpr double sensorless_gain_recovery_rate = 0.05;
     // 2016 models, which are not).
     c.passivity.observer = teleop::PassivityObserver::per_direction;
     c.passivity.gain_recovery_rate = sensorless_gain_recovery_rate;
+    // The estimator's stiction memory (ClosedLoopConfig::stiction_memory, the instrument's own
+    // constants) stays off: in this loop it lost cases (2 of 20 met with TDPA against 8 without,
+    // docs/passivity.md): the hand yields, the motor backs off beyond the stuck travel while the
+    // jaw is still in the tissue, and the estimate released there reads the tendon pulling,
+    // below the truth, so the held and released estimate make a relay with the hand.
   }
   c.round_trip = std::chrono::milliseconds(round_trip_ms);
   c.loss = loss;
