@@ -75,6 +75,9 @@ endohaptics_add_example(endohaptics-ros-bridge ros_bridge endohaptics::model_fil
 add_executable(endohaptics-ros-touch-standin ros_bridge/touch_standin.cpp)
 target_link_libraries(endohaptics-ros-touch-standin PRIVATE endohaptics::endohaptics
   endohaptics_warnings CLI11::CLI11 fmt::fmt Threads::Threads endohaptics_ros)
+# A stand-in for the Touch's driver (tests and docs/ros.md): a 1 kHz publisher with nothing to
+# gain from -O3, which cost it 3 s of GCC's optimiser (docs/history/build-times.md, step 16).
+target_compile_options(endohaptics-ros-touch-standin PRIVATE -O1)
 
 if(ENDOHAPTICS_BUILD_TESTS)
   # Heap allocations of the loop thread while ROS traffic flows (tests/ros/ros_alloc_check.cpp).

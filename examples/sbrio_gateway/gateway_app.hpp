@@ -6,7 +6,6 @@
 
 #include <fmt/format.h>
 
-#include <CLI/CLI.hpp>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -22,6 +21,7 @@
 #include <string>
 #include <string_view>
 #include <vector>
+#include "../cli11.hpp"
 
 #include "../cli_numbers.hpp"
 

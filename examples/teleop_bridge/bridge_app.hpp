@@ -9,7 +9,6 @@
 
 #include <fmt/format.h>
 
-#include <CLI/CLI.hpp>
 #include <atomic>
 #include <boost/lockfree/spsc_queue.hpp>
 #include <chrono>
@@ -34,6 +33,7 @@
 #include <string>
 #include <thread>
 #include <tuple>
+#include "../cli11.hpp"
 
 #include "../cli_numbers.hpp"
 
