@@ -83,9 +83,10 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"always-scaled", "while-absorbing"}));
   std::string stiction;
   app.add_option("--stiction-memory", stiction,
-                 "on or off: the estimator's stiction memory with the simulated instrument's "
-                 "constants (default: off)")
-      ->check(CLI::IsMember({"on", "off"}));
+                 "on, through-zero or off: the estimator's stiction memory with the simulated "
+                 "instrument's constants (through-zero: holding while the estimate changes sign, "
+                 "estimation::StictionHold; default: off)")
+      ->check(CLI::IsMember({"on", "through-zero", "off"}));
   CLI11_PARSE(app, argc, argv);
   const auto contact =
       contact_name == "soft" ? sim::ContactKind::soft_tissue : sim::ContactKind::stiff_stop;
@@ -122,7 +123,8 @@ int main(int argc, char** argv) {
     if (reserve > 0.0) src.reserve = reserve;
     if (recovery > 0.0) src.recovery = recovery;
     if (!recover.empty()) src.recover_absorbing = recover == "while-absorbing";
-    if (!stiction.empty()) src.stiction_memory = stiction == "on";
+    if (!stiction.empty()) src.stiction_memory = stiction != "off";
+    src.stiction_through_zero = stiction == "through-zero";
     if (!robot_return.empty()) src.return_needs_motion = robot_return == "setpoint-and-robot";
     if (do_table) sweep_print::table(src);
     if (do_transparency) sweep_print::transparency(contact, src);

@@ -29,6 +29,7 @@ struct Source {
   std::optional<double> recovery;                 //!< 1/s, replaces the sweep's gain recovery
   std::optional<bool> recover_absorbing;          //!< replaces recover_while_absorbing
   std::optional<bool> stiction_memory;            //!< replaces the estimator's stiction memory
+  bool stiction_through_zero = false;             //!< that memory holding through zero
   //! The scenario with this source and the overrides.
   [[nodiscard]] sim::ClosedLoopConfig scenario(int ms, double loss, sim::ContactKind contact,
                                                tp::PassivityMode mode) const {
@@ -39,6 +40,10 @@ struct Source {
     if (recovery) c.passivity.gain_recovery_rate = *recovery;
     if (recover_absorbing) c.passivity.recover_while_absorbing = *recover_absorbing;
     if (stiction_memory) c.stiction_memory = *stiction_memory;
+    c.stiction_through_zero = stiction_through_zero;
+    if (stiction_through_zero) {
+      for (const int j : {2, 3}) c.stiction_contact_level[j] = sim::identified_free_motion_error;
+    }
     if (tolerance) {
       for (const int j : {2, 3}) c.passivity.estimate_tolerance[j] = *tolerance;
     }
@@ -126,16 +131,16 @@ inline void trace(const std::string& path, const sim::ClosedLoopConfig& config, 
   fmt::print(out,
              "time,stylus_force,commanded_force,contact_force,desired,setpoint,robot,energy,"
              "damping,force_gain,drift,estimated_force,true_stylus_force,energy_to_robot,"
-             "energy_to_operator\n");
+             "energy_to_operator,motor,current\n");
   for (const auto& s : samples) {
     fmt::print(
         out,
         "{:.4f},{:.5g},{:.5g},{:.5g},{:.6g},{:.6g},{:.6g},{:.6g},{:.5g},{:.4g},{:.5g},{:.5g},"
-        "{:.5g},{:.6g},{:.6g}\n",
+        "{:.5g},{:.6g},{:.6g},{:.6g},{:.5g}\n",
         s.time, s.stylus_force, s.commanded_force, s.contact_force, s.desired, s.setpoint, s.robot,
         s.passivity.energy, s.passivity.damping, s.passivity.force_gain, s.passivity.drift,
         s.estimated_force, s.true_stylus_force, s.passivity.energy_to_robot,
-        s.passivity.energy_to_operator);
+        s.passivity.energy_to_operator, s.motor, s.current);
   }
   if (std::fclose(out) != 0) throw std::runtime_error("cannot write " + path);
   fmt::print(

@@ -12,6 +12,7 @@
 
 #include <array>
 #include <chrono>
+#include <endohaptics/estimation/stiction_hold.hpp>
 #include <endohaptics/sim/closed_loop.hpp>
 #include <endohaptics/sim/passivity_sweep.hpp>
 #include <filesystem>
@@ -215,6 +216,36 @@ TEST_CASE("passivity closed loop: the stiction memory's settings are the instrum
     CHECK_FALSE(scenario(0, 0.0, sim::ContactKind::soft_tissue, tp::PassivityMode::tdpa, source)
                     .stiction_memory);
   }
+}
+
+TEST_CASE("passivity closed loop: the stiction hold keeps a stuck joint's force through zero") {
+  // Clamp 1 as in the 100 ms stiff case of docs/passivity.md: held -0.76 N (the external force
+  // along -setpoint, so the motor pressed along +), the motor backs off along -.
+  endohaptics::estimation::ForceEstimatorSettings<double> s;
+  s.stick_travel[2] = 0.0314;
+  s.stick_play[2] = 0.01745;
+  s.stick_force[2] = 0.416;
+  const endohaptics::estimation::StictionHold::Vector level(0.0, 0.0, 0.05, 0.05);
+  endohaptics::estimation::StictionHold hold(s, level);
+  CHECK(hold.apply(2, -0.76, 0.198) == -0.76);
+  CHECK(hold.apply(2, -0.40, 0.190) == -0.76);  // fell, backed off 8 mrad: held
+  CHECK(hold.apply(2, 0.016, 0.173) == -0.76);  // the other side, 25 mrad: still held
+  CHECK(hold.apply(2, 0.016, 0.160) == 0.016);  // 38 mrad, beyond the stuck travel: let go
+  CHECK(hold.apply(0, 0.5, 0.0) == 0.5);        // roll: no memory configured, passed on
+  CHECK(hold.apply(2, -0.30, 0.170) == -0.30);  // a press: 0.016 N is no contact, not held
+  CHECK(hold.apply(2, -0.10, 0.175) == -0.10);  // a fall with the motor not backed off: followed
+  CHECK(hold.apply(2, -0.30, 0.180) == -0.30);  // pressed on
+  CHECK(hold.apply(2, -0.20, 0.160) == -0.30);  // below stick_force the play is added:
+  CHECK(hold.apply(2, -0.20, 0.140) == -0.30);  // 40 mrad < 31.4 + 17.5 mrad: held
+  CHECK(hold.apply(2, -0.20, 0.130) == -0.20);  // 50 mrad: let go
+  // Without a contact level the same 0.016 N would be held against the press.
+  endohaptics::estimation::StictionHold noisy(s);
+  CHECK(noisy.apply(2, -0.76, 0.198) == -0.76);
+  CHECK(noisy.apply(2, 0.016, 0.160) == 0.016);
+  CHECK(noisy.apply(2, -0.30, 0.170) == 0.016);
+  s.stick_play[1] = -1.0;
+  CHECK_THROWS_WITH_AS(endohaptics::estimation::StictionHold{s}, doctest::Contains("stick_play[1]"),
+                       endohaptics::Error);
 }
 
 TEST_CASE("passivity closed loop: the preset-2016 estimate runs from the sbRIO's reports only") {

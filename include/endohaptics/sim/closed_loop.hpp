@@ -30,6 +30,7 @@
 #include "endohaptics/estimation/clamp_presets.hpp"
 #include "endohaptics/estimation/force_estimator.hpp"
 #include "endohaptics/estimation/paced_estimator.hpp"
+#include "endohaptics/estimation/stiction_hold.hpp"
 #include "endohaptics/kinematics/cylindrical_mapper.hpp"
 #include "endohaptics/model/human_arm_model.hpp"
 #include "endohaptics/sim/delay_line.hpp"
@@ -102,6 +103,14 @@ struct ClosedLoopConfig {
   //! (stiction_memory_settings), as the demo sets it for the emulator's instrument. Off: the
   //! estimate is passed on as the model gives it.
   bool stiction_memory = false;
+  //! With stiction_memory: the memory holds through zero (estimation::StictionHold after the
+  //! estimator, same constants) instead of the estimator's own, which lets go when the estimate
+  //! changes sign.
+  bool stiction_through_zero = false;
+  //! N per motor, with stiction_through_zero: the estimate's error bound in free motion
+  //! (estimation::StictionHold's contact level); a held force within it is held only on the
+  //! same side.
+  estimation::MotorVector stiction_contact_level = estimation::MotorVector::Zero();
 
   //! Throws Error naming the field and value.
   void validate() const {
@@ -148,7 +157,9 @@ struct ClosedLoopSample {
   double desired = 0.0;            //!< rad, clamp 1 setpoint the stylus maps to (range-clamped)
   double setpoint = 0.0;           //!< rad, clamp 1 setpoint sent
   double robot = 0.0;              //!< rad, clamp 1 true joint position
-  bool force_limited = false;      //!< a limit scaled the force this tick
+  double motor = 0.0;    //!< rad, clamp 1 motor (gear output) position as the sbRIO reports it
+  double current = 0.0;  //!< A, clamp 1 motor current as the sbRIO reports it
+  bool force_limited = false;            //!< a limit scaled the force this tick
   teleop::PassivityFigures passivity{};  //!< the loop's energy figures (observe/tdpa)
 };
 
@@ -224,11 +235,15 @@ class LoopForceEstimator {
  public:
   using Clock = ManualClock;  //!< the loop's virtual clock
   //! `newest`: the sensor's tag (ForceSource::sensor); `stiction`: the stiction memory's
-  //! settings (stiction_memory_settings), or null for none. Throws Error on a model the bridge's
-  //! estimator refuses.
+  //! settings (stiction_memory_settings), or null for none; `through_zero`: that memory as
+  //! estimation::StictionHold after the estimator rather than the estimator's own, with
+  //! `contact_level` (N per motor, its free-motion error bound). Throws Error
+  //! on a model the bridge's estimator refuses.
   LoopForceEstimator(const estimation::MotorVector* newest, ForceSource source,
                      const std::optional<estimation::BridgeJointModel>& clamp, Clock& clock,
-                     const estimation::ForceEstimatorSettings<double>* stiction = nullptr)
+                     const estimation::ForceEstimatorSettings<double>* stiction = nullptr,
+                     bool through_zero = false,
+                     const estimation::MotorVector& contact_level = estimation::MotorVector::Zero())
       : sensor_{newest} {
     if (source == ForceSource::sensor) return;
     const auto models = source == ForceSource::identified
@@ -236,7 +251,9 @@ class LoopForceEstimator {
                             : estimation::preset_force_models(estimation::ClampPreset::yaw2016);
     estimation::ForceEstimatorSettings<double> settings;
     settings.loop_period = 1e-3;
-    if (stiction != nullptr) {
+    if (stiction != nullptr && through_zero) {
+      hold_.emplace(*stiction, contact_level);
+    } else if (stiction != nullptr) {
       settings.stick_travel = stiction->stick_travel;
       settings.stick_play = stiction->stick_play;
       settings.stick_force = stiction->stick_force;
@@ -251,15 +268,21 @@ class LoopForceEstimator {
   bool estimate(const estimation::MotorState4& measured, const estimation::MotorVector& setpoint,
                 estimation::MotorVector& force) noexcept {
     if (!paced_) return sensor_.estimate(measured, setpoint, force);
-    return paced_->estimate(measured, setpoint, force);
+    if (!paced_->estimate(measured, setpoint, force)) return false;
+    if (hold_) {
+      for (int j = 0; j < 4; ++j) force[j] = hold_->apply(j, force[j], measured.position[j]);
+    }
+    return true;
   }
   //! Forgets the model's history (the link came back).
   void reset() noexcept {
     if (paced_) paced_->reset();
+    if (hold_) hold_->reset();
   }
 
  private:
   TaggedForceSensor sensor_;
+  std::optional<estimation::StictionHold> hold_;  // the memory holding through zero
   std::optional<estimation::BridgeForceEstimator> estimator_;
   std::optional<estimation::PacedEstimator<estimation::BridgeForceEstimator, Clock>> paced_;
 };
@@ -343,7 +366,8 @@ class ClosedLoop {
         device_(clock_, press_script(config), config.device, config.arm),
         stiction_(stiction_settings(rig_.config())),
         sensor_(&newest_force_, config.force_source, config.clamp_model, clock_,
-                config.stiction_memory ? &stiction_ : nullptr),
+                config.stiction_memory ? &stiction_ : nullptr, config.stiction_through_zero,
+                config.stiction_contact_level),
         mapper_(mapping(config)),
         loop_(pc_transport_, device_, sensor_, mapper_, clock_, loop_config(config)),
         start_(clock_.now()) {}
@@ -372,6 +396,9 @@ class ClosedLoop {
     s.desired = desired_clamp1();
     s.setpoint = r.setpoint[clamp1];
     s.robot = rig_.truth().joint_position[clamp1];
+    const auto reported = rig_.state();
+    s.motor = reported.position[clamp1];
+    s.current = reported.current[clamp1];
     s.force_limited = r.force_limited;
     s.passivity = r.passivity;
     return s;

@@ -54,6 +54,13 @@ inline constexpr std::array<int, 8> transparency_round_trips_ms{0,   50,  100, 2
 //! (PassivityConfig::gain_recovery_rate; the sensor's runs keep the default 0.2/s).
 inline constexpr double sensorless_gain_recovery_rate = 0.05;
 
+//! N at the tool: the free-motion error bound of the identified clamp model the sweep
+//! identifies on its training presses (examples/passivity_sweep/identify_training.hpp): the
+//! largest |estimate| where the true force is 0 in the three training logs after the first 0.5 s
+//! (0.016, 0.088, 0.069 N). The contact level of the stiction hold
+//! (ClosedLoopConfig::stiction_contact_level, --stiction-memory through-zero).
+inline constexpr double identified_free_motion_error = 0.088;
+
 //! One scenario: `round_trip_ms` ms round trip, `loss` per direction, the contact and the
 //! passivity mode (observe: the loop renders what it renders with the layer off, energy visible),
 //! the network's random seed 7 (the documented table's), the force fed back from `source`
