@@ -652,6 +652,125 @@ TEST_CASE("invalid configurations throw endohaptics::Error naming field and valu
   c = Config{};
   c.force_scale[1] = 0.0;  // zero is allowed: that channel renders nothing
   CHECK(message(c) == "no error");
+  c = Config{};
+  c.roll_lever_radius = -0.01;
+  CHECK(message(c) == "CylindricalMapper: roll_lever_radius must be finite and >= 0 m, got -0.01");
+  c = Config{};
+  c.roll_lever_radius = inf;
+  CHECK(message(c) == "CylindricalMapper: roll_lever_radius must be finite and >= 0 m, got inf");
+  c = Config{};
+  c.roll_lever_radius = 0.0;  // zero is allowed: eq. 5.8 verbatim at every radius
+  CHECK(message(c) == "no error");
+}
+
+TEST_CASE("the roll channel near the waist axis: scaled by r / roll_lever_radius inside it") {
+  // Off by default (eq. 5.8 verbatim); the geometric choice is the rest radius, b_clamp / a_clamp
+  // (where eq. 5.9 puts the clamps mid-range).
+  CHECK(Config{}.roll_lever_radius == 0.0);
+  Config config;
+  config.roll_lever_radius = endohaptics::kinematics::rest_position(config).x();
+  CHECK(config.roll_lever_radius == exact(0.7 / 5.384));
+  Mapper mapper(config);
+  const double lever = config.roll_lever_radius;
+  const Motors f = joint_forces(0.8, 0.5, -0.6, 0.6);  // roll, pitch, clamp1, clamp2
+  Vector3 force = Vector3::Zero();
+
+  SUBCASE("at and beyond the lever radius: eq. 5.8 verbatim") {
+    for (const double r : {lever, 0.2, 0.3, inf}) {
+      REQUIRE(mapper.map_force(f, pi / 2, r, force).ok());
+      CAPTURE(r);
+      // theta = pi/2: e_r = +x, e_theta = -y (module docs).
+      CHECK(force.x() == exact(0.6));
+      CHECK(force.y() == exact(-0.8));
+      CHECK(force.z() == exact(0.5));
+    }
+  }
+  SUBCASE("inside it the roll channel alone scales with r; clamp and pitch untouched") {
+    for (const double r : {0.1, 0.04, 0.0186, 1e-4, 0.0}) {
+      REQUIRE(mapper.map_force(f, pi / 2, r, force).ok());
+      CAPTURE(r);
+      CHECK(mapper.roll_lever(r) == exact(r / lever));
+      CHECK(force.x() == exact(0.6));
+      CHECK(force.y() == exact(-0.8 * r / lever));
+      CHECK(force.z() == exact(0.5));
+    }
+  }
+  SUBCASE("the held radius is the last map_position's r; before it and after reset, unscaled") {
+    CHECK(mapper.radius() == inf);  // no position yet: theta_neutral, radius not known
+    REQUIRE(mapper.map_force(f, force).ok());
+    CHECK(force.y() == exact(-0.8));
+    const double r = 0.04;
+    Motors setpoint = Motors::Zero();
+    REQUIRE(mapper.map_position(Vector3(r, 0.0, 0.137), setpoint).ok());
+    CHECK(mapper.radius() == exact(r));
+    REQUIRE(mapper.map_force(f, force).ok());
+    CHECK(force.y() == exact(-0.8 * r / lever));
+    // The explicit-theta overload does not know r: unscaled, as before this lever existed.
+    REQUIRE(mapper.map_force(f, pi / 2, force).ok());
+    CHECK(force.y() == exact(-0.8));
+    mapper.reset();
+    CHECK(mapper.radius() == inf);
+    REQUIRE(mapper.map_force(f, force).ok());
+    CHECK(force.y() == exact(-0.8));
+  }
+  SUBCASE("lever radius 0 (the default): eq. 5.8 verbatim at every radius") {
+    const Mapper plain;
+    for (const double r : {0.0, 1e-4, 0.04, 0.2}) {
+      REQUIRE(plain.map_force(f, pi / 2, r, force).ok());
+      CHECK(force.y() == exact(-0.8));
+    }
+  }
+  SUBCASE("a NaN or negative radius is refused, the output untouched") {
+    force = Vector3::Constant(7.0);
+    CHECK(mapper.map_force(f, pi / 2, not_a_number, force).status ==
+          NumericStatus::non_finite_input);
+    CHECK(mapper.map_force(f, pi / 2, -0.01, force).status == NumericStatus::non_finite_input);
+    CHECK(force == Vector3::Constant(7.0));
+  }
+}
+
+TEST_CASE("the roll a compliant hand gives back under the roll force is bounded at every radius") {
+  // The loop the lever radius bounds: a joint force f on roll is rendered as a tangential stylus
+  // force F; a hand of compliance c (table 5.1's arm in series: 1/k1 + 1/k2 = 23.2 mm/N) yields
+  // c F along e_theta, and eq. 5.9 turns that into a_roll c F / r of roll setpoint. Eq. 5.8
+  // verbatim makes that grow as 1/r towards the waist axis (the checks below fail with
+  // roll_lever_radius 0); with the lever it never exceeds its value at the lever radius,
+  // a_roll c s f / roll_lever_radius, and equals it at every r up to there.
+  const double compliance = 1.0 / 48.8 + 1.0 / 375.0;  // m/N
+  const double rest_radius = endohaptics::kinematics::rest_position<double>().x();
+  for (const double lever_radius : {0.0, rest_radius}) {
+    Config config;
+    config.roll_lever_radius = lever_radius;
+    config.lower.setConstant(-100.0);
+    config.upper.setConstant(100.0);
+    Mapper mapper(config);
+    const double bound = config.a_roll * compliance * 0.5 / rest_radius;
+    bool exceeded = false;
+    for (double r = 0.005; r <= 0.3; r += 0.005) {
+      const double theta = pi / 2 + 0.3;
+      const Vector3 p(r * std::sin(theta), r * std::cos(theta), 0.137);
+      Motors before = Motors::Zero();
+      REQUIRE(mapper.map_position(p, before).ok());
+      Vector3 force = Vector3::Zero();
+      REQUIRE(mapper.map_force(joint_forces(0.5, 0, 0, 0), force).ok());
+      // Move the hand by c F, a small step along the arc (the rotation keeps r exact).
+      const double tangential =
+          compliance * force.dot(Vector3(std::cos(theta), -std::sin(theta), 0));
+      const double moved = theta + tangential / r;
+      Motors after = Motors::Zero();
+      REQUIRE(mapper.map_position(Vector3(r * std::sin(moved), r * std::cos(moved), 0.137), after)
+                  .ok());
+      const double taken_back = std::abs(after[0] - before[0]);
+      CAPTURE(r);
+      CAPTURE(lever_radius);
+      if (lever_radius > 0) {
+        CHECK(taken_back <= bound * (1 + 1e-12));
+        if (r <= lever_radius) CHECK(taken_back == doctest::Approx(bound).epsilon(1e-9));
+      }
+      exceeded = exceeded || taken_back > bound * (1 + 1e-6);
+    }
+    CHECK(exceeded == (lever_radius == 0));  // eq. 5.8 verbatim exceeds it near the axis
+  }
 }
 
 TEST_CASE_TEMPLATE("float and double give the hand-computed values", Scalar, double, float) {

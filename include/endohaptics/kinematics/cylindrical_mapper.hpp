@@ -103,6 +103,14 @@ struct CylindricalMapperConfig {
   //! defaults the shared limit never scales a force whose channels are each within their limit.
   Vector3 channel_limit = Vector3::Constant(Scalar(1.4));
   Scalar force_limit = Scalar(2.5);  //!< N, magnitude limit of the stylus force (Touch peak 3.3)
+  //! m, >= 0: inside this radius the roll (tangential) channel is multiplied by r / this radius.
+  //! Eq. 5.9 turns a tangential stylus move ds into a_roll ds / r of roll, so the roll a
+  //! compliant hand gives back under the rendered roll force grows as 1 / r towards the waist
+  //! axis; scaled so, it stays at its value at this radius (docs/models/cylindrical_mapper.md,
+  //! "The roll channel near the waist axis"). 0 (default): eq. 5.8 verbatim at every r. The
+  //! geometric choice is the rest radius, rest_position(config).x() (b_clamp / a_clamp = 0.130015
+  //! m with the defaults): the radius eq. 5.9 is centred on.
+  Scalar roll_lever_radius = Scalar(0);
 
   //! Every field but motor_order (a permutation, checked by CylindricalMapper) by its
   //! configuration name, with its bound (core/parameter.hpp): the one list CylindricalMapper's
@@ -132,6 +140,8 @@ struct CylindricalMapperConfig {
     v("force_scale", p.force_scale, Bound::in(0, 100, "N per unit"));
     v("force_limit", p.force_limit, force);
     v("channel_limit", p.channel_limit, force);
+    v("roll_lever_radius", p.roll_lever_radius,
+      Bound::in(0, std::numeric_limits<double>::infinity(), "m"));
   }
 };
 
@@ -173,6 +183,7 @@ class CylindricalMapper {
   explicit CylindricalMapper(const Config& config = Config{}) : config_(config) {
     validate();
     held_theta_ = config_.theta_neutral;
+    held_radius_ = std::numeric_limits<Scalar>::infinity();
   }
 
   //! The validated configuration.
@@ -216,19 +227,23 @@ class CylindricalMapper {
       setpoint[m] = p[index(config_.motor_order[static_cast<std::size_t>(m)])];
     }
     held_theta_ = theta;
+    held_radius_ = r;
     result.coordinates = Coordinates{theta, r, position.z()};
     return result;
   }
 
-  //! Eq. 5.8 at stylus angle `theta` (rad): joint forces (motor order; each the external force on
-  //! that joint, positive along its positive setpoint) -> stylus force (N, mapping frame), scaled
-  //! and limited per channel, then limited in magnitude. sign(a_i) makes each channel oppose the
-  //! stylus motion that would drive its joint further against the force (docs: "Signs of a").
-  //! `stylus_force` is untouched unless the result is ok.
-  ForceResult map_force(const MotorVector& motor_force, Scalar theta,
+  //! Eq. 5.8 at stylus angle `theta` (rad) and radius `radius` (m): joint forces (motor order;
+  //! each the external force on that joint, positive along its positive setpoint) -> stylus force
+  //! (N, mapping frame), scaled and limited per channel, then limited in magnitude. sign(a_i)
+  //! makes each channel oppose the stylus motion that would drive its joint further against the
+  //! force (docs: "Signs of a"). The roll channel is also multiplied by
+  //! min(1, radius / roll_lever_radius) (the roll gain of eq. 5.9 goes as 1 / r; docs: "The roll
+  //! channel near the waist axis"). `stylus_force` is untouched unless the result is ok
+  //! (a NaN or negative radius is refused; +infinity means "far from the axis").
+  ForceResult map_force(const MotorVector& motor_force, Scalar theta, Scalar radius,
                         Vector3& stylus_force) const noexcept {
     ForceResult result;
-    if (!motor_force.allFinite() || !std::isfinite(theta)) {
+    if (!motor_force.allFinite() || !std::isfinite(theta) || !(radius >= Scalar(0))) {
       result.status = NumericStatus::non_finite_input;
       return result;
     }
@@ -239,7 +254,7 @@ class CylindricalMapper {
     // Generalised forces along r, theta, z (virtual work: P_clamp2 grows with r, P_clamp1 falls).
     std::array<Scalar, 3> channel = {
         sign(config_.a_clamp) * (f_clamp2 - f_clamp1) / 2 * config_.force_scale[0],
-        sign(config_.a_roll) * f_roll * config_.force_scale[1],
+        sign(config_.a_roll) * f_roll * config_.force_scale[1] * roll_lever(radius),
         sign(config_.a_pitch) * f_pitch * config_.force_scale[2]};
     for (std::size_t k = 0; k < channel.size(); ++k) {
       const Scalar limit = config_.channel_limit[static_cast<Eigen::Index>(k)];
@@ -268,16 +283,33 @@ class CylindricalMapper {
     return result;
   }
 
-  //! Eq. 5.8 at the theta of the last successful `map_position` (or `theta_neutral`).
+  //! Eq. 5.8 at stylus angle `theta` with the radius not known: as at r >= roll_lever_radius
+  //! (the roll channel unscaled, eq. 5.8 verbatim).
+  ForceResult map_force(const MotorVector& motor_force, Scalar theta,
+                        Vector3& stylus_force) const noexcept {
+    return map_force(motor_force, theta, std::numeric_limits<Scalar>::infinity(), stylus_force);
+  }
+
+  //! Eq. 5.8 at the theta and radius of the last successful `map_position` (before any:
+  //! `theta_neutral`, radius not known). What the teleoperation loop renders.
   ForceResult map_force(const MotorVector& motor_force, Vector3& stylus_force) const noexcept {
-    return map_force(motor_force, held_theta_, stylus_force);
+    return map_force(motor_force, held_theta_, held_radius_, stylus_force);
+  }
+
+  //! The factor on the roll channel at stylus radius `radius` (m, >= 0): min(1, radius /
+  //! roll_lever_radius); 1 when roll_lever_radius is 0 or radius is +infinity.
+  [[nodiscard]] Scalar roll_lever(Scalar radius) const noexcept {
+    const Scalar lever = config_.roll_lever_radius;
+    return radius >= lever ? Scalar(1) : radius / lever;
   }
 
   //! Per motor slot, the largest joint force (N) that eq. 5.8 renders without its channel's
   //! `channel_limit` clipping it, with the other joints at zero: channel_limit / force_scale, and
   //! twice that for the clamps (a clamp's share of the radial channel is half its force);
-  //! +infinity where the channel's scale is 0. For layers that must know what the operator
-  //! feels unclipped (teleop::PassivityConfig::force_limit).
+  //! +infinity where the channel's scale is 0. For roll, the value at r >= roll_lever_radius
+  //! (inside it the lever lets a larger roll force through unclipped: this is the lower bound). For
+  //! layers that must know what the operator feels unclipped
+  //! (teleop::PassivityConfig::force_limit).
   [[nodiscard]] MotorVector unclipped_joint_force() const noexcept {
     MotorVector limit;
     for (std::size_t m = 0; m < config_.motor_order.size(); ++m) {
@@ -305,8 +337,14 @@ class CylindricalMapper {
   //! The theta of the last successful `map_position` (rad), or `theta_neutral` before it.
   [[nodiscard]] Scalar theta() const noexcept { return held_theta_; }
 
-  //! Forgets the held theta: back to `theta_neutral`.
-  void reset() noexcept { held_theta_ = config_.theta_neutral; }
+  //! The r (m) of the last successful `map_position`, or +infinity (not known) before it.
+  [[nodiscard]] Scalar radius() const noexcept { return held_radius_; }
+
+  //! Forgets the held theta and radius: back to `theta_neutral` and "radius not known".
+  void reset() noexcept {
+    held_theta_ = config_.theta_neutral;
+    held_radius_ = std::numeric_limits<Scalar>::infinity();
+  }
 
  private:
   static constexpr std::size_t index(Motor joint) noexcept {
@@ -359,6 +397,7 @@ class CylindricalMapper {
   Config config_;
   std::array<int, num_joints> motor_of_joint_{};  // inverse of motor_order
   Scalar held_theta_{};
+  Scalar held_radius_{};
 };
 
 }  // namespace endohaptics::kinematics
