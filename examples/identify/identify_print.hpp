@@ -130,6 +130,10 @@ inline void chosen(const wf::IdentifyReport& r) {
           "free-motion threshold: {:.4g} (the estimate reads 0 up to it; scores include it)\n",
           choice.model.free_motion_threshold);
     }
+    if (r.request.current_play > 0.0) {
+      fmt::print("current play: half width {:.4g} on {} (fitted and scored on the played input)\n",
+                 r.request.current_play, sel.inputs[0]);
+    }
   }
   for (std::size_t k = 0; k < choice.files.size(); ++k) {
     const wf::FileComparison& f = choice.files[k];

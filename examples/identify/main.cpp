@@ -60,6 +60,13 @@ int main(int argc, char** argv) {
                  "unchanged beyond twice it (auto: the 99th percentile of |estimate| where the "
                  "training output is 0)")
       ->check(number_in(0.0, endohaptics::files::ModelFile::max_parameter, {"auto", "none"}));
+  app.add_option("--current-play", q.current_play,
+                 "input 0's units (A): input 0 passes a play (backlash) operator of this half "
+                 "width before the fit and wherever the model runs (the static friction of a "
+                 "joint pressed into an object: its current falls through that band while the "
+                 "force stays); 0: none")
+      ->check(number_in(0.0, endohaptics::files::ModelFile::max_parameter))
+      ->capture_default_str();
   app.add_option("--out", out_path, "write the model here (JSON)");
   CLI11_PARSE(app, argc, argv);
 

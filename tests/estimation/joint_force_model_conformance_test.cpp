@@ -92,8 +92,10 @@ struct Factory<est::Clamp2016AsRun<float>> {
 template <>
 struct Factory<est::IdentifiedHammersteinWiener<double>> {
   static est::IdentifiedHammersteinWiener<double> make() {
+    // With a current play, whose output is part of the state.
     return est::IdentifiedHammersteinWiener<double>(est::models_2016<double>().clamp1.model(),
-                                                    endohaptics::model::FreeMotionThreshold(0.2));
+                                                    endohaptics::model::FreeMotionThreshold(0.2),
+                                                    0.15);
   }
 };
 template <>

@@ -184,6 +184,28 @@ TEST_CASE("a free-motion threshold round-trips, and is refused negative or on a 
         }).find("has no field \"free_motion_threshold\"") != std::string::npos);
 }
 
+TEST_CASE("a current play round-trips, and is refused negative or on a joint model") {
+  files::ModelFile file =
+      files::make_model_file(model::yaw_force_2016_hw(0.1), yaw_inputs, yaw_outputs);
+  const TempFile f("current_play.json");
+  files::save_model(f.path, file);
+  CHECK(files::load_model(f.path).current_play == 0.0);  // absent: none
+  CHECK_FALSE(files::to_json(file).contains("current_play"));
+  file.current_play = 0.17;
+  files::save_model(f.path, file);
+  CHECK(files::load_model(f.path).current_play == 0.17);
+  file.current_play = -0.1;
+  CHECK(message_of([&] { files::save_model(f.path, file); }).find("current_play must be in [0, ") !=
+        std::string::npos);
+  nlohmann::json joint = files::to_json(
+      files::make_joint_model_file(est::StallHoldParameters<double>{}, yaw_inputs, yaw_outputs));
+  joint["current_play"] = 0.1;
+  write_text(f.path, joint.dump());
+  CHECK(message_of([&] {
+          (void)files::load_model(f.path);
+        }).find("has no field \"current_play\"") != std::string::npos);
+}
+
 TEST_CASE("load errors name the file, the field and the value") {
   const std::string src = "model file test";
   auto broken = [](auto edit) {

@@ -197,6 +197,30 @@ TEST_CASE("free-motion threshold: the 99th percentile where the truth is 0, kept
         std::string::npos);
 }
 
+TEST_CASE("run_identify: a current play is fitted on, written, and replayed to the same score") {
+  const TempDir dir;
+  wf::IdentifyRequest q = lag_request(dir);
+  q.current_play = 0.05;
+  const wf::IdentifyReport r = wf::run_identify(q, {});
+  CHECK(r.model.current_play == 0.05);
+  const auto model_path = dir.path() / "model.json";
+  files::save_model(model_path, r.model);
+  CHECK(files::load_model(model_path).current_play == 0.05);
+  // Identify scored the model on the played input; replay plays the raw input itself.
+  wf::ReplayRequest replay;
+  replay.model = model_path.string();
+  replay.logs = q.logs;
+  replay.format = "csv";
+  const wf::ReplayReport rr = wf::run_replay(replay, {});
+  CHECK(rr.mean_fit == doctest::Approx(r.mean_fit).epsilon(1e-9));
+  q.current_play = 0.0;
+  const wf::IdentifyReport without = wf::run_identify(q, {});
+  CHECK(without.model.current_play == 0.0);
+  CHECK(without.mean_fit != r.mean_fit);  // the play changed the input and the score says so
+  q.current_play = -0.1;
+  CHECK(message_of([&] { (void)wf::run_identify(q, {}); }).starts_with("--current-play must be"));
+}
+
 TEST_CASE("run_identify and run_replay: bad requests name the option") {
   const TempDir dir;
   wf::IdentifyRequest q = lag_request(dir);

@@ -7,6 +7,7 @@
 //! (roll: N m with its 2016 model, N with an identified one, as the model was fitted).
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <optional>
 #include <utility>
@@ -28,27 +29,76 @@ namespace endohaptics::estimation {
 //! (6 states; a lower order embedded exactly, model::embed_states). A type of its own so that the
 //! bridge tells it from the 2016 yaw preset: it runs without the 2016 gate and unit scale
 //! (bridge_estimator_settings).
+//!
+//! Optionally the current passes a play (backlash) operator of half width `current_play` A before
+//! the model (files::ModelFile::current_play): z = min(max(z, i - w), i + w), starting at 0. It is
+//! the joint's static friction seen from the motor: a joint pressed into an object sticks while
+//! the tendon's torque stays within the static-friction band of the contact's, so on unloading
+//! the current falls by up to 2 w while the force stays, and on loading the current leads the
+//! force by w. The play's output is held in the state's last entry.
 template <typename Scalar = double>
 class IdentifiedHammersteinWiener : public ClampModel2016<Scalar> {
  public:
   using Base = ClampModel2016<Scalar>;                   //!< the yaw type it runs in
   using Signals = typename Base::Signals;                //!< one joint's signals for one tick
   using Threshold = model::FreeMotionThreshold<Scalar>;  //!< on its output
+  //! The model's state, then the play's output (A).
+  using State = Eigen::Matrix<Scalar, Base::State::RowsAtCompileTime + 1, 1>;
 
   //! `model` (of the yaw type), its output through `threshold` (the model file's
-  //! free_motion_threshold; the default is none).
-  explicit IdentifiedHammersteinWiener(typename Base::ModelType model, Threshold threshold = {})
-      : Base(std::move(model)), threshold_(threshold) {}
+  //! free_motion_threshold; the default is none), its current through a play of half width
+  //! `current_play` A (0: none). Throws Error unless `current_play` is finite and >= 0.
+  explicit IdentifiedHammersteinWiener(typename Base::ModelType model, Threshold threshold = {},
+                                       Scalar current_play = Scalar(0))
+      : Base(std::move(model)),
+        threshold_(threshold),
+        play_(model::detail::nl::non_negative(current_play, "IdentifiedHammersteinWiener",
+                                              "current_play")) {}
 
   //! The model's force through the free-motion threshold.
   [[nodiscard]] Scalar force(const Signals& s) const noexcept {
-    return threshold_.apply(Base::force(s));
+    return threshold_.apply(Base::force(played(s)));
   }
+  //! One model period on the played current (all-or-nothing).
+  [[nodiscard]] model::NumericStatus advance(const Signals& s) noexcept {
+    const Signals p = played(s);
+    const model::NumericStatus status = Base::advance(p);
+    if (status == model::NumericStatus::ok) z_ = p.current;
+    return status;
+  }
+  //! The model's state, then the play's output.
+  [[nodiscard]] State state() const noexcept {
+    State x;
+    x.template head<Base::State::RowsAtCompileTime>() = Base::state();
+    x[State::RowsAtCompileTime - 1] = z_;
+    return x;
+  }
+  //! Sets the model's state and the play's output from `x` (what state() returned).
+  void reset(const State& x) noexcept {
+    Base::reset(typename Base::State(x.template head<Base::State::RowsAtCompileTime>()));
+    z_ = x[State::RowsAtCompileTime - 1];
+  }
+  //! Zero state, the play centred.
+  void reset() noexcept { reset(State::Zero()); }
   //! The free-motion threshold.
   [[nodiscard]] const Threshold& threshold() const noexcept { return threshold_; }
+  //! The play's half width, A (0: none).
+  [[nodiscard]] Scalar current_play() const noexcept { return play_; }
 
  private:
+  //! `s` with the current replaced by the play's output for it (a NaN current stays NaN, so
+  //! advance refuses it and the play keeps its output).
+  [[nodiscard]] Signals played(const Signals& s) const noexcept {
+    if (play_ == Scalar(0)) return s;
+    Signals p = s;
+    if (!std::isfinite(s.current)) return p;
+    p.current = std::fmin(std::fmax(z_, s.current - play_), s.current + play_);
+    return p;
+  }
+
   Threshold threshold_;
+  Scalar play_ = Scalar(0);
+  Scalar z_ = Scalar(0);
 };
 
 //! The force model of one motor slot of the bridge, whichever kind its model file or preset

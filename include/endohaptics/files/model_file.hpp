@@ -143,6 +143,13 @@ struct ModelFile {
   //! whose true output is 0: what the model gives when nothing touches (JSON
   //! "free_motion_threshold", written when > 0).
   double free_motion_threshold = 0.0;
+  //! Input 0's units (A for the force models' current), >= 0, linear kinds only (0: none):
+  //! input 0 passes a play (backlash) operator of this half width, z = min(max(z, u - w), u + w)
+  //! from z = 0, before the input nonlinearity, wherever the model runs (replay, identify's scores,
+  //! the bridge: estimation::IdentifiedHammersteinWiener). The static friction of a joint pressed
+  //! into an object: the current falls through the band while the force stays (identify
+  //! --current-play; JSON "current_play", written when > 0).
+  double current_play = 0.0;
   //! A joint-model kind's parameters (std::monostate: a linear kind). Then `state_space` is a
   //! placeholder (one state, all zero) that carries only the sample time (the parameters' own)
   //! and the sizes: 2 inputs (current A; velocity rad/s, for the observers the encoder velocity

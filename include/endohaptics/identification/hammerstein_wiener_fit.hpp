@@ -66,6 +66,12 @@ struct HammersteinWienerFit {
 [[nodiscard]] ENDOHAPTICS_DECL Eigen::MatrixXd apply_maps(std::span<const StaticMap> maps,
                                                           const Eigen::MatrixXd& u);
 
+//! u (N x nu) with column 0 passed through a play (backlash) operator of half width `play` >= 0
+//! from z = 0: z_k = min(max(z_{k-1}, u_k0 - play), u_k0 + play) (files::ModelFile::current_play;
+//! the bridge's estimation::IdentifiedHammersteinWiener runs the same). u itself when play is 0
+//! or u has no column; a non-finite sample passes and leaves z as it was.
+[[nodiscard]] ENDOHAPTICS_DECL Eigen::MatrixXd played_input(const Eigen::MatrixXd& u, double play);
+
 //! Output (N x ny) of the fitted model from x0 of the linear block: g(G(f(u))).
 [[nodiscard]] ENDOHAPTICS_DECL Eigen::MatrixXd simulate(const HammersteinWienerFit& hw,
                                                         const Eigen::MatrixXd& u,

@@ -52,6 +52,9 @@ struct IdentifyRequest {
   //! what the model gives when nothing touches; refused with fewer than 100 such samples. Linear
   //! kinds only. Empty: none.
   std::optional<std::string> free_threshold{};
+  //! Input 0's units, >= 0 (0: none): input 0 passes a play of this half width before the fit
+  //! (files::ModelFile::current_play, written into the model); subspace families only.
+  double current_play = 0.0;
 };
 
 //! The request resolved, the logs prepared and the subspace family fitted: what run_identify

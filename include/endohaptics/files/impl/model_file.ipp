@@ -41,6 +41,10 @@ ENDOHAPTICS_DECL void validate(const ModelFile& m, const std::string& where) {
          format_number(ModelFile::max_parameter) + "] (output units), got " +
          format_number(m.free_motion_threshold));
   }
+  if (!(m.current_play >= 0.0 && m.current_play <= ModelFile::max_parameter)) {
+    fail(where + ": current_play must be in [0, " + format_number(ModelFile::max_parameter) +
+         "] (input 0's units), got " + format_number(m.current_play));
+  }
   if (m.current_reference && m.kind() != ModelKind::push_load_observer &&
       m.kind() != ModelKind::bidirectional_load_observer) {
     fail(where + ": kind \"" + std::string(to_string(m.kind())) +
@@ -61,6 +65,9 @@ ENDOHAPTICS_DECL void validate(const ModelFile& m, const std::string& where) {
     }
     if (m.free_motion_threshold != 0.0) {
       fail(where + ": kind \"" + kind + "\" has no free_motion_threshold (linear kinds only)");
+    }
+    if (m.current_play != 0.0) {
+      fail(where + ": kind \"" + kind + "\" has no current_play (linear kinds only)");
     }
     if (ss.state_size() != 1 || ss.input_size() != static_cast<Eigen::Index>(nu) ||
         ss.output_size() != 1 || !ss.A().isZero(0.0) || !ss.B().isZero(0.0) ||
@@ -238,6 +245,7 @@ ENDOHAPTICS_DECL void add_linear_block(json& j, const ModelFile& m) {
   j["D"] = matrix_to_json(ss.D());
   j["x0"] = std::vector<double>(ss.state().data(), ss.state().data() + ss.state().size());
   if (m.free_motion_threshold > 0.0) j["free_motion_threshold"] = m.free_motion_threshold;
+  if (m.current_play > 0.0) j["current_play"] = m.current_play;
   if (m.is_hammerstein_wiener()) {
     j["input_nonlinearity"] = json::array();
     for (const auto& map : m.input_nonlinearity)
@@ -278,7 +286,7 @@ ENDOHAPTICS_DECL ModelFile joint_model_from_json(const json& j, const std::strin
                                                  std::vector<SignalInfo> outputs,
                                                  const std::string& where) {
   for (const char* linear : {"states", "A", "B", "C", "D", "x0", "input_nonlinearity",
-                             "output_nonlinearity", "free_motion_threshold"}) {
+                             "output_nonlinearity", "free_motion_threshold", "current_play"}) {
     if (j.contains(linear)) {
       fail(where + ": kind \"" + kind + "\" has no field \"" + linear +
            "\" (its parameters are in \"parameters\")");
@@ -539,6 +547,9 @@ ENDOHAPTICS_DECL ModelFile model_from_json(const nlohmann::json& file, const std
   if (j.contains("free_motion_threshold")) {  // its range: validate, below
     m.free_motion_threshold =
         mf::number(j["free_motion_threshold"], where, "free_motion_threshold");
+  }
+  if (j.contains("current_play")) {  // its range: validate, below
+    m.current_play = mf::number(j["current_play"], where, "current_play");
   }
   m.provenance = mf::provenance_from_json(j, where);
   mf::validate(m, where);

@@ -22,6 +22,19 @@ ENDOHAPTICS_DECL Eigen::MatrixXd apply_maps(std::span<const StaticMap> maps,
   return out;
 }
 
+ENDOHAPTICS_DECL Eigen::MatrixXd played_input(const Eigen::MatrixXd& u, double play) {
+  Eigen::MatrixXd out = u;
+  if (play == 0.0 || u.cols() == 0) return out;
+  double z = 0.0;
+  for (Eigen::Index k = 0; k < u.rows(); ++k) {
+    const double v = u(k, 0);
+    if (!std::isfinite(v)) continue;
+    z = std::fmin(std::fmax(z, v - play), v + play);
+    out(k, 0) = z;
+  }
+  return out;
+}
+
 ENDOHAPTICS_DECL Eigen::MatrixXd simulate(const HammersteinWienerFit& hw, const Eigen::MatrixXd& u,
                                           const Eigen::VectorXd& x0) {
   return apply_maps(hw.output, simulate(hw.linear, apply_maps(hw.input, u), x0));

@@ -140,6 +140,22 @@ ENDOHAPTICS_DECL IdentifyReport run_identify(const IdentifyRequest& request,
       }
     }
   }
+  // The play on input 0: the subspace family is fitted and scored on the played input; the model
+  // file carries the width (set below, after every score), and replay and the bridge apply it.
+  if (!(request.current_play >= 0.0 && request.current_play <= files::ModelFile::max_parameter)) {
+    ENDOHAPTICS_THROW(Error("--current-play must be in [0, " +
+                            detail::format_number(files::ModelFile::max_parameter) + "], got " +
+                            detail::format_number(request.current_play)));
+  }
+  if (request.current_play > 0.0) {
+    for (auto* logs : {&r.fit_logs, &r.score_logs}) {
+      for (PreparedLog& log : *logs) {
+        for (DataSet& d : log.segments) {
+          d.u = identification::played_input(d.u, request.current_play);
+        }
+      }
+    }
+  }
   r.time_constant_limit = time_constant_limit(r.options.max_time_constant, r.fit_logs);
   r.options.progress = hooks.progress;
   if (hooks.prepared) hooks.prepared(r);
@@ -187,6 +203,11 @@ ENDOHAPTICS_DECL IdentifyReport run_identify(const IdentifyRequest& request,
     }
     choice.model.provenance.fit_percent = {sum / static_cast<double>(choice.files.size())};
   }
+  if (request.current_play > 0.0 && choice.model.is_joint_model()) {
+    ENDOHAPTICS_THROW(Error("--current-play: the chosen family (" + choice.family +
+                            ") is a joint model, which holds its own friction; give it for a "
+                            "subspace family only"));
+  }
   files::ModelFile model = choice.model;
   IdentifyReport report{std::move(r), std::move(choice), {}, 0.0, 0.0, std::move(model)};
   const bool joint = report.joint_chosen();
@@ -204,6 +225,8 @@ ENDOHAPTICS_DECL IdentifyReport run_identify(const IdentifyRequest& request,
   const auto n_files = static_cast<double>(report.choice.files.size());
   report.mean_rmse = rmse_sum / n_files;
   report.mean_fit = fit_sum / n_files;
+  // Every score above ran on the played input; from here the model plays its input itself.
+  report.model.current_play = request.current_play;
   report.model.provenance.notes =
       "preprocessing: " + describe(joint ? report.joint_preprocessing : report.preprocessing) +
       "\nfit_percent: mean causal fit over the identification logs, " +
