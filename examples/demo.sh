@@ -7,7 +7,9 @@
 #      pace than in the runs below, each grasp to another depth (operator.depth_variation); the
 #      emulator logs what the sbRIO reports and the true force on an exact 1 ms grid;
 #   2. endohaptics-identify, once per motor: a Hammerstein-Wiener model (that motor's reported
-#      current and velocity -> its true force) of order 2, written into a model set
+#      current and velocity -> its true force; pitch and the clamps: the current through a play
+#      of the joint's static friction, the order chosen by the causal score; roll: order 2),
+#      written into a model set
 #      (model_sets/EW/<motor>.json) that the bridge loads by instrument name, with a free-motion
 #      threshold chosen on the experiment alone (--free-threshold auto: the estimate reads 0 up
 #      to what the model gave there while nothing touched). Order 2: the sbRIO's
@@ -88,13 +90,25 @@ duration=$seconds
 echo "== 2. identify a model per motor: its reported current and velocity -> its true force"
 # Generic CSVs: the force-model formats' near-integrating limit stated (csv has none by default;
 # docs/identification_results.md).
+# Pitch and the clamps: the current first passes a play of half width K_s, the joint's static
+# friction in the current domain (docs/models/sim.md, "Parameters": 0.17, 0.21, 0.20 A): a joint
+# pressed into an object sticks while the current stays within K_s of what the contact's force
+# needs, so on unloading the current falls by up to 2 K_s while the force stays (docs/models.md,
+# "Current play"). The play replaces the current's dead zone (0; the velocity's: auto), and the
+# order is the causal score's choice on the experiment (auto, up to 4). Roll: as before, no play.
 mkdir -p "$out/model_sets/EW"
 motors=(roll pitch clamp1 clamp2)
+plays=(0 0.17 0.21 0.20)
 for slot in 0 1 2 3; do
   echo "-- ${motors[$slot]} (motor $slot)"
+  if [[ ${plays[$slot]} == 0 ]]; then
+    fit=(--order 2 --deadzone auto)
+  else
+    fit=(--order auto --max-order 4 --deadzone 0,auto --current-play "${plays[$slot]}")
+  fi
   "$bin/endohaptics-identify" --format csv --log "$out/experiment.truth.csv" \
     --input "reported_current$slot" --input "reported_velocity$slot" --output "force$slot" \
-    --ts 0.001 --order 2 --deadzone auto --method best --max-time-constant 2 \
+    --ts 0.001 "${fit[@]}" --method best --max-time-constant 2 \
     --free-threshold auto --out "$out/model_sets/EW/${motors[$slot]}.json" | tail -n 2
 done
 
@@ -116,8 +130,9 @@ echo "== 3. teleoperation with the identified models (instrument EW)"
 # the tendon's torque, 2 K_s k_tau / k_t (K_s 0.13, 0.17, 0.21, 0.20 A; k_tau 0.0171 N m/A x
 # 76000/2048; k_t 5, 5, 8.5, 8.5 N m/rad): stick_travel; below the force the static friction
 # holds against, K_s k_tau / lever (lever 0.18, 0.18, 0.32, 0.32 m): stick_force, also through
-# the play (0.01745 rad): stick_play. So its force stays while its current relaxes.
-stick='"stick_travel": [0.0330, 0.0432, 0.0314, 0.0299], '
+# the play (0.01745 rad): stick_play. So its force stays while its current relaxes. Roll only:
+# pitch and the clamps hold that band in their models' current play (travel 0: off).
+stick='"stick_travel": [0.0330, 0, 0, 0], '
 stick+='"stick_play": [0.01745, 0.01745, 0.01745, 0.01745], '
 stick+='"stick_force": [0.458, 0.599, 0.416, 0.397]'
 printf '{ %s, "estimator": { "model_sets": "model_sets", "instrument": "EW", %s } }\n' \
