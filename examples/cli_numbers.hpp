@@ -4,11 +4,11 @@
 // range in --help.
 #pragma once
 
+#include <CLI/CLI.hpp>
 #include <endohaptics/workflow/command_line.hpp>
 #include <string>
 #include <utility>
 #include <vector>
-#include "cli11.hpp"
 
 namespace examples {
 

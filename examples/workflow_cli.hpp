@@ -5,12 +5,12 @@
 // otherwise), the help text says so.
 #pragma once
 
+#include <CLI/CLI.hpp>
 #include <endohaptics/workflow/command_line.hpp>
 #include <endohaptics/workflow/model_comparison.hpp>
 #include <endohaptics/workflow/preprocessing.hpp>
 #include <string>
 #include <vector>
-#include "cli11.hpp"
 
 #include "cli_numbers.hpp"
 

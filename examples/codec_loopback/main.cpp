@@ -1,18 +1,15 @@
 // Codec round trip over UDP loopback: a stand-in sbRIO thread answers every setpoint packet
 // with a state packet (position = setpoint, all enabled motors active); the PC side encodes,
 // sends, waits for the answer, decodes and prints both packets.
-// Before Asio: Boost 1.74's boost/asio/awaitable.hpp uses std::exchange without including it.
-#include <utility>
-
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <CLI/CLI.hpp>
 #include <boost/asio.hpp>
 #include <chrono>
 #include <endohaptics/protocol/packet_codec.hpp>
 #include <endohaptics/workflow/command_line.hpp>
 #include <string>
 #include <thread>
-#include "../cli11.hpp"
 
 #include "../cli_numbers.hpp"
 

@@ -2,12 +2,12 @@
 // noexcept member functions satisfies the concepts (no base classes, no virtuals). Here the
 // "transport" is an in-process mailbox served by a toy sbRIO, and the "device" a scripted hand.
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 #include <array>
 #include <cmath>
 #include <endohaptics/kinematics/cylindrical_mapper.hpp>
 #include <endohaptics/teleop/teleop_loop.hpp>
 #include <endohaptics/workflow/command_line.hpp>
-#include "../cli11.hpp"
 
 #include "../cli_numbers.hpp"
 

@@ -78,9 +78,6 @@ target_link_libraries(endohaptics-ros-touch-standin PRIVATE endohaptics::endohap
 # A stand-in for the Touch's driver (tests and docs/ros.md): a 1 kHz publisher with nothing to
 # gain from -O3, which cost it 3 s of GCC's optimiser (15.8 -> 12.9 s of CPU at -O1).
 target_compile_options(endohaptics-ros-touch-standin PRIVATE -O1)
-# A stand-in for the Touch's driver (tests and docs/ros.md): a 1 kHz publisher with nothing to
-# gain from -O3, which cost it 3 s of GCC's optimiser (docs/history/build-times.md, step 16).
-target_compile_options(endohaptics-ros-touch-standin PRIVATE -O1)
 
 if(ENDOHAPTICS_BUILD_TESTS)
   # Heap allocations of the loop thread while ROS traffic flows (tests/ros/ros_alloc_check.cpp).

@@ -6,13 +6,13 @@
 // refused messages (NaN, wrong frame). docs/ros.md.
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <atomic>
 #include <csignal>
 #include <endohaptics/core/clock.hpp>
 #include <endohaptics/sim/scripted_operator.hpp>
 #include <limits>
 #include <optional>
-#include "../cli11.hpp"
 
 #include "../cli_numbers.hpp"
 #include "../teleop_bridge/touch_frame.hpp"

@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -21,7 +22,6 @@
 #include <string>
 #include <string_view>
 #include <vector>
-#include "../cli11.hpp"
 
 #include "../cli_numbers.hpp"
 

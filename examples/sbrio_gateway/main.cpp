@@ -4,9 +4,9 @@
 // motors itself (transport/v2_gateway.hpp, docs/rig.md). Options and run: gateway_app.hpp.
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
-#include "../cli11.hpp"
 
 #include "gateway_app.hpp"
 

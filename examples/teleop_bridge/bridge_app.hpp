@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <atomic>
 #include <boost/lockfree/spsc_queue.hpp>
 #include <chrono>
@@ -33,7 +34,6 @@
 #include <string>
 #include <thread>
 #include <tuple>
-#include "../cli11.hpp"
 
 #include "../cli_numbers.hpp"
 
