@@ -62,6 +62,12 @@ int main(int argc, char** argv) {
                  "N on the clamps: the estimate error the observer tolerates (default: the "
                  "sweep's choice for the force source)")
       ->check(examples::number_in(0.0, 10.0));
+  double robot_tolerance = -1.0;
+  app.add_option("--robot-tolerance", robot_tolerance,
+                 "N on the clamps: the force below which the robot-side controller does not "
+                 "hold a setpoint step back (default: the sweep's choice for the force source: the "
+                 "identified model's free-motion error bound, 0.088 N)")
+      ->check(examples::number_in(0.0, 10.0));
   std::string robot_return;
   app.add_option("--robot-return", robot_return,
                  "setpoint-and-robot or setpoint: what shows energy coming back at the robot port "
@@ -85,7 +91,7 @@ int main(int argc, char** argv) {
   app.add_option("--stiction-memory", stiction,
                  "on, through-zero or off: the estimator's stiction memory with the simulated "
                  "instrument's constants (through-zero: holding while the estimate changes sign, "
-                 "estimation::StictionHold; default: off)")
+                 "estimation::StictionHold; default: through-zero for identified, off otherwise)")
       ->check(CLI::IsMember({"on", "through-zero", "off"}));
   CLI11_PARSE(app, argc, argv);
   const auto contact =
@@ -120,11 +126,14 @@ int main(int argc, char** argv) {
                                                  : tp::PassivityObserver::per_direction;
     }
     if (tolerance >= 0.0) src.tolerance = tolerance;
+    if (robot_tolerance >= 0.0) src.robot_tolerance = robot_tolerance;
     if (reserve > 0.0) src.reserve = reserve;
     if (recovery > 0.0) src.recovery = recovery;
     if (!recover.empty()) src.recover_absorbing = recover == "while-absorbing";
-    if (!stiction.empty()) src.stiction_memory = stiction != "off";
-    src.stiction_through_zero = stiction == "through-zero";
+    if (!stiction.empty()) {
+      src.stiction_memory = stiction != "off";
+      src.stiction_through_zero = stiction == "through-zero";
+    }
     if (!robot_return.empty()) src.return_needs_motion = robot_return == "setpoint-and-robot";
     if (do_table) sweep_print::table(src);
     if (do_transparency) sweep_print::transparency(contact, src);

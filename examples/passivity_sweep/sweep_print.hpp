@@ -24,12 +24,13 @@ struct Source {
   std::optional<endohaptics::estimation::BridgeJointModel> clamp_model;  //!< identified's
   std::optional<tp::PassivityObserver> observer;  //!< replaces the sweep's choice when given
   std::optional<double> tolerance;                //!< N on the clamps, replaces the sweep's
+  std::optional<double> robot_tolerance;          //!< N on the clamps, robot_cost_tolerance
   std::optional<bool> return_needs_motion;        //!< replaces the sweep's choice when given
   std::optional<double> reserve;                  //!< J, replaces the sweep's energy reserve
   std::optional<double> recovery;                 //!< 1/s, replaces the sweep's gain recovery
   std::optional<bool> recover_absorbing;          //!< replaces recover_while_absorbing
   std::optional<bool> stiction_memory;            //!< replaces the estimator's stiction memory
-  bool stiction_through_zero = false;             //!< that memory holding through zero
+  std::optional<bool> stiction_through_zero;      //!< that memory holding through zero
   //! The scenario with this source and the overrides.
   [[nodiscard]] sim::ClosedLoopConfig scenario(int ms, double loss, sim::ContactKind contact,
                                                tp::PassivityMode mode) const {
@@ -40,9 +41,12 @@ struct Source {
     if (recovery) c.passivity.gain_recovery_rate = *recovery;
     if (recover_absorbing) c.passivity.recover_while_absorbing = *recover_absorbing;
     if (stiction_memory) c.stiction_memory = *stiction_memory;
-    c.stiction_through_zero = stiction_through_zero;
-    if (stiction_through_zero) {
+    if (stiction_through_zero) c.stiction_through_zero = *stiction_through_zero;
+    if (c.stiction_through_zero) {
       for (const int j : {2, 3}) c.stiction_contact_level[j] = sim::identified_free_motion_error;
+    }
+    if (robot_tolerance) {
+      for (const int j : {2, 3}) c.passivity.robot_cost_tolerance[j] = *robot_tolerance;
     }
     if (tolerance) {
       for (const int j : {2, 3}) c.passivity.estimate_tolerance[j] = *tolerance;

@@ -264,6 +264,42 @@ TEST_CASE("passivity: a force within the estimate tolerance is neither booked no
   CHECK(out[clamp1] == doctest::Approx(-0.2));
 }
 
+TEST_CASE("passivity: a step against a force within the robot cost tolerance is not held back") {
+  for (const double tolerance : {0.0, 0.05}) {
+    CAPTURE(tolerance);
+    tp::PassivityConfig config;
+    config.mode = tp::PassivityMode::tdpa;
+    config.observer = tp::PassivityObserver::per_direction;
+    config.robot_cost_tolerance[clamp1] = tolerance;
+    tp::TimeDomainPassivity tdpa(config);
+    tdpa.reset(Vector::Zero());
+    Vector force = Vector::Zero(), out, sent = Vector::Zero();
+    force[clamp1] = -0.5;              // a contact pushing back against the setpoint's motion
+    for (int t = 1; t <= 2000; ++t) {  // the setpoint goes twice as far as the hand: a deficit
+      Vector desired = Vector::Zero();
+      desired[clamp1] = 1e-4 * t;
+      sent[clamp1] = 2e-4 * t;
+      tdpa.track_desired(desired);
+      tdpa.commit(sent);
+      tdpa.observe_robot(sent, force);
+      (void)tdpa.shape_force(force, 1e-3, out);
+    }
+    REQUIRE(tdpa.energy_to_robot(clamp1) < -0.02);  // J, standing: nothing will repay it
+    Vector candidate = sent;
+    candidate[clamp1] += 4e-3;  // one rate-limited step further in
+    force[clamp1] = -0.02;      // what is left of the force: within the tolerance
+    (void)tdpa.shape_setpoint(candidate, sent, force, out);
+    CHECK(out[clamp1] == (tolerance > 0.0 ? candidate[clamp1] : sent[clamp1]));
+    force[clamp1] = -0.3;  // a contact beyond it is still charged: the step is held back
+    (void)tdpa.shape_setpoint(candidate, sent, force, out);
+    CHECK(out[clamp1] == sent[clamp1]);
+    CHECK(tdpa.energy_to_robot(clamp1) < -0.02);  // the observer books what it booked
+  }
+  tp::PassivityConfig bad;
+  bad.robot_cost_tolerance[3] = -1.0;
+  CHECK_THROWS_WITH(bad.validate(), doctest::Contains("robot_cost_tolerance[3] must be finite"));
+}
+
 TEST_CASE("passivity: recover_while_absorbing brings the force back while the hand holds still") {
   for (const bool recover : {false, true}) {
     CAPTURE(recover);

@@ -80,11 +80,21 @@ inline constexpr double identified_free_motion_error = 0.088;
     // 2016 models, which are not).
     c.passivity.observer = teleop::PassivityObserver::per_direction;
     c.passivity.gain_recovery_rate = sensorless_gain_recovery_rate;
-    // The estimator's stiction memory (ClosedLoopConfig::stiction_memory, the instrument's own
-    // constants) stays off: in this loop it lost cases (2 of 20 met with TDPA against 8 without,
-    // docs/passivity.md): the hand yields, the motor backs off beyond the stuck travel while the
-    // jaw is still in the tissue, and the estimate released there reads the tendon pulling,
-    // below the truth, so the held and released estimate make a relay with the hand.
+    if (source == ForceSource::identified) {
+      // The stiction memory with the instrument's own constants (stiction_memory_settings),
+      // holding through zero (estimation::StictionHold: the estimator's own memory lets go when
+      // the model reads a relaxed current as a small force the other way, with the jaw still
+      // stuck; with it 2 of 20 cases met, docs/passivity.md), a held force below the model's
+      // free-motion error bound on the same side only; and the robot-side controller charging
+      // a step only against the force beyond that bound (a standing deficit otherwise stops
+      // the setpoint against a force the estimate cannot tell from zero).
+      c.stiction_memory = true;
+      c.stiction_through_zero = true;
+      for (const int j : {2, 3}) {
+        c.stiction_contact_level[j] = identified_free_motion_error;
+        c.passivity.robot_cost_tolerance[j] = identified_free_motion_error;
+      }
+    }
   }
   c.round_trip = std::chrono::milliseconds(round_trip_ms);
   c.loss = loss;

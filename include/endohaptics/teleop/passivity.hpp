@@ -97,6 +97,13 @@ struct PassivityConfig {
   //! the servo pushes (its current): with the robot stuck (a stop, stiction) that force follows
   //! the setpoint's distance from the robot, a spring the setpoint stores energy in and gets back.
   bool robot_return_needs_motion = true;
+  //! N per motor, >= 0: the robot-side PC charges a setpoint step only against the force beyond
+  //! this band (on top of estimate_tolerance). A sensorless estimate's free-motion error bound:
+  //! a step against a force the estimate cannot tell from zero is not held back. Without it a
+  //! standing deficit (the robot-side PC never reverses a step, so nothing repays it) stops
+  //! every step against any force however small, and the setpoint stays behind the hand for
+  //! good. The observer still books the force as it is. 0: every step is charged.
+  Vector robot_cost_tolerance = Vector::Zero();
   //! False: the operator-side force scale follows the deficit (1 + E / energy_reserve) at every
   //! tick. True: only on ticks where the operator port gives the hand energy (the force along
   //! the hand's motion), the condition of the impedance-type PC of Ryu, Kwon & Hannaford 2004;
@@ -143,6 +150,13 @@ struct PassivityConfig {
     if (observer != PassivityObserver::combined && observer != PassivityObserver::per_direction) {
       ENDOHAPTICS_THROW(Error("PassivityConfig: observer must be combined or per_direction, got " +
                               std::to_string(static_cast<int>(observer))));
+    }
+    for (int j = 0; j < robot_cost_tolerance.size(); ++j) {
+      if (!std::isfinite(robot_cost_tolerance[j]) || robot_cost_tolerance[j] < 0.0) {
+        ENDOHAPTICS_THROW(Error("PassivityConfig: robot_cost_tolerance[" + std::to_string(j) +
+                                "] must be finite and >= 0 N, got " +
+                                endohaptics::detail::format_number(robot_cost_tolerance[j])));
+      }
     }
     for (int j = 0; j < estimate_tolerance.size(); ++j) {
       if (!std::isfinite(estimate_tolerance[j]) || estimate_tolerance[j] < 0.0) {
@@ -251,7 +265,8 @@ class TimeDomainPassivity {
     out = candidate;
     if (!controlling() || !started_) return false;
     bool changed = false;
-    const Vector booked = tolerated(force);
+    const Vector tolerance = config_.estimate_tolerance + config_.robot_cost_tolerance;
+    const Vector booked = force - force.cwiseMax(-tolerance).cwiseMin(tolerance);
     for (int j = 0; j < Vector::SizeAtCompileTime; ++j) {
       const double deficit = per_direction_ ? -energy_to_robot(j) : -energy(j);
       const double step = (candidate[j] - from[j]) * config_.lever[j];  // m at the tool
