@@ -21,6 +21,7 @@
 #include "endohaptics/estimation/stall_hold.hpp"
 #include "endohaptics/model/friction_model.hpp"
 #include "endohaptics/model/static_nonlinearity.hpp"
+#include "endohaptics/model/stop_operators.hpp"
 
 namespace endohaptics::estimation {
 
@@ -92,7 +93,7 @@ class IdentifiedHammersteinWiener : public ClampModel2016<Scalar> {
     if (play_ == Scalar(0)) return s;
     Signals p = s;
     if (!std::isfinite(s.current)) return p;
-    p.current = std::fmin(std::fmax(z_, s.current - play_), s.current + play_);
+    p.current = model::play(z_, s.current, play_);
     return p;
   }
 

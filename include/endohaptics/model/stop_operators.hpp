@@ -15,6 +15,16 @@
 
 namespace endohaptics::model {
 
+//! The play (backlash) operator of half width `r` >= 0, one sample: its output z follows the
+//! input q only once q is more than r away, z_k = min(max(z_{k-1}, q_k - r), q_k + r). Each of
+//! StopOperators' thresholds runs one; identified force models run one on the motor current
+//! (files::ModelFile::current_play, estimation::IdentifiedHammersteinWiener,
+//! identification::played_input). Precondition: q finite.
+template <typename Scalar>
+[[nodiscard]] inline Scalar play(Scalar z, Scalar q, Scalar r) noexcept {
+  return std::fmin(std::fmax(z, q - r), q + r);
+}
+
 //! N stop operators with increasing thresholds (see the file comment). Before the first motion
 //! the history is unknown: every output stays 0 until the position has travelled `start_travel`
 //! from where it started; then the operators start as if the motion before the start had run the
@@ -79,11 +89,7 @@ class StopOperators {
       x[N + 1] = Scalar(2);
     }
     for (int j = 0; j < N; ++j) {
-      if (q - x[j] > r_[j]) {
-        x[j] = q - r_[j];
-      } else if (x[j] - q > r_[j]) {
-        x[j] = q + r_[j];
-      }
+      x[j] = play(x[j], q, r_[j]);
       s[j] = (q - x[j]) * inverse_[j];
     }
   }

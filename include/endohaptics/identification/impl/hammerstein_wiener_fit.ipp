@@ -29,7 +29,7 @@ ENDOHAPTICS_DECL Eigen::MatrixXd played_input(const Eigen::MatrixXd& u, double p
   for (Eigen::Index k = 0; k < u.rows(); ++k) {
     const double v = u(k, 0);
     if (!std::isfinite(v)) continue;
-    z = std::fmin(std::fmax(z, v - play), v + play);
+    z = model::play(z, v, play);
     out(k, 0) = z;
   }
   return out;
