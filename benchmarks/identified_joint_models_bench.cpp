@@ -29,8 +29,9 @@ using joint_signal_sweep::run_joint_steps;
 
 // An order-2 model embedded in the 6 states at 1 ms (what endohaptics-identify --order 2 writes
 // and the bridge runs), a dead zone on the current, a free-motion threshold of 0.18 N (the demo's
-// clamp models: 0.166-0.204 N).
-est::IdentifiedHammersteinWiener<double> identified() {
+// clamp models: 0.166-0.204 N); with `current_play` > 0 the current passes a play of that half
+// width instead of the dead zone (the demo's pitch and clamps: --current-play K_s).
+est::IdentifiedHammersteinWiener<double> identified(double current_play = 0.0) {
   using SS = model::StateSpace<6, 2, 1>;
   SS::MatrixA A = SS::MatrixA::Zero();
   A.topLeftCorner<2, 2>() << 0.995, 0.01, -0.004, 0.97;
@@ -40,15 +41,21 @@ est::IdentifiedHammersteinWiener<double> identified() {
   C.leftCols<2>() << -2.5, 0.77;
   const SS::MatrixD D{{-0.23, -0.096}};
   using Channels = model::PerChannel<model::Deadzone<double>, 2>;
-  const std::array<model::Deadzone<double>, 2> maps{model::Deadzone<double>(0.099),
-                                                    model::Deadzone<double>(0.0)};
+  const std::array<model::Deadzone<double>, 2> maps{
+      model::Deadzone<double>(current_play > 0.0 ? 0.0 : 0.099), model::Deadzone<double>(0.0)};
   return est::IdentifiedHammersteinWiener<double>(
       model::YawForceHW2016<double>(SS(A, B, C, D, 0.001), Channels(maps)),
-      model::FreeMotionThreshold<double>(0.18));
+      model::FreeMotionThreshold<double>(0.18), current_play);
 }
 
 void BM_IdentifiedHW_step(benchmark::State& st) { run_joint_steps(st, identified()); }
 BENCHMARK(BM_IdentifiedHW_step);
+
+// The same model with a play of 0.17 A on the current (clamp 1's K_s in the emulator's table).
+void BM_IdentifiedHW_step_current_play(benchmark::State& st) {
+  run_joint_steps(st, identified(0.17));
+}
+BENCHMARK(BM_IdentifiedHW_step_current_play);
 
 void BM_IdentifiedHW_reference_Clamp2016_worksheet_step(benchmark::State& st) {
   run_joint_steps(st, est::models_2016().clamp1);
@@ -56,10 +63,11 @@ void BM_IdentifiedHW_reference_Clamp2016_worksheet_step(benchmark::State& st) {
 BENCHMARK(BM_IdentifiedHW_reference_Clamp2016_worksheet_step);
 
 // Every joint an identified model, advanced on every tick (1 ms models: no decimation), the
-// bridge's estimator settings over `settings`.
-void run_identified_every_joint(benchmark::State& st,
-                                est::ForceEstimatorSettings<double> settings) {
-  const est::BridgeJointModel m(identified());
+// bridge's estimator settings over `settings`, each model's current through a play of
+// `current_play` A (0: none).
+void run_identified_every_joint(benchmark::State& st, est::ForceEstimatorSettings<double> settings,
+                                double current_play = 0.0) {
+  const est::BridgeJointModel m(identified(current_play));
   const est::BridgeForceModels models{m, m, m, m};
   settings.loop_period = 0.001;
   run_estimator_ticks(
@@ -81,6 +89,12 @@ void BM_BridgeTick_identified_every_joint_stiction_memory(benchmark::State& st) 
   run_identified_every_joint(st, settings);
 }
 BENCHMARK(BM_BridgeTick_identified_every_joint_stiction_memory);
+
+// The same with a play of 0.17 A on every joint's current (the demo's pitch and clamps).
+void BM_BridgeTick_identified_every_joint_current_play(benchmark::State& st) {
+  run_identified_every_joint(st, {}, 0.17);
+}
+BENCHMARK(BM_BridgeTick_identified_every_joint_current_play);
 
 void BM_BridgeTick_identified_reference_yaw2016(benchmark::State& st) {
   run_estimator_ticks(st, est::preset_force_estimator(est::ClampPreset::yaw2016, 0.001));
