@@ -301,4 +301,31 @@ TEST_CASE(
   CHECK(with_play > without + 4.0);
 }
 
+TEST_CASE("run_identify: a current play is the subspace family's input only" *
+          doctest::skip(!endohaptics::test::has_shared_data("endowrist-2016/clamp-hits"))) {
+  wf::IdentifyRequest q;
+  for (const auto& e : std::filesystem::directory_iterator(
+           endohaptics::test::shared_data("endowrist-2016/clamp-hits"))) {
+    q.logs.push_back(e.path().string());
+  }
+  std::sort(q.logs.begin(), q.logs.end());
+  q.inputs = {"current", "velocity"};
+  q.outputs = {"force"};
+  q.current_play = 0.2;
+  // A joint model alone: nothing would take the play, so it is refused, saying why.
+  q.method = "stall_hold";
+  CHECK(message_of([&] {
+          (void)wf::run_identify(q, {});
+        }).starts_with("--current-play: the method list has no subspace family"));
+  // Beside a subspace family: the play is on its input in the family choice; a joint model
+  // chosen is written without it, a subspace model with it.
+  for (const char* method : {"moesp,stall_hold", "moesp"}) {
+    q.method = method;
+    const wf::IdentifyReport r = wf::run_identify(q, {});
+    CHECK(r.model.current_play == (r.joint_chosen() ? 0.0 : 0.2));
+  }
+  q.method = "moesp";
+  CHECK_FALSE(wf::run_identify(q, {}).joint_chosen());
+}
+
 }  // namespace workflow_identify_request_test

@@ -53,7 +53,9 @@ struct IdentifyRequest {
   //! kinds only. Empty: none.
   std::optional<std::string> free_threshold{};
   //! Input 0's units, >= 0 (0: none): input 0 passes a play of this half width before the fit
-  //! (files::ModelFile::current_play, written into the model); subspace families only.
+  //! (files::ModelFile::current_play, written into the model); subspace families only: with
+  //! joint models in the method list they meet the played subspace family on their own inputs,
+  //! and one of them chosen is written with current_play 0.
   double current_play = 0.0;
 };
 

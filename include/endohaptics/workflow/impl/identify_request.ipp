@@ -147,6 +147,12 @@ ENDOHAPTICS_DECL IdentifyReport run_identify(const IdentifyRequest& request,
                             detail::format_number(files::ModelFile::max_parameter) + "], got " +
                             detail::format_number(request.current_play)));
   }
+  if (request.current_play > 0.0 && !r.subspace_family) {
+    ENDOHAPTICS_THROW(
+        Error("--current-play: the method list has no subspace family, the only "
+              "one whose input the play is (the joint models hold their own "
+              "friction)"));
+  }
   if (request.current_play > 0.0) {
     for (auto* logs : {&r.fit_logs, &r.score_logs}) {
       for (PreparedLog& log : *logs) {
@@ -203,11 +209,9 @@ ENDOHAPTICS_DECL IdentifyReport run_identify(const IdentifyRequest& request,
     }
     choice.model.provenance.fit_percent = {sum / static_cast<double>(choice.files.size())};
   }
-  if (request.current_play > 0.0 && choice.model.is_joint_model()) {
-    ENDOHAPTICS_THROW(Error("--current-play: the chosen family (" + choice.family +
-                            ") is a joint model, which holds its own friction; give it for a "
-                            "subspace family only"));
-  }
+  // The play is the subspace family's input operator: the joint models meet it in the family
+  // choice on their own inputs (they hold their own friction), and one of them chosen is written
+  // without it.
   files::ModelFile model = choice.model;
   IdentifyReport report{std::move(r), std::move(choice), {}, 0.0, 0.0, std::move(model)};
   const bool joint = report.joint_chosen();
@@ -226,7 +230,7 @@ ENDOHAPTICS_DECL IdentifyReport run_identify(const IdentifyRequest& request,
   report.mean_rmse = rmse_sum / n_files;
   report.mean_fit = fit_sum / n_files;
   // Every score above ran on the played input; from here the model plays its input itself.
-  report.model.current_play = request.current_play;
+  report.model.current_play = joint ? 0.0 : request.current_play;
   report.model.provenance.notes =
       "preprocessing: " + describe(joint ? report.joint_preprocessing : report.preprocessing) +
       "\nfit_percent: mean causal fit over the identification logs, " +
