@@ -66,7 +66,7 @@ int main(int argc, char** argv) {
   app.add_option("--robot-tolerance", robot_tolerance,
                  "N on the clamps: the force below which the robot-side controller does not "
                  "hold a setpoint step back (default: the sweep's choice for the force source: the "
-                 "identified model's free-motion error bound, 0.088 N)")
+                 "identified model's free-motion error bound, --contact-level)")
       ->check(examples::number_in(0.0, 10.0));
   std::string robot_return;
   app.add_option("--robot-return", robot_return,
@@ -87,11 +87,26 @@ int main(int argc, char** argv) {
                  "always-scaled or while-absorbing: when the operator-side force scale follows "
                  "the deficit (default: the sweep's choice)")
       ->check(CLI::IsMember({"always-scaled", "while-absorbing"}));
+  std::string fit_name = "play";
+  app.add_option("--identify-fit", fit_name,
+                 "play or deadzone: the clamp model identified with the current through a play of "
+                 "the clamp's static friction (the demo's way, default) or with a current dead "
+                 "zone (order 2, as before the play)")
+      ->check(CLI::IsMember({"play", "deadzone"}));
+  double contact_level = -1.0;
+  app.add_option(
+         "--contact-level", contact_level,
+         "N on the clamps: the through-zero stiction hold's contact level and the default "
+         "--robot-tolerance (default: the identified model's free-motion error bound on its "
+         "training presses, measured)")
+      ->check(examples::number_in(0.0, 10.0));
   std::string stiction;
-  app.add_option("--stiction-memory", stiction,
-                 "on, through-zero or off: the estimator's stiction memory with the simulated "
-                 "instrument's constants (through-zero: holding while the estimate changes sign, "
-                 "estimation::StictionHold; default: through-zero for identified, off otherwise)")
+  app.add_option(
+         "--stiction-memory", stiction,
+         "on, through-zero or off: the estimator's stiction memory with the simulated "
+         "instrument's constants (through-zero: holding while the estimate changes sign, "
+         "estimation::StictionHold; default: off: the identified model's current play holds "
+         "the static-friction band itself)")
       ->check(CLI::IsMember({"on", "through-zero", "off"}));
   CLI11_PARSE(app, argc, argv);
   const auto contact =
@@ -110,12 +125,19 @@ int main(int argc, char** argv) {
             training_dir.empty()
                 ? std::filesystem::temp_directory_path() / "endohaptics-passivity-training"
                 : std::filesystem::path(training_dir);
-        src.clamp_model = sweep_identify::identify_sweep_clamp_model(dir);
+        const auto fit = fit_name == "play" ? sweep_identify::TrainingFit::play
+                                            : sweep_identify::TrainingFit::deadzone;
+        src.clamp_model = sweep_identify::identify_sweep_clamp_model(dir, fit);
         fmt::print(stderr,
-                   "endohaptics-passivity-sweep: clamp model identified on {} training "
+                   "endohaptics-passivity-sweep: clamp model identified ({}) on {} training "
                    "runs: {}\n",
-                   sim::training_presses().size(), (dir / "clamp_model.json").string());
+                   fit_name, sim::training_presses().size(), (dir / "clamp_model.json").string());
       }
+      src.contact_level = sweep_identify::free_motion_error(*src.clamp_model);
+      fmt::print(stderr,
+                 "endohaptics-passivity-sweep: its free-motion error on the training presses: "
+                 "{:.3f} N\n",
+                 *src.contact_level);
     } else if (source_name == "preset-2016") {
       src.source = sim::ForceSource::preset_2016;
     } else if (!model_path.empty()) {
@@ -125,6 +147,7 @@ int main(int argc, char** argv) {
       src.observer = observer_name == "combined" ? tp::PassivityObserver::combined
                                                  : tp::PassivityObserver::per_direction;
     }
+    if (contact_level >= 0.0) src.contact_level = contact_level;
     if (tolerance >= 0.0) src.tolerance = tolerance;
     if (robot_tolerance >= 0.0) src.robot_tolerance = robot_tolerance;
     if (reserve > 0.0) src.reserve = reserve;

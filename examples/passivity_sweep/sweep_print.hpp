@@ -31,6 +31,9 @@ struct Source {
   std::optional<bool> recover_absorbing;          //!< replaces recover_while_absorbing
   std::optional<bool> stiction_memory;            //!< replaces the estimator's stiction memory
   std::optional<bool> stiction_through_zero;      //!< that memory holding through zero
+  //! N on the clamps: the through-zero hold's contact level and the robot-side tolerance
+  //! (replaces sim::identified_free_motion_error; robot_tolerance replaces it for the latter).
+  std::optional<double> contact_level;
   //! The scenario with this source and the overrides.
   [[nodiscard]] sim::ClosedLoopConfig scenario(int ms, double loss, sim::ContactKind contact,
                                                tp::PassivityMode mode) const {
@@ -44,6 +47,12 @@ struct Source {
     if (stiction_through_zero) c.stiction_through_zero = *stiction_through_zero;
     if (c.stiction_through_zero) {
       for (const int j : {2, 3}) c.stiction_contact_level[j] = sim::identified_free_motion_error;
+    }
+    if (contact_level && source == sim::ForceSource::identified) {
+      for (const int j : {2, 3}) {
+        c.stiction_contact_level[j] = *contact_level;
+        c.passivity.robot_cost_tolerance[j] = *contact_level;
+      }
     }
     if (robot_tolerance) {
       for (const int j : {2, 3}) c.passivity.robot_cost_tolerance[j] = *robot_tolerance;

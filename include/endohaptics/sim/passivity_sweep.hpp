@@ -55,11 +55,26 @@ inline constexpr std::array<int, 8> transparency_round_trips_ms{0,   50,  100, 2
 inline constexpr double sensorless_gain_recovery_rate = 0.05;
 
 //! N at the tool: the free-motion error bound of the identified clamp model the sweep
-//! identifies on its training presses (examples/passivity_sweep/identify_training.hpp): the
-//! largest |estimate| where the true force is 0 in the three training logs after the first 0.5 s
-//! (0.016, 0.088, 0.069 N). The contact level of the stiction hold
-//! (ClosedLoopConfig::stiction_contact_level, --stiction-memory through-zero).
-inline constexpr double identified_free_motion_error = 0.088;
+//! identifies on its training presses (examples/passivity_sweep/identify_training.hpp, the
+//! current through the play clamp_current_play): the largest |estimate| where the true force is
+//! 0 in the three training logs after the first 0.5 s (sweep_identify::free_motion_error; 0.088 N
+//! for the model with a current dead zone instead). The robot-side controller's tolerance
+//! (PassivityConfig::robot_cost_tolerance) and, with the stiction hold switched on, its contact
+//! level (ClosedLoopConfig::stiction_contact_level).
+inline constexpr double identified_free_motion_error = 0.014;
+
+//! A, the half width of the play the sweep's identified clamp model puts the reported current
+//! through (workflow::IdentifyRequest::current_play), as the demo does for the emulator's
+//! instrument (examples/demo.sh, step 2): the simulated clamp's static friction K_s in the current
+//! domain, read from the rig the loop runs (endowrist_2016_rig, the one source of the number). A
+//! clamp pressed into an object sticks while its current stays within K_s of what the contact
+//! needs, so on unloading the current falls by up to 2 K_s while the force stays: the branch a
+//! current dead zone reads as 0.
+[[nodiscard]] inline double clamp_current_play() {
+  return endowrist_2016_rig<4>(Environment::free_space)
+      .joints[static_cast<std::size_t>(ClosedLoop::clamp1)]
+      .transmission.static_friction;
+}
 
 //! One scenario: `round_trip_ms` ms round trip, `loss` per direction, the contact and the
 //! passivity mode (observe: the loop renders what it renders with the layer off, energy visible),
@@ -81,15 +96,13 @@ inline constexpr double identified_free_motion_error = 0.088;
     c.passivity.observer = teleop::PassivityObserver::per_direction;
     c.passivity.gain_recovery_rate = sensorless_gain_recovery_rate;
     if (source == ForceSource::identified) {
-      // The stiction memory with the instrument's own constants (stiction_memory_settings),
-      // holding through zero (estimation::StictionHold: the estimator's own memory lets go when
-      // the model reads a relaxed current as a small force the other way, with the jaw still
-      // stuck; with it 2 of 20 cases met, docs/passivity.md), a held force below the model's
-      // free-motion error bound on the same side only; and the robot-side controller charging
-      // a step only against the force beyond that bound (a standing deficit otherwise stops
+      // No stiction memory: the model's current play (clamp_current_play) holds the force
+      // through the static-friction band itself, the branch the memory stood in for (with both,
+      // at 100 ms on tissue the memory keeps 0.28 N while the contact relaxes to 0.06 N: a force
+      // the contact no longer has pushes the hand out, docs/passivity.md). The contact level is
+      // set for whoever switches it on. The robot-side controller charges a step only against
+      // the force beyond the model's free-motion error bound (a standing deficit otherwise stops
       // the setpoint against a force the estimate cannot tell from zero).
-      c.stiction_memory = true;
-      c.stiction_through_zero = true;
       for (const int j : {2, 3}) {
         c.stiction_contact_level[j] = identified_free_motion_error;
         c.passivity.robot_cost_tolerance[j] = identified_free_motion_error;
