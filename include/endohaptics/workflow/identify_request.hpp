@@ -57,6 +57,10 @@ struct IdentifyRequest {
   //! joint models in the method list they meet the played subspace family on their own inputs,
   //! and one of them chosen is written with current_play 0.
   double current_play = 0.0;
+  //! The family choice searches a joint family's constants again inside each of its folds
+  //! (WorkflowOptions::nested_joint_constants): its inner score then leaks nothing of the fold's
+  //! held-out files, at about the folds' count times the search's cost.
+  bool nested_joint_constants = false;
 };
 
 //! The request resolved, the logs prepared and the subspace family fitted: what run_identify

@@ -51,6 +51,7 @@ inline void resolve(IdentifyProgress& r, const IdentifyHooks& hooks) {
   r.preprocessing.input_offset = offset_mode_from_string(q.input_offset);
   WorkflowOptions& options = r.options;
   options.max_order = q.max_order;
+  options.nested_joint_constants = q.nested_joint_constants;
   options.max_time_constant =
       q.max_time_constant ? *q.max_time_constant : defaults.max_time_constant;
   if (order != "auto") options.order = parse_number(order, "--order", 1, limits::max_order);
