@@ -273,8 +273,8 @@ TEST_CASE("passivity closed loop: the stiction hold keeps a stuck joint's force 
   s.stick_travel[2] = 0.0314;
   s.stick_play[2] = 0.01745;
   s.stick_force[2] = 0.416;
-  const endohaptics::estimation::StictionHold::Vector level(0.0, 0.0, 0.05, 0.05);
-  endohaptics::estimation::StictionHold hold(s, level);
+  const endohaptics::estimation::StictionHold<>::Vector level(0.0, 0.0, 0.05, 0.05);
+  endohaptics::estimation::StictionHold<> hold(s, level);
   CHECK(hold.apply(2, -0.76, 0.198) == -0.76);
   CHECK(hold.apply(2, -0.40, 0.190) == -0.76);  // fell, backed off 8 mrad: held
   CHECK(hold.apply(2, 0.016, 0.173) == -0.76);  // the other side, 25 mrad: still held
@@ -286,14 +286,20 @@ TEST_CASE("passivity closed loop: the stiction hold keeps a stuck joint's force 
   CHECK(hold.apply(2, -0.20, 0.160) == -0.30);  // below stick_force the play is added:
   CHECK(hold.apply(2, -0.20, 0.140) == -0.30);  // 40 mrad < 31.4 + 17.5 mrad: held
   CHECK(hold.apply(2, -0.20, 0.130) == -0.20);  // 50 mrad: let go
-  // Without a contact level the same 0.016 N would be held against the press.
-  endohaptics::estimation::StictionHold noisy(s);
+  // With a contact level of 0 the same 0.016 N would be held against the press.
+  endohaptics::estimation::StictionHold<> noisy(
+      s, endohaptics::estimation::StictionHold<>::Vector::Zero());
   CHECK(noisy.apply(2, -0.76, 0.198) == -0.76);
   CHECK(noisy.apply(2, 0.016, 0.160) == 0.016);
   CHECK(noisy.apply(2, -0.30, 0.170) == 0.016);
+  // Without one (ForceEstimator's rule) only a fall on the same side is held.
+  endohaptics::estimation::StictionHold<> same_side(s);
+  CHECK(same_side.apply(2, -0.76, 0.198) == -0.76);
+  CHECK(same_side.apply(2, -0.40, 0.190) == -0.76);
+  CHECK(same_side.apply(2, 0.016, 0.173) == 0.016);
   s.stick_play[1] = -1.0;
-  CHECK_THROWS_WITH_AS(endohaptics::estimation::StictionHold{s}, doctest::Contains("stick_play[1]"),
-                       endohaptics::Error);
+  CHECK_THROWS_WITH_AS(endohaptics::estimation::StictionHold<>{s},
+                       doctest::Contains("stick_play[1]"), endohaptics::Error);
 }
 
 TEST_CASE("passivity closed loop: the preset-2016 estimate runs from the sbRIO's reports only") {

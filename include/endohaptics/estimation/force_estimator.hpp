@@ -26,6 +26,7 @@
 #include "endohaptics/estimation/kalman_corrected.hpp"
 #include "endohaptics/estimation/open_loop.hpp"
 #include "endohaptics/estimation/rate_policy.hpp"
+#include "endohaptics/estimation/stiction_hold.hpp"
 #include "endohaptics/estimation/zoh_resampling.hpp"
 #include "endohaptics/model/friction_model.hpp"
 #include "endohaptics/model/state_space.hpp"
@@ -178,7 +179,8 @@ class ForceEstimator {
                     model::Saturation<ScalarType>(settings.output_limit[1]),
                     model::Saturation<ScalarType>(settings.output_limit[2]),
                     model::Saturation<ScalarType>(settings.output_limit[3])},
-        gain_(-settings.current_sign.cwiseProduct(settings.unit_scale)) {
+        gain_(-settings.current_sign.cwiseProduct(settings.unit_scale)),
+        stick_(settings_) {
     for (int m = 0; m < joints; ++m) {
       tool_joint_of_motor_[static_cast<std::size_t>(m)] =
           static_cast<int>(settings_.motor_order[static_cast<std::size_t>(m)]);
@@ -229,7 +231,7 @@ class ForceEstimator {
     raw_ = raw;
     for (int j = 0; j < joints; ++j) {
       const auto js = static_cast<std::size_t>(j);
-      const ScalarType held = stick_hold(j, gated[j], signals[js].position);
+      const ScalarType held = stick_.apply(j, gated[j], signals[js].position);
       forces[j] = saturation_[js].apply(deadzone_[js].apply(held));
     }
     return NumericStatus::ok;
@@ -269,8 +271,7 @@ class ForceEstimator {
     std::apply([](auto&... stepper) { (stepper.reset(), ...); }, steppers_);
     friction_.reset();
     raw_.setZero();
-    held_.setZero();
-    anchor_.setZero();
+    stick_.reset();
   }
 
   [[nodiscard]] const Settings& settings() const noexcept { return settings_; }  //!< as given
@@ -319,30 +320,6 @@ class ForceEstimator {
     (std::make_index_sequence<4>{});
   }
 
-  // The stiction memory of tool joint `j` (Settings::stick_travel): `f` this tick's estimate,
-  // `position` the motor's (rad). The external force pushes along sign(held), so the motor
-  // pressed against it along -sign(held) and backs off along +sign(held). Held only while the
-  // motor has backed off from where it last pressed: a fall with the motor not backed off is the
-  // model's own transient (a stop in free motion), not a tendon unloading in front of a stuck
-  // joint, and is followed.
-  ScalarType stick_hold(int j, ScalarType f, ScalarType position) noexcept {
-    if (!(settings_.stick_travel[j] > ScalarType(0))) return f;
-    ScalarType& held = held_[j];
-    ScalarType& anchor = anchor_[j];
-    const bool fell_same_side =
-        held != ScalarType(0) && f * held >= ScalarType(0) && std::fabs(f) < std::fabs(held);
-    if (fell_same_side) {
-      const ScalarType travel =
-          settings_.stick_travel[j] +
-          (std::fabs(held) < settings_.stick_force[j] ? settings_.stick_play[j] : ScalarType(0));
-      const ScalarType backed_off = held > ScalarType(0) ? position - anchor : anchor - position;
-      if (backed_off > ScalarType(0) && backed_off < travel) return held;  // the force stays
-    }
-    held = f;
-    anchor = position;
-    return f;
-  }
-
   static Settings validated(const Settings& s) {
     auto name = [](int j) { return std::string(protocol::to_string(static_cast<Motor>(j))); };
     std::array<bool, 4> seen{};
@@ -370,8 +347,7 @@ class ForceEstimator {
   std::array<model::Saturation<ScalarType>, 4> saturation_;
   Forces gain_;
   Forces raw_ = Forces::Zero();
-  Forces held_ = Forces::Zero();    // per tool joint: the estimate the stiction memory holds
-  Forces anchor_ = Forces::Zero();  // per tool joint: motor position where it was last set, rad
+  StictionHold<ScalarType> stick_;  // Settings::stick_*: same side only
   std::array<int, 4> tool_joint_of_motor_{};
   NumericStatus last_status_ = NumericStatus::ok;
 };

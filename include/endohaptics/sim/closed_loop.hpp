@@ -282,7 +282,7 @@ class LoopForceEstimator {
 
  private:
   TaggedForceSensor sensor_;
-  std::optional<estimation::StictionHold> hold_;  // the memory holding through zero
+  std::optional<estimation::StictionHold<>> hold_;  // the memory holding through zero
   std::optional<estimation::BridgeForceEstimator> estimator_;
   std::optional<estimation::PacedEstimator<estimation::BridgeForceEstimator, Clock>> paced_;
 };
