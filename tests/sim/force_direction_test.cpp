@@ -17,6 +17,8 @@
 #include <endohaptics/transport/in_memory_transport.hpp>
 #include <memory>
 
+#include "emulated_wire.hpp"
+
 namespace sim_force_direction_test {
 
 namespace {
@@ -33,23 +35,7 @@ using Rig = sim::SimulatedRig<4>;
 using Emulator = sim::SbrioEmulator<transport::InMemoryTransport<>, Rig, endohaptics::ManualClock>;
 
 // The PC's transport: the emulator answers inside send, 100 us of simulated time later.
-struct Wire {
-  transport::InMemoryTransport<>* pc;
-  Emulator* emulator;
-  endohaptics::ManualClock* clock;
-  transport::TransportStatus send(std::span<const std::byte> datagram) noexcept {
-    const auto status = pc->send(datagram);
-    clock->advance(100us);
-    (void)emulator->poll(0ns);
-    return status;
-  }
-  transport::ReceiveResult receive(std::span<std::byte> buffer,
-                                   std::chrono::nanoseconds timeout) noexcept {
-    const auto r = pc->receive(buffer, timeout);
-    if (r.status == transport::TransportStatus::timeout) clock->advance(timeout);
-    return r;
-  }
-};
+using Wire = test_support::EmulatedWire<Emulator, endohaptics::ManualClock>;
 
 // An operator who moves the stylus so that one joint's setpoint goes from its rest value to
 // `target` in 2 s, then holds it there (pressing into the contact), and records the force felt.

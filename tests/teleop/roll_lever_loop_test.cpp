@@ -18,6 +18,8 @@
 #include <endohaptics/transport/in_memory_transport.hpp>
 #include <memory>
 
+#include "emulated_wire.hpp"
+
 namespace teleop_roll_lever_loop_test {
 
 namespace {
@@ -33,25 +35,8 @@ using Rig = sim::SimulatedRig<4>;
 using Emulator = sim::SbrioEmulator<transport::InMemoryTransport<>, Rig, endohaptics::ManualClock>;
 using Hand = sim::ScriptedOperator<endohaptics::ManualClock>;
 
-// The PC's transport: the emulator answers at once; the wire and the sbRIO take 100 us.
-struct EmulatedWire {
-  transport::InMemoryTransport<>* pc;
-  Emulator* emulator;
-  endohaptics::ManualClock* clock;
-
-  transport::TransportStatus send(std::span<const std::byte> datagram) noexcept {
-    const auto status = pc->send(datagram);
-    clock->advance(100us);
-    (void)emulator->poll(0ns);
-    return status;
-  }
-  transport::ReceiveResult receive(std::span<std::byte> buffer,
-                                   std::chrono::nanoseconds timeout) noexcept {
-    const auto r = pc->receive(buffer, timeout);
-    if (r.status == transport::TransportStatus::timeout) clock->advance(timeout);
-    return r;
-  }
-};
+// The PC's transport: the wire and the sbRIO take 100 us.
+using EmulatedWire = test_support::EmulatedWire<Emulator, endohaptics::ManualClock>;
 
 // The ideal sensor, `delay` ticks late: the rig's true joint forces (external_force, the
 // convention of map_force). estimation::JointForceEstimator.

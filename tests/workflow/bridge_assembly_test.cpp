@@ -15,6 +15,7 @@
 #include <memory>
 #include <string>
 
+#include "emulated_wire.hpp"
 #include "test_support.hpp"
 
 namespace workflow_bridge_assembly_test {
@@ -37,27 +38,7 @@ using Rig = sim::SimulatedRig<4>;
 using Emulator = sim::SbrioEmulator<transport::InMemoryTransport<>, Rig, Clock>;
 using Hand = sim::ScriptedOperator<Clock>;
 
-// The bridge's transport: a datagram sent reaches the emulator, which answers after `latency`
-// of simulated time; a receive that times out has waited its timeout.
-struct EmulatedWire {
-  transport::InMemoryTransport<>* pc;
-  Emulator* emulator;
-  Clock* clock;
-  std::chrono::nanoseconds latency = 100us;
-
-  transport::TransportStatus send(std::span<const std::byte> datagram) noexcept {
-    const auto status = pc->send(datagram);
-    clock->advance(latency);
-    (void)emulator->poll(0ns);
-    return status;
-  }
-  transport::ReceiveResult receive(std::span<std::byte> buffer,
-                                   std::chrono::nanoseconds timeout) noexcept {
-    const auto r = pc->receive(buffer, timeout);
-    if (r.status == transport::TransportStatus::timeout) clock->advance(timeout);
-    return r;
-  }
-};
+using EmulatedWire = test_support::EmulatedWire<Emulator, Clock>;  // 100 us answers
 
 // The rig side and the bridge assembled from `config` and `settings`.
 struct Setup {
