@@ -62,6 +62,15 @@ wf::IdentifyRequest lag_request(const TempDir& dir) {
   return q;
 }
 
+// Replay's mean fit of the model file `model_path` on the request's logs (csv).
+double replayed_fit(const std::filesystem::path& model_path, const wf::IdentifyRequest& q) {
+  wf::ReplayRequest replay;
+  replay.model = model_path.string();
+  replay.logs = q.logs;
+  replay.format = "csv";
+  return wf::run_replay(replay, {}).mean_fit;
+}
+
 }  // namespace
 
 TEST_CASE("identify methods: one name table, --method lists, the subspace and joint kinds") {
@@ -184,12 +193,7 @@ TEST_CASE("free-motion threshold: the 99th percentile where the truth is 0, kept
   const auto model_path = dir.path() / "model.json";
   files::save_model(model_path, r.model);
   CHECK(files::load_model(model_path).free_motion_threshold == 0.05);
-  wf::ReplayRequest replay;
-  replay.model = model_path.string();
-  replay.logs = q.logs;
-  replay.format = "csv";
-  const wf::ReplayReport rr = wf::run_replay(replay, {});
-  CHECK(rr.mean_fit == doctest::Approx(r.mean_fit).epsilon(1e-9));
+  CHECK(replayed_fit(model_path, q) == doctest::Approx(r.mean_fit).epsilon(1e-9));
   q.free_threshold = "none";
   const double without = wf::run_identify(q, {}).mean_fit;
   CHECK(without != r.mean_fit);  // the threshold changed the estimate and the score says so
@@ -209,12 +213,7 @@ TEST_CASE("run_identify: a current play is fitted on, written, and replayed to t
   files::save_model(model_path, r.model);
   CHECK(files::load_model(model_path).current_play == 0.05);
   // Identify scored the model on the played input; replay plays the raw input itself.
-  wf::ReplayRequest replay;
-  replay.model = model_path.string();
-  replay.logs = q.logs;
-  replay.format = "csv";
-  const wf::ReplayReport rr = wf::run_replay(replay, {});
-  CHECK(rr.mean_fit == doctest::Approx(r.mean_fit).epsilon(1e-9));
+  CHECK(replayed_fit(model_path, q) == doctest::Approx(r.mean_fit).epsilon(1e-9));
   q.current_play = 0.0;
   const wf::IdentifyReport without = wf::run_identify(q, {});
   CHECK(without.model.current_play == 0.0);
