@@ -61,10 +61,11 @@ int main(int argc, char** argv) {
                  "training output is 0)")
       ->check(number_in(0.0, endohaptics::files::ModelFile::max_parameter, {"auto", "none"}));
   app.add_option("--current-play", q.current_play,
-                 "input 0's units (A): input 0 passes a play (backlash) operator of this half "
-                 "width before the fit and wherever the model runs (the static friction of a "
-                 "joint pressed into an object: its current falls through that band while the "
-                 "force stays); 0: none")
+                 "input 0's units (A): the subspace family's input 0 passes a play (backlash) "
+                 "operator of this half width before the fit and wherever that model runs (the "
+                 "static friction of a joint pressed into an object: its current falls through "
+                 "that band while the force stays); a joint model chosen beside it is written "
+                 "without a play; 0: none")
       ->check(number_in(0.0, endohaptics::files::ModelFile::max_parameter))
       ->capture_default_str();
   app.add_option("--out", out_path, "write the model here (JSON)");
