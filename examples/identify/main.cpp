@@ -68,6 +68,10 @@ int main(int argc, char** argv) {
                  "without a play; 0: none")
       ->check(number_in(0.0, endohaptics::files::ModelFile::max_parameter))
       ->capture_default_str();
+  app.add_flag("--nested-constants", q.nested_joint_constants,
+               "the family choice searches a joint family's constants again inside each of its "
+               "cross-validation folds, so the inner score sees nothing of the fold's held-out "
+               "files (about the folds' count times the search's cost)");
   app.add_option("--out", out_path, "write the model here (JSON)");
   CLI11_PARSE(app, argc, argv);
 
