@@ -265,8 +265,8 @@ class TimeDomainPassivity {
     out = candidate;
     if (!controlling() || !started_) return false;
     bool changed = false;
-    const Vector tolerance = config_.estimate_tolerance + config_.robot_cost_tolerance;
-    const Vector booked = force - force.cwiseMax(-tolerance).cwiseMin(tolerance);
+    const Vector booked =
+        tolerated(force, config_.estimate_tolerance + config_.robot_cost_tolerance);
     for (int j = 0; j < Vector::SizeAtCompileTime; ++j) {
       const double deficit = per_direction_ ? -energy_to_robot(j) : -energy(j);
       const double step = (candidate[j] - from[j]) * config_.lever[j];  // m at the tool
@@ -421,7 +421,11 @@ class TimeDomainPassivity {
   // The force shrunk towards zero by the estimate's error bound (PassivityConfig::
   // estimate_tolerance): f - clamp(f, -tol, tol).
   [[nodiscard]] Vector tolerated(const Vector& force) const noexcept {
-    return force - force.cwiseMax(-config_.estimate_tolerance).cwiseMin(config_.estimate_tolerance);
+    return tolerated(force, config_.estimate_tolerance);
+  }
+  // `force` shrunk towards zero by `band` per joint (0 within it).
+  [[nodiscard]] static Vector tolerated(const Vector& force, const Vector& band) noexcept {
+    return force - force.cwiseMax(-band).cwiseMin(band);
   }
 
   PassivityConfig config_;
