@@ -7,14 +7,11 @@
 // Allocates, writes files, throws endohaptics::Error.
 #pragma once
 
-#include <algorithm>
-#include <cmath>
 #include <endohaptics/files/clamp_model_file.hpp>
 #include <endohaptics/files/model_file.hpp>
 #include <endohaptics/sim/passivity_sweep.hpp>
 #include <endohaptics/workflow/identify_request.hpp>
 #include <filesystem>
-#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -71,43 +68,6 @@ enum class TrainingFit { play, deadzone };
   const auto model_path = dir / "clamp_model.json";
   endohaptics::files::save_model(model_path, report.model);
   return endohaptics::files::bridge_joint_model(report.model, "identified clamp model");
-}
-
-//! N: the free-motion error bound of `model` on the training presses: the largest |estimate|
-//! where the true force is 0, after the first 0.5 s of each press (the model fresh per press,
-//! fed clamp 1's reported current, velocity, position and setpoint as the loop's rig reports
-//! them). The stiction hold's contact level and the robot-side tolerance of the sweep.
-[[nodiscard]] inline double free_motion_error(
-    const endohaptics::estimation::BridgeJointModel& model) {
-  double worst = 0.0;
-  for (const auto& press : sim::training_presses()) {
-    sim::ClosedLoopConfig c;
-    c.contact = press.contact;
-    c.contact_position = press.contact_position;
-    c.press_depth = press.press_depth;
-    c.approach_start = press.approach_start;
-    c.approach_time = press.approach_time;
-    c.force_gain = 0.0;
-    auto loop = std::make_unique<sim::ClosedLoop>(c);
-    auto m = model;
-    const auto n = static_cast<int>(press.seconds * 1000.0 + 0.5);
-    constexpr int j = sim::ClosedLoop::clamp1;
-    for (int i = 0; i < n; ++i) {
-      const auto s = loop->step();
-      const auto state = loop->rig().state();
-      endohaptics::estimation::JointSignals<double> sig;
-      sig.current = state.current[j];
-      sig.velocity = state.velocity[j];
-      sig.position = state.position[j];
-      sig.setpoint = state.position[j];
-      const double f = m.force(sig);
-      (void)m.advance(sig);
-      if (s.time > 0.5 && loop->rig().truth().external_force[j] == 0.0) {
-        worst = std::max(worst, std::fabs(f));
-      }
-    }
-  }
-  return worst;
 }
 
 }  // namespace sweep_identify

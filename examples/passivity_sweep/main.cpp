@@ -98,7 +98,8 @@ int main(int argc, char** argv) {
          "--contact-level", contact_level,
          "N on the clamps: the through-zero stiction hold's contact level and the default "
          "--robot-tolerance (default: the identified model's free-motion error bound on its "
-         "training presses, measured)")
+         "training presses, measured; required with --stiction-memory through-zero on the other "
+         "sources)")
       ->check(examples::number_in(0.0, 10.0));
   std::string stiction;
   app.add_option(
@@ -119,7 +120,7 @@ int main(int argc, char** argv) {
     if (source_name == "identified") {
       src.source = sim::ForceSource::identified;
       if (!model_path.empty()) {
-        src.clamp_model = endohaptics::files::load_bridge_joint_model(model_path);
+        src.clamp = sim::identified_clamp(endohaptics::files::load_bridge_joint_model(model_path));
       } else {
         const std::filesystem::path dir =
             training_dir.empty()
@@ -127,17 +128,16 @@ int main(int argc, char** argv) {
                 : std::filesystem::path(training_dir);
         const auto fit = fit_name == "play" ? sweep_identify::TrainingFit::play
                                             : sweep_identify::TrainingFit::deadzone;
-        src.clamp_model = sweep_identify::identify_sweep_clamp_model(dir, fit);
+        src.clamp = sim::identified_clamp(sweep_identify::identify_sweep_clamp_model(dir, fit));
         fmt::print(stderr,
                    "endohaptics-passivity-sweep: clamp model identified ({}) on {} training "
                    "runs: {}\n",
                    fit_name, sim::training_presses().size(), (dir / "clamp_model.json").string());
       }
-      src.contact_level = sweep_identify::free_motion_error(*src.clamp_model);
       fmt::print(stderr,
                  "endohaptics-passivity-sweep: its free-motion error on the training presses: "
                  "{:.3f} N\n",
-                 *src.contact_level);
+                 src.clamp->free_motion_error);
     } else if (source_name == "preset-2016") {
       src.source = sim::ForceSource::preset_2016;
     } else if (!model_path.empty()) {
@@ -156,6 +156,11 @@ int main(int argc, char** argv) {
     if (!stiction.empty()) {
       src.stiction_memory = stiction != "off";
       src.stiction_through_zero = stiction == "through-zero";
+      if (*src.stiction_through_zero && source_name != "identified" && !src.contact_level) {
+        throw std::runtime_error(
+            "--stiction-memory through-zero needs --contact-level with --force-source " +
+            source_name + " (the identified source's is its model's measured free-motion error)");
+      }
     }
     if (!robot_return.empty()) src.return_needs_motion = robot_return == "setpoint-and-robot";
     if (do_table) sweep_print::table(src);

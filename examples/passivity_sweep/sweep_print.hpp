@@ -20,24 +20,25 @@ namespace tp = endohaptics::teleop;
 
 //! Where the force comes from: the source and, for identified, the clamp model.
 struct Source {
-  sim::ForceSource source = sim::ForceSource::sensor;                    //!< what is fed back
-  std::optional<endohaptics::estimation::BridgeJointModel> clamp_model;  //!< identified's
-  std::optional<tp::PassivityObserver> observer;  //!< replaces the sweep's choice when given
-  std::optional<double> tolerance;                //!< N on the clamps, replaces the sweep's
-  std::optional<double> robot_tolerance;          //!< N on the clamps, robot_cost_tolerance
-  std::optional<bool> return_needs_motion;        //!< replaces the sweep's choice when given
-  std::optional<double> reserve;                  //!< J, replaces the sweep's energy reserve
-  std::optional<double> recovery;                 //!< 1/s, replaces the sweep's gain recovery
-  std::optional<bool> recover_absorbing;          //!< replaces recover_while_absorbing
-  std::optional<bool> stiction_memory;            //!< replaces the estimator's stiction memory
-  std::optional<bool> stiction_through_zero;      //!< that memory holding through zero
-  //! N on the clamps: the through-zero hold's contact level and the robot-side tolerance
-  //! (replaces sim::identified_free_motion_error; robot_tolerance replaces it for the latter).
+  sim::ForceSource source = sim::ForceSource::sensor;  //!< what is fed back
+  std::optional<sim::IdentifiedClamp> clamp;           //!< identified's, with its error bound
+  std::optional<tp::PassivityObserver> observer;       //!< replaces the sweep's choice when given
+  std::optional<double> tolerance;                     //!< N on the clamps, replaces the sweep's
+  std::optional<double> robot_tolerance;               //!< N on the clamps, robot_cost_tolerance
+  std::optional<bool> return_needs_motion;             //!< replaces the sweep's choice when given
+  std::optional<double> reserve;                       //!< J, replaces the sweep's energy reserve
+  std::optional<double> recovery;                      //!< 1/s, replaces the sweep's gain recovery
+  std::optional<bool> recover_absorbing;               //!< replaces recover_while_absorbing
+  std::optional<bool> stiction_memory;                 //!< replaces the estimator's stiction memory
+  std::optional<bool> stiction_through_zero;           //!< that memory holding through zero
+  //! N on the clamps: the through-zero hold's contact level and, for identified, the robot-side
+  //! tolerance (replaces the clamp model's measured free-motion error bound; robot_tolerance
+  //! replaces it for the latter). Required with stiction_through_zero on other sources.
   std::optional<double> contact_level;
   //! The scenario with this source and the overrides.
   [[nodiscard]] sim::ClosedLoopConfig scenario(int ms, double loss, sim::ContactKind contact,
                                                tp::PassivityMode mode) const {
-    auto c = sim::press_scenario(ms, loss, contact, mode, source, clamp_model);
+    auto c = sim::press_scenario(ms, loss, contact, mode, source, clamp);
     if (observer) c.passivity.observer = *observer;
     if (return_needs_motion) c.passivity.robot_return_needs_motion = *return_needs_motion;
     if (reserve) c.passivity.energy_reserve = *reserve;
@@ -45,13 +46,12 @@ struct Source {
     if (recover_absorbing) c.passivity.recover_while_absorbing = *recover_absorbing;
     if (stiction_memory) c.stiction_memory = *stiction_memory;
     if (stiction_through_zero) c.stiction_through_zero = *stiction_through_zero;
-    if (c.stiction_through_zero) {
-      for (const int j : {2, 3}) c.stiction_contact_level[j] = sim::identified_free_motion_error;
-    }
-    if (contact_level && source == sim::ForceSource::identified) {
+    if (contact_level) {
       for (const int j : {2, 3}) {
         c.stiction_contact_level[j] = *contact_level;
-        c.passivity.robot_cost_tolerance[j] = *contact_level;
+        if (source == sim::ForceSource::identified) {
+          c.passivity.robot_cost_tolerance[j] = *contact_level;
+        }
       }
     }
     if (robot_tolerance) {

@@ -38,11 +38,11 @@ constexpr double seconds_without = sim::press_seconds_without;
 constexpr double seconds_with = sim::press_seconds_with;
 constexpr double epsilon = sim::PressCriteria{}.epsilon;
 constexpr double max_drift = sim::PressCriteria{}.max_drift;
-sim::ClosedLoopConfig scenario(
-    int ms, double loss, sim::ContactKind contact, tp::PassivityMode mode,
-    sim::ForceSource source = sim::ForceSource::sensor,
-    const std::optional<endohaptics::estimation::BridgeJointModel>& model = std::nullopt) {
-  return sim::press_scenario(ms, loss, contact, mode, source, model);
+sim::ClosedLoopConfig scenario(int ms, double loss, sim::ContactKind contact,
+                               tp::PassivityMode mode,
+                               sim::ForceSource source = sim::ForceSource::sensor,
+                               const std::optional<sim::IdentifiedClamp>& clamp = std::nullopt) {
+  return sim::press_scenario(ms, loss, contact, mode, source, clamp);
 }
 
 sim::PressReport run(const sim::ClosedLoopConfig& config, double seconds) {
@@ -72,23 +72,26 @@ void check_row(int ms) {
   }
 }
 
-// The clamp model identified on the training runs, once per test process (its own directory:
-// CTest runs test cases in parallel processes).
-const endohaptics::estimation::BridgeJointModel& identified_model() {
-  static const endohaptics::estimation::BridgeJointModel model = [] {
+// The clamp model identified on the training runs, with its free-motion error bound measured
+// there, once per test process (its own directory: CTest runs test cases in parallel processes).
+const sim::IdentifiedClamp& identified_clamp() {
+  static const sim::IdentifiedClamp clamp = [] {
     const auto dir = std::filesystem::temp_directory_path() /
                      ("endohaptics-sweep-test-" + std::to_string(::getpid()));
     auto m = sweep_identify::identify_sweep_clamp_model(dir);
     std::filesystem::remove_all(dir);
-    return m;
+    return sim::identified_clamp(std::move(m));
   }();
-  return model;
+  return clamp;
+}
+const endohaptics::estimation::BridgeJointModel& identified_model() {
+  return identified_clamp().model;
 }
 
 // One case of the sweep with the identified model and TDPA.
 sim::PressReport identified_with_tdpa(int ms, double loss, sim::ContactKind contact) {
   return run(scenario(ms, loss, contact, tp::PassivityMode::tdpa, sim::ForceSource::identified,
-                      identified_model()),
+                      identified_clamp()),
              seconds_with);
 }
 
@@ -171,7 +174,7 @@ TEST_CASE("passivity sweep: identified with TDPA, 0 and 20 ms, every criterion")
   for (const int ms : {0, 20}) check_identified_row(ms);
   const sim::PressReport without =
       run(scenario(20, 0.0, sim::ContactKind::stiff_stop, tp::PassivityMode::observe,
-                   sim::ForceSource::identified, identified_model()),
+                   sim::ForceSource::identified, identified_clamp()),
           seconds_without);
   CHECK(sim::press_stable_without(without));
 }
@@ -179,7 +182,7 @@ TEST_CASE("passivity sweep: identified with TDPA, 50 ms, every criterion") {
   check_identified_row(50);
   const sim::PressReport without =
       run(scenario(50, 0.0, sim::ContactKind::stiff_stop, tp::PassivityMode::observe,
-                   sim::ForceSource::identified, identified_model()),
+                   sim::ForceSource::identified, identified_clamp()),
           seconds_without);
   CHECK_FALSE(sim::press_stable_without(without));
 }
@@ -201,17 +204,17 @@ TEST_CASE("passivity sweep: identified with a current dead zone, 50 and 100 ms (
   const auto model =
       sweep_identify::identify_sweep_clamp_model(dir, sweep_identify::TrainingFit::deadzone);
   std::filesystem::remove_all(dir);
-  const double level = sweep_identify::free_motion_error(model);  // 0.088 N
+  const sim::IdentifiedClamp clamp = sim::identified_clamp(model);  // its bound: 0.088 N
   for (const int ms : {50, 100}) {
     for (const auto contact : {sim::ContactKind::soft_tissue, sim::ContactKind::stiff_stop}) {
       CAPTURE(name(ms, 0.0, contact));
       auto c =
-          scenario(ms, 0.0, contact, tp::PassivityMode::tdpa, sim::ForceSource::identified, model);
+          scenario(ms, 0.0, contact, tp::PassivityMode::tdpa, sim::ForceSource::identified, clamp);
       c.stiction_memory = true;
       c.stiction_through_zero = true;
       for (const int j : {2, 3}) {
-        c.stiction_contact_level[j] = level;
-        c.passivity.robot_cost_tolerance[j] = level;
+        c.stiction_contact_level[j] = clamp.free_motion_error;
+        c.passivity.robot_cost_tolerance[j] = clamp.free_motion_error;
       }
       const sim::PressReport r = run(c, seconds_with);
       CHECK(sim::press_missed_criteria(r, ms) == "");
@@ -235,11 +238,14 @@ TEST_CASE("passivity closed loop: the stiction memory's settings are the instrum
   // The identified source runs none (its model's current play holds the static-friction band),
   // the model's free-motion error bound as the robot-side controller's tolerance (and the hold's
   // contact level, should it be switched on); the 2016 preset no memory either.
+  // (any clamp model: only the configuration is looked at)
+  const sim::IdentifiedClamp clamp{
+      endohaptics::estimation::bridge_force_models(std::nullopt).clamp1, 0.014};
   const auto identified = scenario(0, 0.0, sim::ContactKind::soft_tissue, tp::PassivityMode::tdpa,
-                                   sim::ForceSource::identified);
+                                   sim::ForceSource::identified, clamp);
   CHECK_FALSE(identified.stiction_memory);
-  CHECK(identified.stiction_contact_level[2] == sim::identified_free_motion_error);
-  CHECK(identified.passivity.robot_cost_tolerance[2] == sim::identified_free_motion_error);
+  CHECK(identified.stiction_contact_level[2] == 0.014);
+  CHECK(identified.passivity.robot_cost_tolerance[2] == 0.014);
   CHECK(identified.passivity.robot_cost_tolerance[0] == 0.0);
   CHECK_FALSE(scenario(0, 0.0, sim::ContactKind::soft_tissue, tp::PassivityMode::tdpa,
                        sim::ForceSource::preset_2016)
@@ -262,8 +268,11 @@ TEST_CASE("passivity sweep: the identified model's current play is the clamp's s
       identified_model().get<endohaptics::estimation::IdentifiedHammersteinWiener<double>>();
   REQUIRE(hw != nullptr);
   CHECK(hw->current_play() == sim::clamp_current_play());
-  CHECK(sweep_identify::free_motion_error(identified_model()) ==
-        doctest::Approx(sim::identified_free_motion_error).epsilon(0.1));
+  // Measured on the training presses (0.014 N when the sweep's table was recorded): within the
+  // stylus's free-motion goal of 0.05 N, and the bound the scenarios carry.
+  CHECK(identified_clamp().free_motion_error > 0.0);
+  CHECK(identified_clamp().free_motion_error < 0.05);
+  CHECK(sim::free_motion_error(identified_model()) == identified_clamp().free_motion_error);
 }
 
 TEST_CASE("passivity closed loop: the stiction hold keeps a stuck joint's force through zero") {
@@ -320,6 +329,9 @@ TEST_CASE("passivity closed loop: the preset-2016 estimate runs from the sbRIO's
   sim::ClosedLoopConfig c;
   c.force_source = sim::ForceSource::identified;  // without a model
   CHECK_THROWS_WITH(sim::ClosedLoop{c}, doctest::Contains("identified needs a clamp_model"));
+  CHECK_THROWS_WITH((void)scenario(0, 0.0, sim::ContactKind::stiff_stop, tp::PassivityMode::tdpa,
+                                   sim::ForceSource::identified),
+                    doctest::Contains("needs its clamp model"));
 }
 
 TEST_CASE("passivity closed loop: observe renders exactly what off renders") {

@@ -114,6 +114,11 @@ struct ForceEstimatorSettings {
   Vector stick_play = Vector::Zero();
   //! >= 0, output units (N): tau_s / lever, the force below which `stick_play` is added.
   Vector stick_force = Vector::Zero();
+  //! >= 0, output units (N): a held force beyond this is also held while the estimate falls
+  //! *through zero* (StictionHold's contact level: the estimate's error bound in free motion);
+  //! +infinity, the default: held on the same side only. Not a configuration key (a file holds
+  //! no infinity); the passivity sweep sets it (sim::ClosedLoopConfig::stiction_through_zero).
+  Vector stick_contact_level = Vector::Constant(std::numeric_limits<Scalar>::infinity());
 
   //! The per-joint settings by their configuration names, with their bounds (core/parameter.hpp;
   //! the friction by its static levels): the one list ForceEstimator's validation and the bridge
@@ -180,7 +185,7 @@ class ForceEstimator {
                     model::Saturation<ScalarType>(settings.output_limit[2]),
                     model::Saturation<ScalarType>(settings.output_limit[3])},
         gain_(-settings.current_sign.cwiseProduct(settings.unit_scale)),
-        stick_(settings_) {
+        stick_(settings_, settings_.stick_contact_level.template cast<ScalarType>()) {
     for (int m = 0; m < joints; ++m) {
       tool_joint_of_motor_[static_cast<std::size_t>(m)] =
           static_cast<int>(settings_.motor_order[static_cast<std::size_t>(m)]);
@@ -347,7 +352,7 @@ class ForceEstimator {
   std::array<model::Saturation<ScalarType>, 4> saturation_;
   Forces gain_;
   Forces raw_ = Forces::Zero();
-  StictionHold<ScalarType> stick_;  // Settings::stick_*: same side only
+  StictionHold<ScalarType> stick_;  // Settings::stick_*
   std::array<int, 4> tool_joint_of_motor_{};
   NumericStatus last_status_ = NumericStatus::ok;
 };

@@ -7,9 +7,10 @@
 //! pressed by more than 0 and less than the stuck travel (`stick_travel`, plus `stick_play`
 //! while the held force is below `stick_force`): docs/models.md, "Stiction memory".
 //!
-//! ForceEstimator runs it after its gates (ForceEstimatorSettings::stick_*), holding only while
-//! the estimate falls on the same side (a contact level of +infinity). With a finite
-//! `contact_level` a held force beyond it is also held while the estimate falls *through zero*:
+//! ForceEstimator runs it after its gates (ForceEstimatorSettings::stick_*), by default holding
+//! only while the estimate falls on the same side (a contact level of +infinity). With a finite
+//! `contact_level` (ForceEstimatorSettings::stick_contact_level) a held force beyond it is also
+//! held while the estimate falls *through zero*:
 //! a model whose relaxed current lies inside its input dead zone reads a stuck joint as zero or
 //! a small force the other way (the passivity sweep's dead-zone clamp model, docs/passivity.md,
 //! "The stiction memory in the loop"). A held force within the level is no evidence of a contact

@@ -235,10 +235,10 @@ class LoopForceEstimator {
  public:
   using Clock = ManualClock;  //!< the loop's virtual clock
   //! `newest`: the sensor's tag (ForceSource::sensor); `stiction`: the stiction memory's
-  //! settings (stiction_memory_settings), or null for none; `through_zero`: that memory as
-  //! estimation::StictionHold after the estimator rather than the estimator's own, with
-  //! `contact_level` (N per motor, its free-motion error bound). Throws Error
-  //! on a model the bridge's estimator refuses.
+  //! settings (stiction_memory_settings), or null for none; `through_zero`: that memory holding
+  //! through zero beyond `contact_level` (N per motor, the estimate's free-motion error bound;
+  //! ForceEstimatorSettings::stick_contact_level). Throws Error on a model the bridge's estimator
+  //! refuses.
   LoopForceEstimator(const estimation::MotorVector* newest, ForceSource source,
                      const std::optional<estimation::BridgeJointModel>& clamp, Clock& clock,
                      const estimation::ForceEstimatorSettings<double>* stiction = nullptr,
@@ -251,12 +251,11 @@ class LoopForceEstimator {
                             : estimation::preset_force_models(estimation::ClampPreset::yaw2016);
     estimation::ForceEstimatorSettings<double> settings;
     settings.loop_period = 1e-3;
-    if (stiction != nullptr && through_zero) {
-      hold_.emplace(*stiction, contact_level);
-    } else if (stiction != nullptr) {
+    if (stiction != nullptr) {
       settings.stick_travel = stiction->stick_travel;
       settings.stick_play = stiction->stick_play;
       settings.stick_force = stiction->stick_force;
+      if (through_zero) settings.stick_contact_level = contact_level;
     }
     estimator_.emplace(models, estimation::bridge_estimator_settings(settings, models));
     paced_.emplace(*estimator_, clock, std::chrono::milliseconds(1));
@@ -268,21 +267,15 @@ class LoopForceEstimator {
   bool estimate(const estimation::MotorState4& measured, const estimation::MotorVector& setpoint,
                 estimation::MotorVector& force) noexcept {
     if (!paced_) return sensor_.estimate(measured, setpoint, force);
-    if (!paced_->estimate(measured, setpoint, force)) return false;
-    if (hold_) {
-      for (int j = 0; j < 4; ++j) force[j] = hold_->apply(j, force[j], measured.position[j]);
-    }
-    return true;
+    return paced_->estimate(measured, setpoint, force);
   }
   //! Forgets the model's history (the link came back).
   void reset() noexcept {
     if (paced_) paced_->reset();
-    if (hold_) hold_->reset();
   }
 
  private:
   TaggedForceSensor sensor_;
-  std::optional<estimation::StictionHold<>> hold_;  // the memory holding through zero
   std::optional<estimation::BridgeForceEstimator> estimator_;
   std::optional<estimation::PacedEstimator<estimation::BridgeForceEstimator, Clock>> paced_;
 };

@@ -8,8 +8,10 @@
 //! Simulation time; allocates (the samples), not for a tick.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -54,14 +56,14 @@ inline constexpr std::array<int, 8> transparency_round_trips_ms{0,   50,  100, 2
 //! (PassivityConfig::gain_recovery_rate; the sensor's runs keep the default 0.2/s).
 inline constexpr double sensorless_gain_recovery_rate = 0.05;
 
-//! N at the tool: the free-motion error bound of the identified clamp model the sweep
-//! identifies on its training presses (examples/passivity_sweep/identify_training.hpp, the
-//! current through the play clamp_current_play): the largest |estimate| where the true force is
-//! 0 in the three training logs after the first 0.5 s (sweep_identify::free_motion_error; 0.088 N
-//! for the model with a current dead zone instead). The robot-side controller's tolerance
-//! (PassivityConfig::robot_cost_tolerance) and, with the stiction hold switched on, its contact
-//! level (ClosedLoopConfig::stiction_contact_level).
-inline constexpr double identified_free_motion_error = 0.014;
+//! The `identified` force source's clamp model with its free-motion error bound (N at the tool,
+//! free_motion_error on the training presses: measured, identified_clamp): the robot-side
+//! controller's tolerance (PassivityConfig::robot_cost_tolerance) and, with the stiction hold
+//! switched on, its contact level (ClosedLoopConfig::stiction_contact_level).
+struct IdentifiedClamp {
+  estimation::BridgeJointModel model;  //!< as the bridge runs a clamp model file
+  double free_motion_error = 0.0;      //!< N, >= 0
+};
 
 //! A, the half width of the play the sweep's identified clamp model puts the reported current
 //! through (workflow::IdentifyRequest::current_play), as the demo does for the emulator's
@@ -79,14 +81,19 @@ inline constexpr double identified_free_motion_error = 0.014;
 //! One scenario: `round_trip_ms` ms round trip, `loss` per direction, the contact and the
 //! passivity mode (observe: the loop renders what it renders with the layer off, energy visible),
 //! the network's random seed 7 (the documented table's), the force fed back from `source`
-//! (ForceSource::identified runs `clamp_model`, required then).
+//! (ForceSource::identified runs `clamp`, required then: throws Error without it).
 [[nodiscard]] inline ClosedLoopConfig press_scenario(
     int round_trip_ms, double loss, ContactKind contact, teleop::PassivityMode mode,
     ForceSource source = ForceSource::sensor,
-    const std::optional<estimation::BridgeJointModel>& clamp_model = std::nullopt) {
+    const std::optional<IdentifiedClamp>& clamp = std::nullopt) {
   ClosedLoopConfig c;
   c.force_source = source;
-  c.clamp_model = clamp_model;
+  if (source == ForceSource::identified) {
+    if (!clamp) {
+      ENDOHAPTICS_THROW(Error("press_scenario: the identified force source needs its clamp model"));
+    }
+    c.clamp_model = clamp->model;
+  }
   if (source != ForceSource::sensor) {
     // The sensorless estimate: per-direction observers (neither controller feeds its own
     // observer), the force scale coming back 4x slower (the best of the grid in
@@ -104,8 +111,8 @@ inline constexpr double identified_free_motion_error = 0.014;
       // the force beyond the model's free-motion error bound (a standing deficit otherwise stops
       // the setpoint against a force the estimate cannot tell from zero).
       for (const int j : {2, 3}) {
-        c.stiction_contact_level[j] = identified_free_motion_error;
-        c.passivity.robot_cost_tolerance[j] = identified_free_motion_error;
+        c.stiction_contact_level[j] = clamp->free_motion_error;
+        c.passivity.robot_cost_tolerance[j] = clamp->free_motion_error;
       }
     }
   }
@@ -228,6 +235,48 @@ inline void write_training_log(const std::filesystem::path& path, const Training
                  loop->rig().truth().external_force[j]);
   }
   if (std::fclose(out) != 0) ENDOHAPTICS_THROW(Error("cannot write " + path.string()));
+}
+
+//! N: the free-motion error bound of `model` on the training presses: the largest |estimate|
+//! where clamp 1's true force is 0, after the first 0.5 s of each press (the model fresh per
+//! press, fed clamp 1's reported current, velocity and position as the loop's rig reports them,
+//! force feedback off).
+[[nodiscard]] inline double free_motion_error(const estimation::BridgeJointModel& model) {
+  double worst = 0.0;
+  for (const auto& press : training_presses()) {
+    ClosedLoopConfig c;
+    c.contact = press.contact;
+    c.contact_position = press.contact_position;
+    c.press_depth = press.press_depth;
+    c.approach_start = press.approach_start;
+    c.approach_time = press.approach_time;
+    c.force_gain = 0.0;
+    auto loop = std::make_unique<ClosedLoop>(c);
+    auto m = model;
+    const auto n = static_cast<int>(press.seconds * 1000.0 + 0.5);
+    constexpr int j = ClosedLoop::clamp1;
+    for (int i = 0; i < n; ++i) {
+      const ClosedLoopSample s = loop->step();
+      const auto state = loop->rig().state();
+      estimation::JointSignals<double> sig;
+      sig.current = state.current[j];
+      sig.velocity = state.velocity[j];
+      sig.position = state.position[j];
+      sig.setpoint = state.position[j];
+      const double f = m.force(sig);
+      (void)m.advance(sig);
+      if (s.time > 0.5 && loop->rig().truth().external_force[j] == 0.0) {
+        worst = std::max(worst, std::fabs(f));
+      }
+    }
+  }
+  return worst;
+}
+
+//! `model` with its free-motion error bound measured on the training presses.
+[[nodiscard]] inline IdentifiedClamp identified_clamp(estimation::BridgeJointModel model) {
+  const double bound = free_motion_error(model);
+  return {std::move(model), bound};
 }
 
 }  // namespace endohaptics::sim
