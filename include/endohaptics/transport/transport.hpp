@@ -24,6 +24,9 @@ namespace endohaptics::transport {
 inline constexpr std::size_t default_max_drain = 64;
 //! Largest drain bound a transport accepts.
 inline constexpr std::size_t max_drain_limit = 4096;
+//! Longest receive spin (UdpConfig::receive_spin) a transport accepts: one 1 kHz period; a
+//! longer one is a busy poll, and a blocking wait is the better tool for it.
+inline constexpr std::chrono::nanoseconds max_receive_spin = std::chrono::milliseconds(1);
 
 namespace detail {
 
@@ -35,6 +38,18 @@ inline std::size_t checked_max_drain(std::size_t max_drain, std::string_view who
                             std::to_string(max_drain)));
   }
   return max_drain;
+}
+
+//! `spin` if it is in [0, max_receive_spin]; otherwise throws Error naming `who`'s field.
+inline std::chrono::nanoseconds checked_receive_spin(std::chrono::nanoseconds spin,
+                                                     std::string_view who) {
+  if (spin.count() < 0 || spin > max_receive_spin) {
+    ENDOHAPTICS_THROW(Error(std::string(who) + ": receive_spin must be in [0, " +
+                            std::to_string(max_receive_spin.count()) +
+                            "] ns (0: block at once), got " + std::to_string(spin.count()) +
+                            " ns"));
+  }
+  return spin;
 }
 
 }  // namespace detail

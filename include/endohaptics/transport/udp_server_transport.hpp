@@ -43,6 +43,9 @@ struct UdpServerConfig {
   //! "addr:port" with the last colon before the port); empty: pin per pin_first_peer. Datagrams
   //! from anyone else are counted (foreign_datagrams()) and never answered, from the start.
   std::string peer;
+  //! Each receive first polls the socket without blocking for up to this long, then blocks; 0
+  //! (the default) blocks at once. In [0, max_receive_spin] (UdpConfig::receive_spin).
+  std::chrono::nanoseconds receive_spin{0};
 };
 
 //! Server (sbRIO) side of the UDP link: bound, unconnected socket that replies to the sender of
@@ -59,6 +62,7 @@ class UdpServerTransport {
         repin_after_(config.repin_after) {
     namespace ip = boost::asio::ip;
     boost::system::error_code ec;
+    scratch_.wait.set_spin(detail::checked_receive_spin(config.receive_spin, "UdpServerTransport"));
     if (config.repin_after.count() < 0) {
       ENDOHAPTICS_THROW(Error("UdpServerTransport: repin_after must be >= 0 ns, got " +
                               std::to_string(config.repin_after.count())));
@@ -168,6 +172,9 @@ class UdpServerTransport {
 
   //! Datagrams one receive reads at most.
   [[nodiscard]] std::size_t max_drain() const noexcept { return max_drain_; }
+  //! The receive's non-blocking poll before it blocks (UdpServerConfig::receive_spin), and how
+  //! often it found a datagram (hits) or ran out and blocked (misses).
+  [[nodiscard]] const detail::ReadableWait& receive_wait() const noexcept { return scratch_.wait; }
 
   //! Datagrams from other senders than the pinned peer (UdpServerConfig::pin_first_peer).
   [[nodiscard]] std::size_t foreign_datagrams() const noexcept { return foreign_; }

@@ -7,6 +7,7 @@
 
 #include <netinet/in.h>
 #include <poll.h>
+#include <sched.h>
 #include <sys/socket.h>
 #include <sys/timerfd.h>
 #include <unistd.h>
@@ -49,6 +50,12 @@ inline std::chrono::nanoseconds monotonic_now() noexcept {
 //! once per round trip). When the timer fires before this wait's deadline, it is re-armed at the
 //! deadline and the wait goes on: a wait never ends after its deadline, nor before it without a
 //! datagram. Without a timerfd (creation refused) every wait is a ppoll with its own timeout.
+//!
+//! Optionally (set_spin, default 0: off) a wait first polls the socket without blocking for up to
+//! `spin` (never past its deadline), yielding the CPU between polls, and blocks only if nothing
+//! came: a datagram that arrives during the spin costs no wake-up of a blocked thread, at the
+//! price of the CPU the spin burns (a relay whose peer answers within microseconds;
+//! docs/performance.md, the sbRIO gateway).
 class ReadableWait {
  public:
   ReadableWait() noexcept : timer_(::timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC)) {}
@@ -61,6 +68,10 @@ class ReadableWait {
   //! Waits until `fd` is readable (ok), the CLOCK_MONOTONIC time `deadline` (ns) passes (timeout;
   //! a deadline already passed still looks once) or the wait fails (error).
   TransportStatus until(int fd, std::chrono::nanoseconds deadline) noexcept {
+    if (spin_.count() > 0) {
+      const TransportStatus spun = spin_until(fd, deadline);
+      if (spun != TransportStatus::timeout) return spun;
+    }
     for (;;) {
       const auto now = monotonic_now();
       if (now >= deadline) return poll_until(fd, now);
@@ -86,7 +97,44 @@ class ReadableWait {
     }
   }
 
+  //! How long a wait polls without blocking before it blocks (0: it blocks at once). The caller
+  //! keeps it in [0, max_receive_spin] (checked_receive_spin).
+  void set_spin(std::chrono::nanoseconds spin) noexcept {
+    spin_ = std::max(spin, std::chrono::nanoseconds(0));
+  }
+  //! The spin set.
+  [[nodiscard]] std::chrono::nanoseconds spin() const noexcept { return spin_; }
+  //! Waits (with a spin set) that a datagram ended during the spin: no blocking wait, no wake-up.
+  [[nodiscard]] std::uint64_t spin_hits() const noexcept { return spin_hits_; }
+  //! Waits (with a spin set) whose spin ended without a datagram, so they blocked.
+  [[nodiscard]] std::uint64_t spin_misses() const noexcept { return spin_misses_; }
+
  private:
+  // Polls `fd` without blocking until it is readable (ok), the spin or the deadline has passed
+  // (timeout: block from here) or the poll fails (error). A deadline already passed is left to
+  // the blocking path, which still looks once.
+  TransportStatus spin_until(int fd, std::chrono::nanoseconds deadline) noexcept {
+    const auto now = monotonic_now();
+    if (now >= deadline) return TransportStatus::timeout;
+    const auto end = spin_ < deadline - now ? now + spin_ : deadline;
+    for (;;) {
+      pollfd pfd{fd, POLLIN, 0};
+      const int ready = ::poll(&pfd, 1, 0);
+      if (ready > 0) {
+        ++spin_hits_;
+        return TransportStatus::ok;
+      }
+      if (ready < 0 && errno != EINTR) return TransportStatus::error;
+      if (monotonic_now() >= end) break;
+      // A thread woken on this CPU (often the very peer that is to answer: the kernel places a
+      // woken receiver beside its sender) runs now, not when the spin ends. Without it a spin on
+      // two shared cores was slower than no spin at all (docs/performance.md).
+      ::sched_yield();
+    }
+    ++spin_misses_;
+    return TransportStatus::timeout;
+  }
+
   // ppoll on `fd` alone until the CLOCK_MONOTONIC time `deadline` (looks once when it has
   // passed): ok, timeout or error.
   static TransportStatus poll_until(int fd, std::chrono::nanoseconds deadline) noexcept {
@@ -104,6 +152,9 @@ class ReadableWait {
 
   int timer_;
   std::chrono::nanoseconds armed_{0};  // CLOCK_MONOTONIC expiry the timer is armed for (0: none)
+  std::chrono::nanoseconds spin_{0};   // the non-blocking poll before each blocking wait
+  std::uint64_t spin_hits_ = 0;
+  std::uint64_t spin_misses_ = 0;
 };
 
 //! Largest datagram a UDP transport reads whole; longer ones are refused as oversized (every
@@ -220,6 +271,11 @@ struct UdpConfig {
   int receive_buffer_bytes = 0;                 //!< SO_RCVBUF; 0 keeps the system default
   //! Datagrams one receive reads at most (1..max_drain_limit); the rest wait for the next call.
   std::size_t max_drain = default_max_drain;
+  //! Each receive first polls the socket without blocking for up to this long (never past its
+  //! timeout), then blocks: 0 (the default) blocks at once. In [0, max_receive_spin]. Spinning
+  //! saves the wake-up of a blocked thread when the answer comes within the spin, and burns the
+  //! CPU meanwhile (detail::ReadableWait).
+  std::chrono::nanoseconds receive_spin{0};
 };
 
 //! PC side of the UDP link to the sbRIO: bound and connected socket, non-blocking sends and
@@ -232,6 +288,7 @@ class UdpTransport {
       : socket_(io_), max_drain_(detail::checked_max_drain(config.max_drain, "UdpTransport")) {
     namespace ip = boost::asio::ip;
     boost::system::error_code ec;
+    scratch_.wait.set_spin(detail::checked_receive_spin(config.receive_spin, "UdpTransport"));
     const ip::address local = ip::make_address(config.local_address, ec);
     if (ec)
       ENDOHAPTICS_THROW(
@@ -300,6 +357,9 @@ class UdpTransport {
 
   //! Datagrams one receive reads at most.
   [[nodiscard]] std::size_t max_drain() const noexcept { return max_drain_; }
+  //! The receive's non-blocking poll before it blocks (UdpConfig::receive_spin), and how often it
+  //! found a datagram (hits) or ran out and blocked (misses).
+  [[nodiscard]] const detail::ReadableWait& receive_wait() const noexcept { return scratch_.wait; }
 
   //! The bound local endpoint (useful with local_port = 0).
   [[nodiscard]] boost::asio::ip::udp::endpoint local_endpoint() const {
