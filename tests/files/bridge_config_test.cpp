@@ -157,7 +157,7 @@ TEST_CASE("file errors name the file") {
 TEST_CASE("unknown keys are errors that list the allowed keys") {
   CHECK(error_of(R"({"safty": {}})") ==
         "bridge.json: unknown key 'safty' (allowed: mapping, safety, plausibility, estimator, "
-        "operator, loop)");
+        "operator, loop, passivity)");
   CHECK(error_of(R"({"loop": {"recieve_timeout": 0.002}})") ==
         "bridge.json: unknown key 'loop.recieve_timeout' (allowed in 'loop': receive_timeout)");
   CHECK(error_of(R"({"safety": {"polcy": "zero_force"}})") ==
@@ -170,6 +170,51 @@ TEST_CASE("unknown keys are errors that list the allowed keys") {
                    "current_sign, unit_scale, friction_level, output_deadzone, output_limit, "
                    "stick_travel, stick_play, stick_force, clamp_model, model_sets, instrument)",
                    0) == 0);
+}
+
+TEST_CASE("the passivity section sets the layer --passivity tdpa runs") {
+  // docs/rig.md: the passivity sweep's stable setting for the sensorless estimate.
+  const auto c = files::parse_bridge_config(
+      R"({ "passivity": { "observer": "per_direction", "gain_recovery_rate": 0.05,
+                          "robot_cost_tolerance": [0, 0, 0.014, 0.014] } })",
+      "bridge.json");
+  CHECK(c.loop.passivity.observer == tp::PassivityObserver::per_direction);
+  CHECK(c.loop.passivity.gain_recovery_rate == 0.05);
+  CHECK(c.loop.passivity.robot_cost_tolerance[2] == 0.014);
+  CHECK(c.loop.passivity.robot_cost_tolerance[0] == 0.0);
+  CHECK(c.loop.passivity.energy_reserve == tp::PassivityConfig{}.energy_reserve);
+  // The mode, the round trip and the force limit are the program's (--passivity, the mapping).
+  CHECK(c.loop.passivity.mode == tp::PassivityMode::off);
+  CHECK(error_of(R"({"passivity": {"mode": "tdpa"}})")
+            .starts_with("bridge.json: unknown key 'passivity.mode' (allowed in 'passivity': "
+                         "observer, energy_reserve, gain_recovery_rate, estimate_tolerance, "
+                         "robot_cost_tolerance, robot_return_needs_motion, "
+                         "recover_while_absorbing, lever, min_motion)"));
+  // Written and read back, booleans as booleans.
+  auto flags = c;
+  flags.loop.passivity.recover_while_absorbing = true;
+  flags.loop.passivity.robot_return_needs_motion = false;
+  const std::string text = files::bridge_config_json(flags);
+  CHECK(text.find(R"("recover_while_absorbing": true)") != std::string::npos);
+  const auto back = files::parse_bridge_config(text);
+  CHECK(back.loop.passivity.recover_while_absorbing);
+  CHECK_FALSE(back.loop.passivity.robot_return_needs_motion);
+  CHECK(back.loop.passivity.observer == tp::PassivityObserver::per_direction);
+  CHECK(files::bridge_config_json(back) == text);
+  // Refused with the key, the rule and the value.
+  CHECK(error_of(R"({"passivity": {"observer": "both"}})") ==
+        R"(bridge.json: passivity.observer: must be "combined" or "per_direction", got "both")");
+  CHECK(error_of(R"({"passivity": {"recover_while_absorbing": 1}})") ==
+        "bridge.json: passivity.recover_while_absorbing: must be true or false, got 1");
+  CHECK(error_of(R"({"passivity": {"robot_cost_tolerance": [0, 0, -0.1, 0]}})") ==
+        "bridge.json: passivity.robot_cost_tolerance[2]: must be finite and >= 0 N, got -0.1");
+  CHECK(error_of(R"({"passivity": {"energy_reserve": 0}})") ==
+        "bridge.json: passivity.energy_reserve: must be finite and > 0 J, got 0");
+  // A built configuration is checked the same way (the section named by the library's error).
+  files::BridgeConfig bad;
+  bad.loop.passivity.gain_recovery_rate = -1.0;
+  CHECK(message_of([&] { files::validate_bridge_config(bad, "built"); }) ==
+        "built: passivity.gain_recovery_rate: must be finite and > 0 1/s, got -1");
 }
 
 TEST_CASE("duplicate keys are errors, at any level") {

@@ -9,6 +9,7 @@
 #include <deque>
 #include <endohaptics/teleop/passivity.hpp>
 #include <endohaptics/teleop/tick_recorder.hpp>
+#include <limits>
 #include <numbers>
 #include <string>
 
@@ -109,8 +110,17 @@ TEST_CASE("passivity: PassivityConfig::validate names the field and the value") 
                     doctest::Contains("estimate_tolerance[2] must be finite and >= 0 N, got -0.1"));
   c = {};
   c.observer = static_cast<tp::PassivityObserver>(5);
+  CHECK_THROWS_WITH(
+      c.validate(),
+      doctest::Contains(R"(observer must be one of "combined" or "per_direction", got 5)"));
+  c = {};
+  c.gain_recovery_rate = std::numeric_limits<double>::infinity();
+  CHECK_THROWS_WITH(c.validate(), doctest::Contains("gain_recovery_rate must be finite and > 0 "
+                                                    "1/s, got inf"));
+  c = {};
+  c.lever[1] = 0.0;
   CHECK_THROWS_WITH(c.validate(),
-                    doctest::Contains("observer must be combined or per_direction, got 5"));
+                    doctest::Contains("lever[1] must be finite and > 0 m/rad, got 0"));
   CHECK(tp::to_string(tp::PassivityMode::tdpa) == "tdpa");
   CHECK(tp::to_string(tp::PassivityMode::observe) == "observe");
 }

@@ -177,4 +177,20 @@ TEST_CASE("bridge assembly: a rate too slow for the watchdog is refused, naming 
   CHECK(max.passivity.mode == config.loop.passivity.mode);  // no TDPA unless asked for
 }
 
+TEST_CASE("bridge assembly: --passivity tdpa runs the configuration's passivity section") {
+  files::BridgeConfig config = files::parse_bridge_config(
+      R"({ "passivity": { "observer": "per_direction", "gain_recovery_rate": 0.05,
+                          "robot_cost_tolerance": [0, 0, 0.014, 0.014] } })");
+  const est::MotorVector unclipped = est::MotorVector::Constant(1.5);
+  const tp::TeleopLoopConfig loop = wf::bridge_loop_config(
+      config, {.rate = "1000", .tdpa = true, .passivity_round_trip_ms = 50.0}, unclipped);
+  CHECK(loop.passivity.mode == tp::PassivityMode::tdpa);
+  CHECK(loop.passivity.round_trip_ticks == 50);
+  CHECK(loop.passivity.force_limit == unclipped);  // the program's, not the file's
+  CHECK(loop.passivity.observer == tp::PassivityObserver::per_direction);
+  CHECK(loop.passivity.gain_recovery_rate == 0.05);
+  CHECK(loop.passivity.robot_cost_tolerance[3] == 0.014);
+  loop.validate();
+}
+
 }  // namespace workflow_bridge_assembly_test

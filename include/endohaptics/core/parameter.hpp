@@ -233,6 +233,8 @@ struct ParameterChecker {
     const double seconds = std::chrono::duration<double>(value).count();
     require(bound.contains(seconds), name, seconds, bound.describe());
   }
+  //! A flag: both values are allowed.
+  void operator()(std::string_view, const bool&, const Bound&) const noexcept {}
   //! A number field.
   template <typename T>
   requires std::is_arithmetic_v<T>

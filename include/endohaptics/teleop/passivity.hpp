@@ -17,8 +17,10 @@
 #include <limits>
 #include <string>
 #include <string_view>
+#include <utility>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/core/parameter.hpp"
 #include "endohaptics/estimation/joint_force_estimator.hpp"
 
 namespace endohaptics::teleop {
@@ -55,6 +57,13 @@ enum class PassivityObserver : std::uint8_t {
   //! neither controller's action feeds the other's observer, nor its own.
   per_direction,
 };
+
+//! The observers by their configuration names ("combined", "per_direction").
+[[nodiscard]] constexpr std::array<std::pair<std::string_view, PassivityObserver>, 2> enumerators(
+    PassivityObserver) noexcept {
+  return {{{"combined", PassivityObserver::combined},
+           {"per_direction", PassivityObserver::per_direction}}};
+}
 
 //! Settings of the passivity layer.
 struct PassivityConfig {
@@ -111,8 +120,27 @@ struct PassivityConfig {
   //! comes back at gain_recovery_rate, so a hold after an impact is felt again.
   bool recover_while_absorbing = false;
 
-  //! Throws Error naming the field and value.
+  //! The fields a configuration sets, by their configuration names, with their bounds
+  //! (core/parameter.hpp): the one list validate() and the bridge configuration's "passivity"
+  //! section use. mode, round_trip_ticks and force_limit are the program's (--passivity,
+  //! --passivity-round-trip, the mapping's limits) and are checked apart.
+  template <typename Self, typename Visitor>
+  static void for_each_field(Self& p, Visitor&& v) {
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    v("observer", p.observer, Bound{});
+    v("energy_reserve", p.energy_reserve, Bound::above(0, inf, "J"));
+    v("gain_recovery_rate", p.gain_recovery_rate, Bound::above(0, inf, "1/s"));
+    v("estimate_tolerance", p.estimate_tolerance, Bound::in(0, inf, "N"));
+    v("robot_cost_tolerance", p.robot_cost_tolerance, Bound::in(0, inf, "N"));
+    v("robot_return_needs_motion", p.robot_return_needs_motion, Bound{});
+    v("recover_while_absorbing", p.recover_while_absorbing, Bound{});
+    v("lever", p.lever, Bound::above(0, inf, "m/rad"));
+    v("min_motion", p.min_motion, Bound::above(0, inf, "m"));
+  }
+
+  //! Throws Error naming the field and value (ParameterError for the fields of for_each_field).
   void validate() const {
+    for_each_field(*this, ParameterChecker{"PassivityConfig"});
     if (mode != PassivityMode::off && mode != PassivityMode::observe &&
         mode != PassivityMode::tdpa) {
       ENDOHAPTICS_THROW(Error("PassivityConfig: mode must be off, observe or tdpa, got " +
@@ -123,51 +151,12 @@ struct PassivityConfig {
                               std::to_string(max_round_trip_ticks) + "], got " +
                               std::to_string(round_trip_ticks)));
     }
-    for (int j = 0; j < lever.size(); ++j) {
-      if (!std::isfinite(lever[j]) || !(lever[j] > 0.0)) {
-        ENDOHAPTICS_THROW(Error("PassivityConfig: lever[" + std::to_string(j) +
-                                "] must be finite and > 0 m/rad, got " +
-                                endohaptics::detail::format_number(lever[j])));
-      }
-    }
-    if (!std::isfinite(energy_reserve) || !(energy_reserve > 0.0)) {
-      ENDOHAPTICS_THROW(Error("PassivityConfig: energy_reserve must be finite and > 0 J, got " +
-                              endohaptics::detail::format_number(energy_reserve)));
-    }
-    if (!std::isfinite(gain_recovery_rate) || !(gain_recovery_rate > 0.0)) {
-      ENDOHAPTICS_THROW(
-          Error("PassivityConfig: gain_recovery_rate must be finite and > 0 1/s, "
-                "got " +
-                endohaptics::detail::format_number(gain_recovery_rate)));
-    }
     for (int j = 0; j < force_limit.size(); ++j) {
       if (std::isnan(force_limit[j]) || !(force_limit[j] > 0.0)) {
         ENDOHAPTICS_THROW(Error("PassivityConfig: force_limit[" + std::to_string(j) +
                                 "] must be > 0 N, got " +
                                 endohaptics::detail::format_number(force_limit[j])));
       }
-    }
-    if (observer != PassivityObserver::combined && observer != PassivityObserver::per_direction) {
-      ENDOHAPTICS_THROW(Error("PassivityConfig: observer must be combined or per_direction, got " +
-                              std::to_string(static_cast<int>(observer))));
-    }
-    for (int j = 0; j < robot_cost_tolerance.size(); ++j) {
-      if (!std::isfinite(robot_cost_tolerance[j]) || robot_cost_tolerance[j] < 0.0) {
-        ENDOHAPTICS_THROW(Error("PassivityConfig: robot_cost_tolerance[" + std::to_string(j) +
-                                "] must be finite and >= 0 N, got " +
-                                endohaptics::detail::format_number(robot_cost_tolerance[j])));
-      }
-    }
-    for (int j = 0; j < estimate_tolerance.size(); ++j) {
-      if (!std::isfinite(estimate_tolerance[j]) || estimate_tolerance[j] < 0.0) {
-        ENDOHAPTICS_THROW(Error("PassivityConfig: estimate_tolerance[" + std::to_string(j) +
-                                "] must be finite and >= 0 N, got " +
-                                endohaptics::detail::format_number(estimate_tolerance[j])));
-      }
-    }
-    if (!std::isfinite(min_motion) || !(min_motion > 0.0)) {
-      ENDOHAPTICS_THROW(Error("PassivityConfig: min_motion must be finite and > 0 m, got " +
-                              endohaptics::detail::format_number(min_motion)));
     }
   }
 };

@@ -30,6 +30,7 @@ void for_each_section(Config& c, F&& f) {
   f("estimator", c.estimator);
   f("operator", c.operator_script);
   f("loop", c.loop);
+  f("passivity", c.loop.passivity);
 }
 
 //! The section whose struct's validation names `owner` (ParameterError::owner()), or "".
@@ -40,6 +41,7 @@ inline std::string_view section_of(std::string_view owner) {
   if (owner == "ForceEstimator") return "estimator";
   if (owner == "OperatorScript") return "operator";
   if (owner == "TeleopLoopConfig") return "loop";
+  if (owner == "PassivityConfig") return "passivity";
   return {};
 }
 
@@ -141,7 +143,10 @@ struct Reader {
     if (it == object.end()) return;
     const json& j = *it;
     const std::string key = dotted(section, name);
-    if constexpr (NamedEnum<V>) {
+    if constexpr (std::is_same_v<V, bool>) {
+      if (!j.is_boolean()) fail(source, key, "must be true or false, got " + show(j));
+      value = j.get<bool>();
+    } else if constexpr (NamedEnum<V>) {
       if (j.is_string()) {
         for (const auto& [label, e] : enumerators(value)) {
           if (j.get_ref<const std::string&>() == label) {
@@ -186,7 +191,9 @@ struct Writer {
   void operator()(std::string_view name, T&& value, const Bound&) const {
     using V = std::remove_cvref_t<T>;
     const std::string key(name);
-    if constexpr (NamedEnum<V>) {
+    if constexpr (std::is_same_v<V, bool>) {
+      out[key] = value;
+    } else if constexpr (NamedEnum<V>) {
       out[key] = std::string(enumerator_name(value));
     } else if constexpr (std::is_integral_v<V>) {
       out[key] = static_cast<long long>(value);
@@ -216,7 +223,9 @@ struct Checker {
   template <typename T>
   void operator()(std::string_view name, const T& value, const Bound& bound) const {
     const std::string key = dotted(section, name);
-    if constexpr (NamedEnum<T>) {
+    if constexpr (std::is_same_v<T, bool>) {
+      return;  // both values are allowed
+    } else if constexpr (NamedEnum<T>) {
       if (enumerator_name(value).empty()) {
         fail(source, key,
              "is not one of " + enumerator_list(value) + " (" +
