@@ -36,6 +36,9 @@ extern "C" inline void on_signal(int) { g_stop.store(true); }
 inline std::chrono::nanoseconds from_ms(double ms) {
   return std::chrono::nanoseconds(static_cast<std::int64_t>(ms * 1e6 + 0.5));
 }
+inline std::chrono::nanoseconds from_us(double us) {
+  return std::chrono::nanoseconds(static_cast<std::int64_t>(us * 1e3 + 0.5));
+}
 
 //! The command line's settings.
 struct Options {
@@ -47,6 +50,8 @@ struct Options {
   double max_round_trip_ms = 0.0;
   double joint_range = protocol::endowrist_joint_range;
   double max_setpoint_rate = protocol::endowrist_max_joint_rate;
+  double spin_us = 0.0;
+  double listen_spin_us = 0.0;
   bool stats = false;
   double duration = 0.0;
 };
@@ -89,6 +94,18 @@ inline void add_options(CLI::App& app, Options& o) {
                  "it (from the sbRIO's measured position after silence)")
       ->check(examples::number_in(1e-3, 1000.0))
       ->capture_default_str();
+  app.add_option("--spin-us", o.spin_us,
+                 "us each wait for the sbRIO's answer polls the link without blocking before it "
+                 "blocks (0: blocks at once): no wake-up when the answer comes within it, this "
+                 "much CPU burnt when it does not; for a gateway with a CPU to spare")
+      ->check(examples::number_in(0.0, 1000.0))
+      ->capture_default_str();
+  app.add_option("--listen-spin-us", o.listen_spin_us,
+                 "us each wait for a console's setpoint polls without blocking before it blocks "
+                 "(0: blocks at once); helps only a console faster than one setpoint per "
+                 "--listen-spin-us (--rate max), otherwise burns that much CPU per setpoint")
+      ->check(examples::number_in(0.0, 1000.0))
+      ->capture_default_str();
   app.add_flag("--stats", o.stats, "print the counters every second");
   app.add_option("--duration", o.duration, "seconds to run (0: until SIGINT/SIGTERM)")
       ->check(examples::number_in(0.0, 1e7))
@@ -123,6 +140,7 @@ inline int run(const Options& o) {
   transport::UdpServerConfig network_config;
   network_config.bind_address = listen_host;
   network_config.port = listen_port;
+  network_config.receive_spin = from_us(o.listen_spin_us);
   transport::UdpServerTransport network(network_config);
   transport::SecureTransport<transport::UdpServerTransport, protocol::SecureResponder<4>> secure(
       network, protocol::SecureResponder<4>(keys, session));
@@ -131,6 +149,7 @@ inline int run(const Options& o) {
   link_config.local_address = sbrio_host.find(':') != std::string::npos ? "::" : "0.0.0.0";
   link_config.remote_address = sbrio_host;
   link_config.remote_port = sbrio_port;
+  link_config.receive_spin = from_us(o.spin_us);
   transport::UdpTransport link(link_config);
   endohaptics::SteadyClock clock;
   transport::V2Gateway gateway(secure, link, clock, gateway_config);
@@ -146,7 +165,13 @@ inline int run(const Options& o) {
       endpoint.address().to_string(), endpoint.port(), o.rig_name, ids,
       std::chrono::duration<double, std::milli>(session.max_round_trip).count(), sbrio_host,
       sbrio_port, o.watchdog_ms, o.joint_range, o.max_setpoint_rate);
-
+  const bool spinning = o.spin_us > 0 || o.listen_spin_us > 0;
+  if (spinning) {
+    fmt::print(
+        "sbrio-gateway: receives spin before they block: {} us for the sbRIO's answer, {} us for "
+        "a console's setpoint\n",
+        o.spin_us, o.listen_spin_us);
+  }
   const auto start = clock.now();
   auto next_report = start + std::chrono::seconds(1);
   bool was_silent = true;
@@ -160,6 +185,14 @@ inline int run(const Options& o) {
         prefix, c.relayed, c.returned, c.disabled, c.sbrio_refused, c.unanswered, c.watchdog_trips,
         c.network_errors + c.sbrio_errors, c.network_errors, c.sbrio_errors,
         secure.counters().rejected(), c.limited);
+    if (spinning) {
+      const auto& l = link.receive_wait();
+      const auto& n = network.receive_wait();
+      fmt::print(
+          "sbrio-gateway: spins: sbRIO link {} answered within the spin, {} blocked after it; "
+          "consoles' side {} answered, {} blocked\n",
+          l.spin_hits(), l.spin_misses(), n.spin_hits(), n.spin_misses());
+    }
   };
   // 1 ms receives at most: a signal ends the run well within 1 s.
   while (!g_stop.load()) {

@@ -17,6 +17,8 @@ programs' counters:
             than the bridge's last setpoint + the gateway's watchdog + a margin has enable mask 0
             (the emulator's own watchdog is 5 s: it never trips)
 Prints "PASS: ..." with the counts, or "FAIL: ...".
+GATEWAY_EXTRA_ARGS (environment, split at spaces) is appended to the gateway's command line, e.g.
+"--spin-us 50 --listen-spin-us 50" to run the same checks with the gateway's receives spinning.
 """
 import csv
 import os
@@ -140,7 +142,8 @@ def main():
     gw_port = free_port()
     gateway = subprocess.Popen(
         runner + [gateway_exe, "--listen", f"127.0.0.1:{gw_port}", "--sbrio",
-                  f"127.0.0.1:{emu_port}", "--key", key, "--watchdog-ms", str(WATCHDOG_MS)],
+                  f"127.0.0.1:{emu_port}", "--key", key, "--watchdog-ms", str(WATCHDOG_MS)]
+        + os.environ.get("GATEWAY_EXTRA_ARGS", "").split(),
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     gw_lines = []
     wait_line(gateway, r"protocol v2 on 127\.0\.0\.1:", "gateway", gw_lines)
@@ -266,6 +269,9 @@ def main():
           f"{gw_stop_s:.2f} s")
     print(relay_line.strip())
     print(v2_line.strip())
+    for line in gw_text.splitlines():
+        if "spins:" in line:
+            print(line.strip())  # GATEWAY_EXTRA_ARGS with a spin: how often it saved a wait
     shutil.rmtree(work, ignore_errors=True)  # kept after a failure, for its logs
 
 
