@@ -262,4 +262,67 @@ TEST_CASE("bidirectional observer on the UMN grasper, one session to the other, 
   CHECK(to_l4 < to_l4_fixed);
 }
 
+TEST_CASE("bidirectional observer on the UMN grasper, blind constants, whole sessions" *
+          doctest::skip(!endohaptics::test::has_shared_data("umn-mis-tool-2018"))) {
+  // The held-out figure of the fixed UMN line (docs/identification_results.md, umn_loso.sh):
+  // every run of one session trains, every run of the other is scored causally after 0.5 s, with
+  // the constants identify's blocked cross-validation on the training session chose (the search
+  // itself takes 23 and 45 s in a Release build: the script runs it; here the fit and the replay
+  // with its choice). The rest threshold is one encoder step per sample.
+  const auto l2 = endohaptics::test::umn_session_all("Tool_4_Maryland_L_2");
+  const auto l4 = endohaptics::test::umn_session_all("Tool_4_Maryland_L_4");
+  REQUIRE(l2.size() == 20);
+  REQUIRE(l4.size() == 50);
+  const auto cross = [](const std::vector<wf::LoadObserverData>& train,
+                        const std::vector<wf::LoadObserverData>& test,
+                        const wf::BidirectionalSettings& s) {
+    est::BidirectionalLoadObserverParameters<double> prior;
+    const auto step = wf::encoder_step(train);
+    REQUIRE(step.has_value());
+    prior.velocity_threshold = *step / prior.sample_time;
+    auto chosen = s;
+    chosen.velocity_threshold = prior.velocity_threshold;
+    const auto fit = wf::fit_bidirectional_load_observer(train, wf::with_settings(prior, chosen),
+                                                         0.5, chosen.rule);
+    const Observer model(fit.parameters);
+    double sum = 0.0;
+    for (const auto& d : test) {
+      const Eigen::VectorXd y = wf::simulate_bidirectional_observer(model, d, fit.reference);
+      const auto n = d.load.size() - 500;
+      sum += std::sqrt((d.load.tail(n) - y.tail(n)).squaredNorm() / static_cast<double>(n));
+    }
+    return sum / static_cast<double>(test.size());
+  };
+  // Chosen on L_2: correlation time 0.05 s, friction prior x1, load walk 0.1 % / 81 (the grid's
+  // lowest, walked four steps of 3 below it); 20 Hz, 5 Hz, q0 0.1 rad, stops x 1.
+  wf::BidirectionalSettings on_l2;
+  on_l2.rule = {0.05, 1.0, 0.001 / 81.0};
+  on_l2.current_cutoff = 20.0;
+  on_l2.velocity_cutoff = 5.0;
+  on_l2.direction_scale = 0.1;
+  // Chosen on L_4: 0.1414 s, x1, 0.3 %; 80 Hz, 20 Hz, q0 0.05 rad, stops x 1.
+  wf::BidirectionalSettings on_l4;
+  on_l4.rule = {0.1414, 1.0, 0.003};
+  on_l4.current_cutoff = 80.0;
+  on_l4.velocity_cutoff = 20.0;
+  on_l4.direction_scale = 0.05;
+  // Both correlation times are values of the search's grid (the factor-sqrt(2) refinement).
+  const auto grid = wf::noise_rule_grid();
+  CHECK(grid.size() == 144);
+  for (const double t : {0.05, 0.1414}) {
+    CHECK(std::any_of(grid.begin(), grid.end(), [t](const wf::BidirectionalNoiseRule& r) {
+      return r.correlation_time == t;
+    }));
+  }
+  const double to_l4 = cross(l2, l4, on_l2);
+  const double to_l2 = cross(l4, l2, on_l4);
+  MESSAGE("blind constants, L_2 -> L_4 " << to_l4 << " mN m, L_4 -> L_2 " << to_l2
+                                         << ", mean of the two " << (to_l4 + to_l2) / 2);
+  // Measured 5.011 and 3.757 mN m (mean 4.384; with the factor-2 grid's choice 5.065 / 3.790,
+  // 4.43): the goal is at most 4.4, below O'Neill et al.'s 4.42.
+  CHECK(to_l4 < 5.02);
+  CHECK(to_l2 < 3.77);
+  CHECK((to_l4 + to_l2) / 2 <= 4.4);
+}
+
 }  // namespace workflow_bidirectional_observer_fit_test

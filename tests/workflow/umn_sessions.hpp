@@ -32,4 +32,30 @@ inline std::vector<workflow::LoadObserverData> umn_session_runs(const std::strin
   return out;
 }
 
+//! Every run of one session folder in name order, as identify gives them to the observer fits
+//! (--format umn-mis-2018 at 1 ms): the encoder angle as the running sum of the reader's
+//! backward-difference velocity times 1 ms, the current, its command and the grip torque.
+inline std::vector<workflow::LoadObserverData> umn_session_all(const std::string& folder) {
+  std::vector<std::filesystem::path> paths;
+  for (const auto& e :
+       std::filesystem::directory_iterator(shared_data("umn-mis-tool-2018/" + folder))) {
+    paths.push_back(e.path());
+  }
+  std::sort(paths.begin(), paths.end());
+  std::vector<workflow::LoadObserverData> out;
+  for (const auto& path : paths) {
+    const auto log = files::read_umn_mis_2018(path.string());
+    const Eigen::VectorXd velocity = log.signal("motor_velocity");
+    Eigen::VectorXd angle(velocity.size());
+    double sum = 0.0;
+    for (Eigen::Index k = 0; k < velocity.size(); ++k) {
+      sum += velocity[k] * 0.001;
+      angle[k] = sum;
+    }
+    out.push_back(
+        {log.signal("current"), angle, log.signal("grip_torque"), log.signal("current_command")});
+  }
+  return out;
+}
+
 }  // namespace endohaptics::test

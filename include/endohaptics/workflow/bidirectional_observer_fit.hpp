@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstddef>
 #include <initializer_list>
+#include <iterator>
 #include <limits>
 #include <optional>
 #include <span>
@@ -115,11 +116,16 @@ with_settings(const estimation::BidirectionalLoadObserverParameters<double>& pri
 [[nodiscard]] ENDOHAPTICS_DECL BidirectionalSettings
 settings_of(const estimation::BidirectionalLoadObserverParameters<double>& prior);
 
+//! The noise rules step (1) of choose_bidirectional_settings scores, in order: correlation time
+//! (outer) x friction prior scale x load walk (inner).
+[[nodiscard]] ENDOHAPTICS_DECL std::vector<BidirectionalNoiseRule> noise_rule_grid();
+
 //! Chooses the constants of BidirectionalSettings by cross-validation over `folds` (each a list
 //! of indices into `data` held out together; all other experiments train it): the mean causal
 //! RMSE of the held-out experiments after the warm-up, each held out once. The search: (1) the
-//! noise rule on a grid (correlation time 0.05, 0.1, 0.2, 0.4, 0.8 s x friction prior scale 1, 2,
-//! 4, 8 x load walk 0.3, 1, 3 % per root second) with the prior's front end; (2) with that rule,
+//! noise rule on a grid (correlation time 0.05 to 0.8 s in steps of a factor sqrt(2), 9 values, x
+//! friction prior scale 1, 2, 4, 8 x load walk 0.1, 0.3, 1, 3 % per root second: 144 rules) with
+//! the prior's front end; (2) with that rule,
 //! the front end one constant at a time, a factor of 2 up, else down, continued while the score
 //! improves (at most 3 steps: the two cut-offs below Nyquist, q0, and the velocity threshold
 //! when `vary_velocity_threshold`; the stop thresholds only narrower, at most 2 steps); a noise

@@ -397,18 +397,25 @@ inline std::vector<double> held_out_rmse(
   return sum;
 }
 
-// The noise-rule grid of choose_bidirectional_settings.
-inline std::vector<BidirectionalNoiseRule> noise_rule_grid() {
+// The correlation times and load walks of the noise-rule grid (its friction prior scales are 1,
+// 2, 4, 8): the correlation time 0.05-0.8 s in steps of a factor sqrt(2) (rounded to 4 digits),
+// the load walk 0.1-3 % of the range per root second in steps of about 3. Fixed before any score
+// was seen; the factor-2 grid with walks 0.3-3 % it refines (research note, section 4) is a subset.
+inline constexpr double noise_grid_times[] = {0.05,   0.0707, 0.1,    0.1414, 0.2,
+                                              0.2828, 0.4,    0.5657, 0.8};
+inline constexpr double noise_grid_walks[] = {0.001, 0.003, 0.01, 0.03};
+
+}  // namespace detail
+
+ENDOHAPTICS_DECL std::vector<BidirectionalNoiseRule> noise_rule_grid() {
   std::vector<BidirectionalNoiseRule> grid;
-  for (const double t : {0.05, 0.1, 0.2, 0.4, 0.8}) {
+  for (const double t : detail::noise_grid_times) {
     for (const double k : {1.0, 2.0, 4.0, 8.0}) {
-      for (const double w : {0.003, 0.01, 0.03}) grid.push_back({t, k, w});
+      for (const double w : detail::noise_grid_walks) grid.push_back({t, k, w});
     }
   }
   return grid;
 }
-
-}  // namespace detail
 
 ENDOHAPTICS_DECL BidirectionalSelection choose_bidirectional_settings(
     std::span<const LoadObserverData> data, const std::vector<std::vector<std::size_t>>& folds,
@@ -465,7 +472,7 @@ ENDOHAPTICS_DECL BidirectionalSelection choose_bidirectional_settings(
   // The noise rule: the grid on the current front end, then, for a constant whose best value is
   // at the grid's edge, steps beyond it while the score improves.
   const auto noise_stage = [&] {
-    const std::vector<BidirectionalNoiseRule> grid = detail::noise_rule_grid();
+    const std::vector<BidirectionalNoiseRule> grid = noise_rule_grid();
     std::vector<BidirectionalNoiseRule> rules = grid;
     const bool first = !std::isfinite(out.prior_rmse);
     if (first) rules.push_back(BidirectionalNoiseRule{});  // the research note's, for the report
@@ -485,9 +492,11 @@ ENDOHAPTICS_DECL BidirectionalSelection choose_bidirectional_settings(
       if (v == low) (void)walk(field, 1.0 / factor, 4, valid);
       if (v == high) (void)walk(field, factor, 4, valid);
     };
-    edge(best.rule.correlation_time, 0.05, 0.8, t, 2.0, above_one_sample);
+    edge(best.rule.correlation_time, std::begin(detail::noise_grid_times)[0],
+         std::end(detail::noise_grid_times)[-1], t, 2.0, above_one_sample);
     edge(best.rule.friction_prior_scale, 1.0, 8.0, kf, 2.0, any);
-    edge(best.rule.load_walk, 0.003, 0.03, lw, 3.0, any);
+    edge(best.rule.load_walk, std::begin(detail::noise_grid_walks)[0],
+         std::end(detail::noise_grid_walks)[-1], lw, 3.0, any);
   };
   noise_stage();
   if (!std::isfinite(best_score)) return out;
