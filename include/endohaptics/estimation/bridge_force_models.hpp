@@ -36,25 +36,53 @@ namespace endohaptics::estimation {
 //! the joint's static friction seen from the motor: a joint pressed into an object sticks while
 //! the tendon's torque stays within the static-friction band of the contact's, so on unloading
 //! the current falls by up to 2 w while the force stays, and on loading the current leads the
-//! force by w. The play's output is held in the state's last entry.
+//! force by w. The play's output and its sliding state are held in the state's last two entries.
+//!
+//! A joint whose Coulomb friction is well below its static friction (the emulated roll: K_c 0.065
+//! against K_s 0.13 A) slides at a narrower band than it sticks at: then the play is
+//! model::friction_play, stuck within `current_play` and sliding at `current_play_slide` plus the
+//! viscous friction's current `current_play_viscous` v (v the model's velocity input; the
+//! coefficient in the reported signals' signs, so -F_mu for a rig that reports the current
+//! negated). Sliding in free motion the played output then stays at 0 instead of riding the
+//! velocity's share; and the joint counts as sliding while that viscous current has the slide's
+//! sign (it moves), not only while the current keeps pulling: a current that wavers while the
+//! joint slides out of a contact does not stick the play at a stale load.
 template <typename Scalar = double>
 class IdentifiedHammersteinWiener : public ClampModel2016<Scalar> {
  public:
   using Base = ClampModel2016<Scalar>;                   //!< the yaw type it runs in
   using Signals = typename Base::Signals;                //!< one joint's signals for one tick
   using Threshold = model::FreeMotionThreshold<Scalar>;  //!< on its output
-  //! The model's state, then the play's output (A).
-  using State = Eigen::Matrix<Scalar, Base::State::RowsAtCompileTime + 1, 1>;
+  //! The model's state, then the play's output (A) and sliding state (-1, 0, +1).
+  using State = Eigen::Matrix<Scalar, Base::State::RowsAtCompileTime + 2, 1>;
 
   //! `model` (of the yaw type), its output through `threshold` (the model file's
   //! free_motion_threshold; the default is none), its current through a play of half width
-  //! `current_play` A (0: none). Throws Error unless `current_play` is finite and >= 0.
+  //! `current_play` A (0: none), sliding at `current_play_slide` A (none: the same, a plain
+  //! play) on the current less `current_play_viscous` times the velocity. Throws Error unless
+  //! `current_play` is finite and >= 0, the slide finite and in [0, current_play], and the
+  //! viscous coefficient finite (both only with a play).
   explicit IdentifiedHammersteinWiener(typename Base::ModelType model, Threshold threshold = {},
-                                       Scalar current_play = Scalar(0))
+                                       Scalar current_play = Scalar(0),
+                                       std::optional<Scalar> current_play_slide = std::nullopt,
+                                       Scalar current_play_viscous = Scalar(0))
       : Base(std::move(model)),
         threshold_(threshold),
         play_(model::detail::nl::non_negative(current_play, "IdentifiedHammersteinWiener",
-                                              "current_play")) {}
+                                              "current_play")),
+        slide_(current_play_slide.value_or(play_)),
+        viscous_(current_play_viscous) {
+    const bool slide_ok = std::isfinite(slide_) && slide_ >= Scalar(0) && slide_ <= play_;
+    if (!slide_ok || !std::isfinite(viscous_) ||
+        (play_ == Scalar(0) && (slide_ != Scalar(0) || viscous_ != Scalar(0)))) {
+      ENDOHAPTICS_THROW(
+          Error("IdentifiedHammersteinWiener: current_play_slide must be in [0, current_play] and "
+                "current_play_viscous finite, both only with a current play; got play " +
+                endohaptics::detail::format_number(static_cast<double>(play_)) + ", slide " +
+                endohaptics::detail::format_number(static_cast<double>(slide_)) + ", viscous " +
+                endohaptics::detail::format_number(static_cast<double>(viscous_))));
+    }
+  }
 
   //! The model's force through the free-motion threshold.
   [[nodiscard]] Scalar force(const Signals& s) const noexcept {
@@ -62,44 +90,67 @@ class IdentifiedHammersteinWiener : public ClampModel2016<Scalar> {
   }
   //! One model period on the played current (all-or-nothing).
   [[nodiscard]] model::NumericStatus advance(const Signals& s) noexcept {
-    const Signals p = played(s);
+    Scalar sliding = sliding_;
+    const Signals p = played(s, sliding);
     const model::NumericStatus status = Base::advance(p);
-    if (status == model::NumericStatus::ok) z_ = p.current;
+    if (status == model::NumericStatus::ok) {
+      z_ = p.current;
+      sliding_ = sliding;
+    }
     return status;
   }
   //! The model's state, then the play's output.
   [[nodiscard]] State state() const noexcept {
     State x;
     x.template head<Base::State::RowsAtCompileTime>() = Base::state();
-    x[State::RowsAtCompileTime - 1] = z_;
+    x[State::RowsAtCompileTime - 2] = z_;
+    x[State::RowsAtCompileTime - 1] = sliding_;
     return x;
   }
   //! Sets the model's state and the play's output from `x` (what state() returned).
   void reset(const State& x) noexcept {
     Base::reset(typename Base::State(x.template head<Base::State::RowsAtCompileTime>()));
-    z_ = x[State::RowsAtCompileTime - 1];
+    z_ = x[State::RowsAtCompileTime - 2];
+    sliding_ = x[State::RowsAtCompileTime - 1];
   }
-  //! Zero state, the play centred.
+  //! Zero state, the play centred and stuck.
   void reset() noexcept { reset(State::Zero()); }
   //! The free-motion threshold.
   [[nodiscard]] const Threshold& threshold() const noexcept { return threshold_; }
   //! The play's half width, A (0: none).
   [[nodiscard]] Scalar current_play() const noexcept { return play_; }
+  //! The play's half width while the joint slides, A (current_play() for a plain play).
+  [[nodiscard]] Scalar current_play_slide() const noexcept { return slide_; }
+  //! The viscous coefficient taken off the play's input, A per (rad/s) (0: none).
+  [[nodiscard]] Scalar current_play_viscous() const noexcept { return viscous_; }
 
  private:
   //! `s` with the current replaced by the play's output for it (a NaN current stays NaN, so
-  //! advance refuses it and the play keeps its output).
-  [[nodiscard]] Signals played(const Signals& s) const noexcept {
+  //! advance refuses it and the play keeps its output); `sliding` the sliding state after it.
+  [[nodiscard]] Signals played(const Signals& s, Scalar& sliding) const noexcept {
     if (play_ == Scalar(0)) return s;
     Signals p = s;
     if (!std::isfinite(s.current)) return p;
-    p.current = model::play(z_, s.current, play_);
+    if (slide_ == play_ && viscous_ == Scalar(0)) {  // a plain play
+      p.current = model::play(z_, s.current, play_);
+      return p;
+    }
+    const Scalar viscous = viscous_ * s.velocity;
+    if (!std::isfinite(viscous)) return s;  // a NaN velocity: advance refuses it as well
+    p.current = model::friction_play(z_, sliding, s.current, play_, slide_, viscous);
     return p;
+  }
+  [[nodiscard]] Signals played(const Signals& s) const noexcept {
+    Scalar sliding = sliding_;
+    return played(s, sliding);
   }
 
   Threshold threshold_;
   Scalar play_ = Scalar(0);
+  Scalar slide_ = Scalar(0);
+  Scalar viscous_ = Scalar(0);
   Scalar z_ = Scalar(0);
+  Scalar sliding_ = Scalar(0);
 };
 
 //! The force model of one motor slot of the bridge, whichever kind its model file or preset

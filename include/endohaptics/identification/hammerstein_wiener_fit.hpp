@@ -73,6 +73,16 @@ struct HammersteinWienerFit {
 //! or u has no column; a non-finite sample passes and leaves z as it was.
 [[nodiscard]] ENDOHAPTICS_DECL Eigen::MatrixXd played_input(const Eigen::MatrixXd& u, double play);
 
+//! u with column 0 replaced by model::friction_play of it (stuck within `play`, sliding at `slide`,
+//! 0 <= slide <= play, plus the viscous current viscous u_k1), from z = 0 and stuck
+//! (files::ModelFile::current_play, current_play_slide, current_play_viscous; the bridge's
+//! estimation::IdentifiedHammersteinWiener runs the same). played_input(u, play) when slide == play
+//! and viscous == 0; u itself when play is 0 or u has no column; a sample whose input is not finite
+//! passes and leaves the play as it was. Throws Error when viscous is not 0 and u has fewer than 2
+//! columns.
+[[nodiscard]] ENDOHAPTICS_DECL Eigen::MatrixXd played_input(const Eigen::MatrixXd& u, double play,
+                                                            double slide, double viscous);
+
 //! Output (N x ny) of the fitted model from x0 of the linear block: g(G(f(u))).
 [[nodiscard]] ENDOHAPTICS_DECL Eigen::MatrixXd simulate(const HammersteinWienerFit& hw,
                                                         const Eigen::MatrixXd& u,

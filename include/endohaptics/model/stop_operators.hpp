@@ -25,6 +25,36 @@ template <typename Scalar>
   return std::fmin(std::fmax(z, q - r), q + r);
 }
 
+//! The play of a joint whose friction sticks at `stick` and slides at `slide` (Karnopp's
+//! stick-slip friction seen from the motor current q: static K_s, Coulomb K_c <= K_s, viscous
+//! `viscous`, the current the viscous friction would take at the measured velocity), one sample.
+//! z is the current the joint's load takes, `sliding` its state: 0 stuck, +1 or -1 sliding that
+//! way. Stuck, z holds until q is more than `stick` away (the joint does not move, so no viscous
+//! term: a motor velocity then is the tendon winding up); then the joint breaks away, and while it
+//! slides the load takes all but the Coulomb and viscous friction, z = q - viscous - sliding *
+//! slide. It slides as long as q - viscous keeps pulling that way or `viscous` has the slide's
+//! sign (the joint moves that way); when neither holds, it sticks again and only `stick` frees
+//! it. With slide == stick and viscous 0 it is play(z, q, stick). Precondition: q and viscous
+//! finite, 0 <= slide <= stick.
+template <typename Scalar>
+[[nodiscard]] inline Scalar friction_play(Scalar z, Scalar& sliding, Scalar q, Scalar stick,
+                                          Scalar slide, Scalar viscous = Scalar(0)) noexcept {
+  const Scalar load = q - viscous;  // what the load and the Coulomb friction take, sliding
+  if (sliding != Scalar(0) && (sliding * (load - z) >= slide || sliding * viscous > Scalar(0))) {
+    return load - sliding * slide;
+  }
+  sliding = Scalar(0);
+  if (q - z > stick) {
+    sliding = Scalar(1);
+    return load - slide;
+  }
+  if (z - q > stick) {
+    sliding = Scalar(-1);
+    return load + slide;
+  }
+  return z;
+}
+
 //! N stop operators with increasing thresholds (see the file comment). Before the first motion
 //! the history is unknown: every output stays 0 until the position has travelled `start_travel`
 //! from where it started; then the operators start as if the motion before the start had run the

@@ -35,6 +35,26 @@ ENDOHAPTICS_DECL Eigen::MatrixXd played_input(const Eigen::MatrixXd& u, double p
   return out;
 }
 
+ENDOHAPTICS_DECL Eigen::MatrixXd played_input(const Eigen::MatrixXd& u, double play, double slide,
+                                              double viscous) {
+  if (slide == play && viscous == 0.0) return played_input(u, play);
+  Eigen::MatrixXd out = u;
+  if (play == 0.0 || u.cols() == 0) return out;
+  if (viscous != 0.0 && u.cols() < 2) {
+    ENDOHAPTICS_THROW(Error("played_input: a viscous term needs the velocity as input 1, got " +
+                            std::to_string(u.cols()) + " input(s)"));
+  }
+  double z = 0.0;
+  double sliding = 0.0;
+  for (Eigen::Index k = 0; k < u.rows(); ++k) {
+    const double friction = viscous == 0.0 ? 0.0 : viscous * u(k, 1);
+    if (!std::isfinite(u(k, 0)) || !std::isfinite(friction)) continue;
+    z = model::friction_play(z, sliding, u(k, 0), play, slide, friction);
+    out(k, 0) = z;
+  }
+  return out;
+}
+
 ENDOHAPTICS_DECL Eigen::MatrixXd simulate(const HammersteinWienerFit& hw, const Eigen::MatrixXd& u,
                                           const Eigen::VectorXd& x0) {
   return apply_maps(hw.output, simulate(hw.linear, apply_maps(hw.input, u), x0));
