@@ -133,6 +133,11 @@ inline void chosen(const wf::IdentifyReport& r) {
     if (r.request.current_play > 0.0) {
       fmt::print("current play: half width {:.4g} on {} (fitted and scored on the played input)\n",
                  r.request.current_play, sel.inputs[0]);
+      if (r.request.current_play_slide || r.request.current_play_viscous != 0.0) {
+        fmt::print("  sliding half width {:.4g}, viscous current {:.4g} x {}\n",
+                   r.request.current_play_slide.value_or(r.request.current_play),
+                   r.request.current_play_viscous, sel.inputs.size() > 1 ? sel.inputs[1] : "-");
+      }
     }
   }
   for (std::size_t k = 0; k < choice.files.size(); ++k) {

@@ -68,6 +68,20 @@ int main(int argc, char** argv) {
                  "without a play; 0: none")
       ->check(number_in(0.0, endohaptics::files::ModelFile::max_parameter))
       ->capture_default_str();
+  app.add_option("--current-play-slide", q.current_play_slide,
+                 "input 0's units (A), in [0, --current-play]: the play's half width while the "
+                 "joint slides (its Coulomb friction, where it is below the static friction of "
+                 "--current-play: stuck, the current crosses the wider band; sliding, the "
+                 "narrower); default: the same, a plain play")
+      ->check(number_in(0.0, endohaptics::files::ModelFile::max_parameter));
+  app.add_option("--current-play-viscous", q.current_play_viscous,
+                 "input 0's units per input 1's (A per rad/s), signed as the logged signals: this "
+                 "times input 1 is the viscous friction's current, which the play takes off "
+                 "while the joint slides, and whose sign says it moves (-F_mu for a rig that "
+                 "reports the current negated); default 0")
+      ->check(number_in(-endohaptics::files::ModelFile::max_parameter,
+                        endohaptics::files::ModelFile::max_parameter))
+      ->capture_default_str();
   app.add_flag("--nested-constants", q.nested_joint_constants,
                "the family choice searches a joint family's constants again inside each of its "
                "cross-validation folds, so the inner score sees nothing of the fold's held-out "

@@ -150,6 +150,16 @@ struct ModelFile {
   //! into an object: the current falls through the band while the force stays (identify
   //! --current-play; JSON "current_play", written when > 0).
   double current_play = 0.0;
+  //! With current_play: the play's half width while the joint slides (Coulomb friction K_c <=
+  //! the static K_s of current_play; model::friction_play), in [0, current_play]; none: the
+  //! same as current_play, a plain play (identify --current-play-slide; JSON
+  //! "current_play_slide", written when set).
+  std::optional<double> current_play_slide{};
+  //! With current_play: this times input 1 (the velocity) is the viscous friction's current, in
+  //! the reported signals' signs; while the joint slides the play's output is input 0 less it
+  //! and less the sliding half width (model::friction_play; identify --current-play-viscous; JSON
+  //! "current_play_viscous", written when not 0).
+  double current_play_viscous = 0.0;
   //! A joint-model kind's parameters (std::monostate: a linear kind). Then `state_space` is a
   //! placeholder (one state, all zero) that carries only the sample time (the parameters' own)
   //! and the sizes: 2 inputs (current A; velocity rad/s, for the observers the encoder velocity

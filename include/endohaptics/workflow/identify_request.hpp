@@ -57,6 +57,12 @@ struct IdentifyRequest {
   //! joint models in the method list they meet the played subspace family on their own inputs,
   //! and one of them chosen is written with current_play 0.
   double current_play = 0.0;
+  //! With current_play: the play's half width while the joint slides, in [0, current_play] (its
+  //! Coulomb friction below the static; files::ModelFile::current_play_slide). None: a plain play.
+  std::optional<double> current_play_slide{};
+  //! With current_play: this times input 1 is the viscous friction's current, taken off while
+  //! the joint slides (files::ModelFile::current_play_viscous). 0: none.
+  double current_play_viscous = 0.0;
   //! The family choice searches a joint family's constants again inside each of its folds
   //! (WorkflowOptions::nested_joint_constants): its inner score then leaks nothing of the fold's
   //! held-out files, at about the folds' count times the search's cost.

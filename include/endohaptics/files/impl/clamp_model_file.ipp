@@ -74,7 +74,8 @@ ENDOHAPTICS_DECL estimation::BridgeJointModel bridge_joint_model(const ModelFile
     }
     return BridgeJointModel(estimation::IdentifiedHammersteinWiener<double>(
         hammerstein_wiener_from<estimation::bridge_clamp_states, 2, 1>(six, where),
-        model::FreeMotionThreshold<double>(file.free_motion_threshold), file.current_play));
+        model::FreeMotionThreshold<double>(file.free_motion_threshold), file.current_play,
+        file.current_play_slide, file.current_play_viscous));
   };
   return file.is_joint_model() ? detail::model_file::with_context(where, joint_model)
                                : hammerstein_wiener();

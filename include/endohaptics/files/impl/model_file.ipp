@@ -45,6 +45,22 @@ ENDOHAPTICS_DECL void validate(const ModelFile& m, const std::string& where) {
     fail(where + ": current_play must be in [0, " + format_number(ModelFile::max_parameter) +
          "] (input 0's units), got " + format_number(m.current_play));
   }
+  if (m.current_play_slide &&
+      !(*m.current_play_slide >= 0.0 && *m.current_play_slide <= m.current_play)) {
+    fail(where + ": current_play_slide must be in [0, current_play = " +
+         format_number(m.current_play) + "], got " + format_number(*m.current_play_slide));
+  }
+  if (!(std::fabs(m.current_play_viscous) <= ModelFile::max_parameter)) {
+    fail(where + ": current_play_viscous must be finite, at most " +
+         format_number(ModelFile::max_parameter) + " in size, got " +
+         format_number(m.current_play_viscous));
+  }
+  if (m.current_play == 0.0 && (m.current_play_slide || m.current_play_viscous != 0.0)) {
+    fail(where + ": current_play_slide and current_play_viscous need a current_play");
+  }
+  if (m.current_play_viscous != 0.0 && m.inputs.size() < 2) {
+    fail(where + ": current_play_viscous needs the velocity as input 1");
+  }
   if (m.current_reference && m.kind() != ModelKind::push_load_observer &&
       m.kind() != ModelKind::bidirectional_load_observer) {
     fail(where + ": kind \"" + std::string(to_string(m.kind())) +
@@ -246,6 +262,8 @@ ENDOHAPTICS_DECL void add_linear_block(json& j, const ModelFile& m) {
   j["x0"] = std::vector<double>(ss.state().data(), ss.state().data() + ss.state().size());
   if (m.free_motion_threshold > 0.0) j["free_motion_threshold"] = m.free_motion_threshold;
   if (m.current_play > 0.0) j["current_play"] = m.current_play;
+  if (m.current_play_slide) j["current_play_slide"] = *m.current_play_slide;
+  if (m.current_play_viscous != 0.0) j["current_play_viscous"] = m.current_play_viscous;
   if (m.is_hammerstein_wiener()) {
     j["input_nonlinearity"] = json::array();
     for (const auto& map : m.input_nonlinearity)
@@ -285,8 +303,9 @@ ENDOHAPTICS_DECL ModelFile joint_model_from_json(const json& j, const std::strin
                                                  double sample_time, std::vector<SignalInfo> inputs,
                                                  std::vector<SignalInfo> outputs,
                                                  const std::string& where) {
-  for (const char* linear : {"states", "A", "B", "C", "D", "x0", "input_nonlinearity",
-                             "output_nonlinearity", "free_motion_threshold", "current_play"}) {
+  for (const char* linear :
+       {"states", "A", "B", "C", "D", "x0", "input_nonlinearity", "output_nonlinearity",
+        "free_motion_threshold", "current_play", "current_play_slide", "current_play_viscous"}) {
     if (j.contains(linear)) {
       fail(where + ": kind \"" + kind + "\" has no field \"" + linear +
            "\" (its parameters are in \"parameters\")");
@@ -550,6 +569,12 @@ ENDOHAPTICS_DECL ModelFile model_from_json(const nlohmann::json& file, const std
   }
   if (j.contains("current_play")) {  // its range: validate, below
     m.current_play = mf::number(j["current_play"], where, "current_play");
+  }
+  if (j.contains("current_play_slide")) {  // its range: validate, below
+    m.current_play_slide = mf::number(j["current_play_slide"], where, "current_play_slide");
+  }
+  if (j.contains("current_play_viscous")) {  // its range: validate, below
+    m.current_play_viscous = mf::number(j["current_play_viscous"], where, "current_play_viscous");
   }
   m.provenance = mf::provenance_from_json(j, where);
   mf::validate(m, where);

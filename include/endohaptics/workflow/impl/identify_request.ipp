@@ -154,11 +154,26 @@ ENDOHAPTICS_DECL IdentifyReport run_identify(const IdentifyRequest& request,
               "one whose input the play is (the joint models hold their own "
               "friction)"));
   }
+  const double slide = request.current_play_slide.value_or(request.current_play);
+  if (!(slide >= 0.0 && slide <= request.current_play) ||
+      !(std::fabs(request.current_play_viscous) <= files::ModelFile::max_parameter)) {
+    ENDOHAPTICS_THROW(Error("--current-play-slide must be in [0, --current-play = " +
+                            detail::format_number(request.current_play) +
+                            "] and --current-play-viscous finite, got " +
+                            detail::format_number(slide) + " and " +
+                            detail::format_number(request.current_play_viscous)));
+  }
+  if (request.current_play == 0.0 &&
+      (request.current_play_slide || request.current_play_viscous != 0.0)) {
+    ENDOHAPTICS_THROW(
+        Error("--current-play-slide and --current-play-viscous need a --current-play"));
+  }
   if (request.current_play > 0.0) {
     for (auto* logs : {&r.fit_logs, &r.score_logs}) {
       for (PreparedLog& log : *logs) {
         for (DataSet& d : log.segments) {
-          d.u = identification::played_input(d.u, request.current_play);
+          d.u = identification::played_input(d.u, request.current_play, slide,
+                                             request.current_play_viscous);
         }
       }
     }
@@ -232,6 +247,10 @@ ENDOHAPTICS_DECL IdentifyReport run_identify(const IdentifyRequest& request,
   report.mean_fit = fit_sum / n_files;
   // Every score above ran on the played input; from here the model plays its input itself.
   report.model.current_play = joint ? 0.0 : request.current_play;
+  if (!joint) {
+    report.model.current_play_slide = request.current_play_slide;
+    report.model.current_play_viscous = request.current_play_viscous;
+  }
   report.model.provenance.notes =
       "preprocessing: " + describe(joint ? report.joint_preprocessing : report.preprocessing) +
       "\nfit_percent: mean causal fit over the identification logs, " +

@@ -91,8 +91,11 @@ ENDOHAPTICS_DECL FileComparison compare_log(const files::ModelFile& model, const
       y_hat = wf::with_context(log.source,
                                [&] { return Eigen::MatrixXd(simulate_joint_model(model, d.u)); });
     } else {
-      const Eigen::MatrixXd u =
-          apply_maps(in_maps, identification::played_input(d.u, model.current_play));
+      const Eigen::MatrixXd u = apply_maps(
+          in_maps,
+          identification::played_input(d.u, model.current_play,
+                                       model.current_play_slide.value_or(model.current_play),
+                                       model.current_play_viscous));
       Eigen::VectorXd x0 = Eigen::VectorXd::Zero(linear.state_size());
       switch (options.initial_state) {
         case InitialStateMode::oracle:
