@@ -14,6 +14,7 @@
 #include <endohaptics/estimation/force_models_2016.hpp>
 #include <endohaptics/model/presets_2016.hpp>
 #include <endohaptics/model/static_nonlinearity.hpp>
+#include <optional>
 
 #include "joint_signal_sweep.hpp"
 
@@ -30,8 +31,12 @@ using joint_signal_sweep::run_joint_steps;
 // An order-2 model embedded in the 6 states at 1 ms (what endohaptics-identify --order 2 writes
 // and the bridge runs), a dead zone on the current, a free-motion threshold of 0.18 N (the demo's
 // clamp models: 0.166-0.204 N); with `current_play` > 0 the current passes a play of that half
-// width instead of the dead zone (the demo's pitch and clamps: --current-play K_s).
-est::IdentifiedHammersteinWiener<double> identified(double current_play = 0.0) {
+// width instead of the dead zone (the demo's pitch and clamps: --current-play K_s), with
+// `slide` the friction play (model::friction_play: sliding at `slide` plus `viscous` x velocity;
+// the demo's roll: --current-play-slide 0.065 --current-play-viscous -0.025).
+est::IdentifiedHammersteinWiener<double> identified(double current_play = 0.0,
+                                                    std::optional<double> slide = std::nullopt,
+                                                    double viscous = 0.0) {
   using SS = model::StateSpace<6, 2, 1>;
   SS::MatrixA A = SS::MatrixA::Zero();
   A.topLeftCorner<2, 2>() << 0.995, 0.01, -0.004, 0.97;
@@ -45,7 +50,7 @@ est::IdentifiedHammersteinWiener<double> identified(double current_play = 0.0) {
       model::Deadzone<double>(current_play > 0.0 ? 0.0 : 0.099), model::Deadzone<double>(0.0)};
   return est::IdentifiedHammersteinWiener<double>(
       model::YawForceHW2016<double>(SS(A, B, C, D, 0.001), Channels(maps)),
-      model::FreeMotionThreshold<double>(0.18), current_play);
+      model::FreeMotionThreshold<double>(0.18), current_play, slide, viscous);
 }
 
 void BM_IdentifiedHW_step(benchmark::State& st) { run_joint_steps(st, identified()); }
@@ -57,6 +62,13 @@ void BM_IdentifiedHW_step_current_play(benchmark::State& st) {
 }
 BENCHMARK(BM_IdentifiedHW_step_current_play);
 
+// The same model with the friction play of the demo's roll (sticks at 0.13 A, slides at 0.065 A
+// plus -0.025 A s/rad x velocity).
+void BM_IdentifiedHW_step_friction_play(benchmark::State& st) {
+  run_joint_steps(st, identified(0.13, 0.065, -0.025));
+}
+BENCHMARK(BM_IdentifiedHW_step_friction_play);
+
 void BM_IdentifiedHW_reference_Clamp2016_worksheet_step(benchmark::State& st) {
   run_joint_steps(st, est::models_2016().clamp1);
 }
@@ -66,8 +78,9 @@ BENCHMARK(BM_IdentifiedHW_reference_Clamp2016_worksheet_step);
 // bridge's estimator settings over `settings`, each model's current through a play of
 // `current_play` A (0: none).
 void run_identified_every_joint(benchmark::State& st, est::ForceEstimatorSettings<double> settings,
-                                double current_play = 0.0) {
-  const est::BridgeJointModel m(identified(current_play));
+                                double current_play = 0.0,
+                                std::optional<double> slide = std::nullopt, double viscous = 0.0) {
+  const est::BridgeJointModel m(identified(current_play, slide, viscous));
   const est::BridgeForceModels models{m, m, m, m};
   settings.loop_period = 0.001;
   run_estimator_ticks(
@@ -95,6 +108,12 @@ void BM_BridgeTick_identified_every_joint_current_play(benchmark::State& st) {
   run_identified_every_joint(st, {}, 0.17);
 }
 BENCHMARK(BM_BridgeTick_identified_every_joint_current_play);
+
+// The same with the friction play of the demo's roll on every joint.
+void BM_BridgeTick_identified_every_joint_friction_play(benchmark::State& st) {
+  run_identified_every_joint(st, {}, 0.13, 0.065, -0.025);
+}
+BENCHMARK(BM_BridgeTick_identified_every_joint_friction_play);
 
 void BM_BridgeTick_identified_reference_yaw2016(benchmark::State& st) {
   run_estimator_ticks(st, est::preset_force_estimator(est::ClampPreset::yaw2016, 0.001));

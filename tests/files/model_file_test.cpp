@@ -206,6 +206,44 @@ TEST_CASE("a current play round-trips, and is refused negative or on a joint mod
         }).find("has no field \"current_play\"") != std::string::npos);
 }
 
+TEST_CASE("a friction play round-trips, and is refused outside its play or without one") {
+  // The demo's roll (model::friction_play): sticks at 0.13 A, slides at 0.065 A plus -0.025 A s/rad
+  // times the velocity (input 1).
+  files::ModelFile file =
+      files::make_model_file(model::yaw_force_2016_hw(0.1), yaw_inputs, yaw_outputs);
+  const TempFile f("friction_play.json");
+  file.current_play = 0.13;
+  files::save_model(f.path, file);
+  const files::ModelFile plain = files::load_model(f.path);
+  CHECK_FALSE(plain.current_play_slide.has_value());  // absent: slides at the play
+  CHECK(plain.current_play_viscous == 0.0);
+  CHECK_FALSE(files::to_json(file).contains("current_play_slide"));
+  CHECK_FALSE(files::to_json(file).contains("current_play_viscous"));
+  file.current_play_slide = 0.065;
+  file.current_play_viscous = -0.025;
+  files::save_model(f.path, file);
+  const files::ModelFile back = files::load_model(f.path);
+  REQUIRE(back.current_play_slide.has_value());
+  CHECK(*back.current_play_slide == 0.065);
+  CHECK(back.current_play_viscous == -0.025);
+  CHECK(files::to_json(back) == files::to_json(file));
+  const auto refused = [&](files::ModelFile m) {
+    return message_of([&] { files::save_model(f.path, m); });
+  };
+  auto wide = file;
+  wide.current_play_slide = 0.2;
+  CHECK(refused(wide).find("current_play_slide must be in [0, current_play = 0.13], got 0.2") !=
+        std::string::npos);
+  auto none = file;
+  none.current_play = 0.0;
+  none.current_play_slide.reset();
+  CHECK(refused(none).find("current_play_slide and current_play_viscous need a current_play") !=
+        std::string::npos);
+  auto nan = file;
+  nan.current_play_viscous = std::nan("");
+  CHECK(refused(nan).find("current_play_viscous must be finite") != std::string::npos);
+}
+
 TEST_CASE("load errors name the file, the field and the value") {
   const std::string src = "model file test";
   auto broken = [](auto edit) {
