@@ -19,6 +19,35 @@ namespace est = endohaptics::estimation;
 using endohaptics::model::NumericStatus;
 using Model = est::IdentifiedHammersteinWiener<double>;
 
+// `n` ticks of a current random-walking by steps within +-`step` A (clamped to +-1.5 A, from
+// `seed`) and a velocity `amplitude` sin(`rate` k): the input columns identify and replay play.
+Eigen::MatrixXd random_walk_input(unsigned seed, double step, double amplitude, double rate,
+                                  int n = 3000) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> draw(-step, step);
+  Eigen::MatrixXd u(n, 2);
+  double current = 0.0;
+  for (int k = 0; k < n; ++k) {
+    current = std::fmax(-1.5, std::fmin(1.5, current + draw(rng)));
+    u(k, 0) = current;
+    u(k, 1) = amplitude * std::sin(rate * static_cast<double>(k));
+  }
+  return u;
+}
+
+// Runs `played` on `u` and `plain` on the played input `p` (the same velocity): the forces equal
+// tick for tick.
+void check_same_forces(Model& played, Model& plain, const Eigen::MatrixXd& u,
+                       const Eigen::MatrixXd& p) {
+  for (Eigen::Index k = 0; k < u.rows(); ++k) {
+    const est::JointSignals<double> s{0.0, u(k, 1), u(k, 0), 0.0};
+    const est::JointSignals<double> q{0.0, u(k, 1), p(k, 0), 0.0};
+    REQUIRE(played.force(s) == plain.force(q));
+    REQUIRE(played.advance(s) == NumericStatus::ok);
+    REQUIRE(plain.advance(q) == NumericStatus::ok);
+  }
+}
+
 // `ticks` model periods at `current` A (velocity 0); the last force.
 double hold(Model& m, double current, int ticks) {
   const est::JointSignals<double> s{0.0, 0.0, current, 0.0};
@@ -57,26 +86,11 @@ TEST_CASE("identified model: the tick's play is identification::played_input, bi
   const auto yaw = est::models_2016<double>().clamp1.model();
   Model played(yaw, {}, 0.17);
   Model plain(yaw);
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> step(-0.05, 0.05);
-  const int n = 3000;
-  Eigen::MatrixXd u(n, 2);
-  double current = 0.0;
-  for (int k = 0; k < n; ++k) {
-    current = std::fmax(-1.5, std::fmin(1.5, current + step(rng)));
-    u(k, 0) = current;
-    u(k, 1) = 2.0 * std::sin(0.01 * k);
-  }
+  const Eigen::MatrixXd u = random_walk_input(7, 0.05, 2.0, 0.01);
   const Eigen::MatrixXd p = endohaptics::identification::played_input(u, 0.17);
   CHECK(p.col(1) == u.col(1));  // the velocity passes
   CHECK((p.col(0) - u.col(0)).cwiseAbs().maxCoeff() <= 0.17 + 1e-15);
-  for (int k = 0; k < n; ++k) {
-    const est::JointSignals<double> s{0.0, u(k, 1), u(k, 0), 0.0};
-    const est::JointSignals<double> q{0.0, u(k, 1), p(k, 0), 0.0};
-    REQUIRE(played.force(s) == plain.force(q));
-    REQUIRE(played.advance(s) == NumericStatus::ok);
-    REQUIRE(plain.advance(q) == NumericStatus::ok);
-  }
+  check_same_forces(played, plain, u, p);
   // Width 0: the input unchanged.
   CHECK(endohaptics::identification::played_input(u, 0.0) == u);
 }
@@ -173,28 +187,13 @@ TEST_CASE("identified model: the friction play in the tick is identification::pl
   const auto yaw = est::models_2016<double>().clamp1.model();
   Model played(yaw, {}, k_s, k_c, -f_mu);
   Model plain(yaw);
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<double> step(-0.03, 0.03);
-  const int n = 3000;
-  Eigen::MatrixXd u(n, 2);
-  double current = 0.0;
-  for (int k = 0; k < n; ++k) {
-    current = std::fmax(-1.5, std::fmin(1.5, current + step(rng)));
-    u(k, 0) = current;
-    u(k, 1) = 1.5 * std::sin(0.013 * k);
-  }
+  const Eigen::MatrixXd u = random_walk_input(5, 0.03, 1.5, 0.013);
   const Eigen::MatrixXd p = endohaptics::identification::played_input(u, k_s, k_c, -f_mu);
   CHECK(p.col(1) == u.col(1));  // the velocity passes
   // The played input differs from the plain play's of either width somewhere.
   CHECK(p != endohaptics::identification::played_input(u, k_s));
   CHECK(p != endohaptics::identification::played_input(u, k_c));
-  for (int k = 0; k < n; ++k) {
-    const est::JointSignals<double> s{0.0, u(k, 1), u(k, 0), 0.0};
-    const est::JointSignals<double> q{0.0, u(k, 1), p(k, 0), 0.0};
-    REQUIRE(played.force(s) == plain.force(q));
-    REQUIRE(played.advance(s) == NumericStatus::ok);
-    REQUIRE(plain.advance(q) == NumericStatus::ok);
-  }
+  check_same_forces(played, plain, u, p);
   // The sliding state is the state's last entry; reset() clears it.
   played.reset();
   CHECK(played.state().isZero(0.0));

@@ -198,6 +198,19 @@ struct TrainingPress {
   double approach_start = 0.2;                     //!< s
   double approach_time = 0.6;                      //!< s
   double seconds = 4.0;                            //!< s simulated
+
+  //! The loop that runs it: its contact and intent, force feedback off (as the demo's
+  //! identification experiment), no delay.
+  [[nodiscard]] ClosedLoopConfig loop_config() const {
+    ClosedLoopConfig c;
+    c.contact = contact;
+    c.contact_position = contact_position;
+    c.press_depth = press_depth;
+    c.approach_start = approach_start;
+    c.approach_time = approach_time;
+    c.force_gain = 0.0;
+    return c;
+  }
 };
 
 //! The training presses: unlike the sweep's (contact at 0.15 rad, 25 mm, 1 s approach from
@@ -215,14 +228,7 @@ struct TrainingPress {
 //! clamp 1's reported current (A) and velocity (rad/s) and its true external force (N) as CSV
 //! (the emulator's truth-log columns reported_current2, reported_velocity2, force2) to `path`.
 inline void write_training_log(const std::filesystem::path& path, const TrainingPress& press) {
-  ClosedLoopConfig c;
-  c.contact = press.contact;
-  c.contact_position = press.contact_position;
-  c.press_depth = press.press_depth;
-  c.approach_start = press.approach_start;
-  c.approach_time = press.approach_time;
-  c.force_gain = 0.0;  // force feedback off, as the demo's identification experiment
-  auto loop = std::make_unique<ClosedLoop>(c);
+  auto loop = std::make_unique<ClosedLoop>(press.loop_config());
   std::FILE* out = std::fopen(path.string().c_str(), "w");
   if (out == nullptr) ENDOHAPTICS_THROW(Error("cannot write " + path.string()));
   std::fputs("time,reported_current2,reported_velocity2,force2\n", out);
@@ -244,14 +250,7 @@ inline void write_training_log(const std::filesystem::path& path, const Training
 [[nodiscard]] inline double free_motion_error(const estimation::BridgeJointModel& model) {
   double worst = 0.0;
   for (const auto& press : training_presses()) {
-    ClosedLoopConfig c;
-    c.contact = press.contact;
-    c.contact_position = press.contact_position;
-    c.press_depth = press.press_depth;
-    c.approach_start = press.approach_start;
-    c.approach_time = press.approach_time;
-    c.force_gain = 0.0;
-    auto loop = std::make_unique<ClosedLoop>(c);
+    auto loop = std::make_unique<ClosedLoop>(press.loop_config());
     auto m = model;
     const auto n = static_cast<int>(press.seconds * 1000.0 + 0.5);
     constexpr int j = ClosedLoop::clamp1;
