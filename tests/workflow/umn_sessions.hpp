@@ -13,16 +13,22 @@
 
 namespace endohaptics::test {
 
-//! Five runs of one session folder spread evenly in name order (frequencies and levels both
-//! vary), to keep the sanitized tests short: the current, its command and the motor encoder only
-//! (the observers use its increments only); grip torque in mN m as logged.
-inline std::vector<workflow::LoadObserverData> umn_session_runs(const std::string& folder) {
+//! The run files of one session folder, in name order.
+inline std::vector<std::filesystem::path> umn_session_paths(const std::string& folder) {
   std::vector<std::filesystem::path> paths;
   for (const auto& e :
        std::filesystem::directory_iterator(shared_data("umn-mis-tool-2018/" + folder))) {
     paths.push_back(e.path());
   }
   std::sort(paths.begin(), paths.end());
+  return paths;
+}
+
+//! Five runs of one session folder spread evenly in name order (frequencies and levels both
+//! vary), to keep the sanitized tests short: the current, its command and the motor encoder only
+//! (the observers use its increments only); grip torque in mN m as logged.
+inline std::vector<workflow::LoadObserverData> umn_session_runs(const std::string& folder) {
+  const std::vector<std::filesystem::path> paths = umn_session_paths(folder);
   std::vector<workflow::LoadObserverData> out;
   for (std::size_t i = 0; i < 5 && paths.size() > 1; ++i) {
     const auto log = files::read_umn_mis_2018(paths[(i * (paths.size() - 1) + 2) / 4].string());
@@ -36,12 +42,7 @@ inline std::vector<workflow::LoadObserverData> umn_session_runs(const std::strin
 //! (--format umn-mis-2018 at 1 ms): the encoder angle as the running sum of the reader's
 //! backward-difference velocity times 1 ms, the current, its command and the grip torque.
 inline std::vector<workflow::LoadObserverData> umn_session_all(const std::string& folder) {
-  std::vector<std::filesystem::path> paths;
-  for (const auto& e :
-       std::filesystem::directory_iterator(shared_data("umn-mis-tool-2018/" + folder))) {
-    paths.push_back(e.path());
-  }
-  std::sort(paths.begin(), paths.end());
+  const std::vector<std::filesystem::path> paths = umn_session_paths(folder);
   std::vector<workflow::LoadObserverData> out;
   for (const auto& path : paths) {
     const auto log = files::read_umn_mis_2018(path.string());
