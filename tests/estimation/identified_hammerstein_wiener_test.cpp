@@ -95,6 +95,21 @@ TEST_CASE("identified model: the tick's play is identification::played_input, bi
   CHECK(endohaptics::identification::played_input(u, 0.0) == u);
 }
 
+TEST_CASE(
+    "identified model: a velocity whose viscous current overflows is refused, the play kept") {
+  const auto yaw = est::models_2016<double>().clamp1.model();
+  Model m(yaw, {}, 0.13, 0.065, 2.0);
+  (void)hold(m, 0.5, 50);  // the play's output moved to 0.37 A
+  const Model::State before = m.state();
+  for (const double v : {1e308, -1e308, std::nan("")}) {
+    CAPTURE(v);
+    const est::JointSignals<double> s{0.0, v, 0.5, 0.0};
+    CHECK(m.advance(s) != NumericStatus::ok);
+    CHECK_FALSE(std::isfinite(m.force(s)));
+    CHECK(m.state() == before);
+  }
+}
+
 TEST_CASE("identified model: a negative or non-finite current play is refused") {
   const auto yaw = est::models_2016<double>().clamp1.model();
   CHECK_THROWS_AS(Model(yaw, {}, -0.1), endohaptics::Error);

@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <limits>
 #include <optional>
 #include <utility>
 
@@ -136,7 +137,10 @@ class IdentifiedHammersteinWiener : public ClampModel2016<Scalar> {
       return p;
     }
     const Scalar viscous = viscous_ * s.velocity;
-    if (!std::isfinite(viscous)) return s;  // a NaN velocity: advance refuses it as well
+    if (!std::isfinite(viscous)) {  // a NaN velocity, or one so large the product overflows:
+      p.current = std::numeric_limits<Scalar>::quiet_NaN();  // advance refuses it, z_ stays
+      return p;
+    }
     p.current = model::friction_play(z_, sliding, s.current, play_, slide_, viscous);
     return p;
   }
