@@ -207,7 +207,9 @@ TEST_CASE("the passivity section sets the layer --passivity tdpa runs") {
   CHECK(error_of(R"({"passivity": {"recover_while_absorbing": 1}})") ==
         "bridge.json: passivity.recover_while_absorbing: must be true or false, got 1");
   CHECK(error_of(R"({"passivity": {"robot_cost_tolerance": [0, 0, -0.1, 0]}})") ==
-        "bridge.json: passivity.robot_cost_tolerance[2]: must be finite and >= 0 N, got -0.1");
+        "bridge.json: passivity.robot_cost_tolerance[2]: must be in [0, 10] N, got -0.1");
+  CHECK(error_of(R"({"passivity": {"estimate_tolerance": [0, 0, 1e300, 0]}})") ==
+        "bridge.json: passivity.estimate_tolerance[2]: must be in [0, 10] N, got 1e+300");
   CHECK(error_of(R"({"passivity": {"energy_reserve": 0}})") ==
         "bridge.json: passivity.energy_reserve: must be finite and > 0 J, got 0");
   // A built configuration is checked the same way (the section named by the library's error).

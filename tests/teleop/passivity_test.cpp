@@ -107,7 +107,7 @@ TEST_CASE("passivity: PassivityConfig::validate names the field and the value") 
   c = {};
   c.estimate_tolerance[2] = -0.1;
   CHECK_THROWS_WITH(c.validate(),
-                    doctest::Contains("estimate_tolerance[2] must be finite and >= 0 N, got -0.1"));
+                    doctest::Contains("estimate_tolerance[2] must be in [0, 10] N, got -0.1"));
   c = {};
   c.observer = static_cast<tp::PassivityObserver>(5);
   CHECK_THROWS_WITH(
@@ -307,7 +307,11 @@ TEST_CASE("passivity: a step against a force within the robot cost tolerance is 
   }
   tp::PassivityConfig bad;
   bad.robot_cost_tolerance[3] = -1.0;
-  CHECK_THROWS_WITH(bad.validate(), doctest::Contains("robot_cost_tolerance[3] must be finite"));
+  CHECK_THROWS_WITH(bad.validate(),
+                    doctest::Contains("robot_cost_tolerance[3] must be in [0, 10] N, got -1"));
+  bad.robot_cost_tolerance[3] = 11.0;  // beyond the estimator's output limit: a typo
+  CHECK_THROWS_WITH(bad.validate(),
+                    doctest::Contains("robot_cost_tolerance[3] must be in [0, 10] N, got 11"));
 }
 
 TEST_CASE("passivity: recover_while_absorbing brings the force back while the hand holds still") {

@@ -70,6 +70,9 @@ struct PassivityConfig {
   using Vector = estimation::MotorVector;  //!< one value per motor (motor order)
   //! Setpoint history kept to align the robot port with the round trip (ticks).
   static constexpr int max_round_trip_ticks = 1023;
+  //! N: the largest estimate_tolerance and robot_cost_tolerance (above the estimator's output
+  //! limit of 9.81 N, ForceEstimatorSettings::output_limit).
+  static constexpr double max_tolerance = 10.0;
 
   PassivityMode mode = PassivityMode::off;  //!< off, observe or tdpa
   //! Ticks between sending a setpoint and receiving the state measured while the robot followed
@@ -130,8 +133,10 @@ struct PassivityConfig {
     v("observer", p.observer, Bound{});
     v("energy_reserve", p.energy_reserve, Bound::above(0, inf, "J"));
     v("gain_recovery_rate", p.gain_recovery_rate, Bound::above(0, inf, "1/s"));
-    v("estimate_tolerance", p.estimate_tolerance, Bound::in(0, inf, "N"));
-    v("robot_cost_tolerance", p.robot_cost_tolerance, Bound::in(0, inf, "N"));
+    // A tolerance beyond max_tolerance (the estimator's output limit, 9.81 N) would switch the
+    // feedback or the robot-side controller off for good: a typo, refused.
+    v("estimate_tolerance", p.estimate_tolerance, Bound::in(0, max_tolerance, "N"));
+    v("robot_cost_tolerance", p.robot_cost_tolerance, Bound::in(0, max_tolerance, "N"));
     v("robot_return_needs_motion", p.robot_return_needs_motion, Bound{});
     v("recover_while_absorbing", p.recover_while_absorbing, Bound{});
     v("lever", p.lever, Bound::above(0, inf, "m/rad"));
