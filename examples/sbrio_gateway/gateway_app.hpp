@@ -189,8 +189,8 @@ inline int run(const Options& o) {
       const auto& l = link.receive_wait();
       const auto& n = network.receive_wait();
       fmt::print(
-          "sbrio-gateway: spins: sbRIO link {} answered within the spin, {} blocked after it; "
-          "consoles' side {} answered, {} blocked\n",
+          "sbrio-gateway: spins: sbRIO link {} found without blocking (already there or within "
+          "the spin), {} blocked after it; consoles' side {} found, {} blocked\n",
           l.spin_hits(), l.spin_misses(), n.spin_hits(), n.spin_misses());
     }
   };

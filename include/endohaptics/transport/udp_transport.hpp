@@ -104,7 +104,9 @@ class ReadableWait {
   }
   //! The spin set.
   [[nodiscard]] std::chrono::nanoseconds spin() const noexcept { return spin_; }
-  //! Waits (with a spin set) that a datagram ended during the spin: no blocking wait, no wake-up.
+  //! Waits (with a spin set) that ended without blocking: the datagram was there at the first poll
+  //! or came during the spin (no blocking wait, no wake-up; the first kind would not have slept
+  //! without the spin either).
   [[nodiscard]] std::uint64_t spin_hits() const noexcept { return spin_hits_; }
   //! Waits (with a spin set) whose spin ended without a datagram, so they blocked.
   [[nodiscard]] std::uint64_t spin_misses() const noexcept { return spin_misses_; }
@@ -358,7 +360,7 @@ class UdpTransport {
   //! Datagrams one receive reads at most.
   [[nodiscard]] std::size_t max_drain() const noexcept { return max_drain_; }
   //! The receive's non-blocking poll before it blocks (UdpConfig::receive_spin), and how often it
-  //! found a datagram (hits) or ran out and blocked (misses).
+  //! found a datagram, already there or during the spin (hits), or ran out and blocked (misses).
   [[nodiscard]] const detail::ReadableWait& receive_wait() const noexcept { return scratch_.wait; }
 
   //! The bound local endpoint (useful with local_port = 0).
