@@ -103,9 +103,9 @@ struct ClosedLoopConfig {
   //! (stiction_memory_settings), as the demo sets it for the emulator's instrument. Off: the
   //! estimate is passed on as the model gives it.
   bool stiction_memory = false;
-  //! With stiction_memory: the memory holds through zero (estimation::StictionHold after the
-  //! estimator, same constants) instead of the estimator's own, which lets go when the estimate
-  //! changes sign.
+  //! With stiction_memory: the memory also holds through zero beyond stiction_contact_level
+  //! (ForceEstimatorSettings::stick_contact_level, same constants); without, it lets go when the
+  //! estimate changes sign.
   bool stiction_through_zero = false;
   //! N per motor, with stiction_through_zero: the estimate's error bound in free motion
   //! (estimation::StictionHold's contact level); a held force within it is held only on the
