@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <endohaptics/model/stop_operators.hpp>
+#include <limits>
+#include <optional>
 #include <random>
 #include <vector>
 
@@ -117,6 +119,46 @@ TEST_CASE("stop operators: float") {
   stops.step(x, 0.05F, s);
   CHECK(s[0] == doctest::Approx(-0.5F));
   CHECK(stops.values(x, 0.05F)[1] == doctest::Approx(-0.75F));
+}
+
+TEST_CASE("friction play: one rule for its constants, worded with the reader's names") {
+  const double inf = std::numeric_limits<double>::infinity();
+  const double nan = std::nan("");
+  const auto refusal = [](double play, std::optional<double> slide, double viscous) {
+    return message_of([&] { md::check_friction_play(play, slide, viscous, "m.json"); });
+  };
+  // Accepted: a plain play, a friction play with or without a viscous term, no play at all, the
+  // edges of each range.
+  CHECK(refusal(0.13, std::nullopt, 0.0) == "(no exception)");
+  CHECK(refusal(0.13, 0.065, -0.025) == "(no exception)");
+  CHECK(refusal(0.13, 0.0, 0.0) == "(no exception)");
+  CHECK(refusal(0.13, 0.13, 0.0) == "(no exception)");
+  CHECK(refusal(0.0, std::nullopt, 0.0) == "(no exception)");
+  CHECK(refusal(md::max_joint_model_parameter, std::nullopt, -md::max_joint_model_parameter) ==
+        "(no exception)");
+  // Each rule, named, after the place.
+  for (const double play : {-0.1, nan, inf, 2 * md::max_joint_model_parameter}) {
+    CAPTURE(play);
+    CHECK(refusal(play, std::nullopt, 0.0).starts_with("m.json: current_play must be in [0, "));
+  }
+  for (const double slide : {-0.01, 0.2, nan, inf}) {
+    CAPTURE(slide);
+    CHECK(refusal(0.13, slide, 0.0)
+              .starts_with("m.json: current_play_slide must be in [0, current_play = 0.13], got"));
+  }
+  for (const double viscous : {nan, inf, -inf, 2 * md::max_joint_model_parameter}) {
+    CAPTURE(viscous);
+    CHECK(refusal(0.13, 0.065, viscous)
+              .starts_with("m.json: current_play_viscous must be finite, at most "));
+  }
+  CHECK(refusal(0.0, 0.0, 0.0) ==
+        "m.json: current_play_slide and current_play_viscous need a current_play");
+  CHECK(refusal(0.0, std::nullopt, -0.025) ==
+        "m.json: current_play_slide and current_play_viscous need a current_play");
+  // Another reader's names, no place.
+  CHECK(message_of([] {
+          md::check_friction_play(0.0, std::nullopt, 0.5, "", {"--play", "--slide", "--viscous"});
+        }) == "--slide and --viscous need a --play");
 }
 
 }  // namespace model_stop_operators_test

@@ -61,28 +61,21 @@ class IdentifiedHammersteinWiener : public ClampModel2016<Scalar> {
   //! free_motion_threshold; the default is none), its current through a play of half width
   //! `current_play` A (0: none), sliding at `current_play_slide` A (none: the same, a plain
   //! play) on the current less `current_play_viscous` times the velocity. Throws Error unless
-  //! `current_play` is finite and >= 0, the slide finite and in [0, current_play], and the
-  //! viscous coefficient finite (both only with a play).
+  //! the three pass model::check_friction_play.
   explicit IdentifiedHammersteinWiener(typename Base::ModelType model, Threshold threshold = {},
                                        Scalar current_play = Scalar(0),
                                        std::optional<Scalar> current_play_slide = std::nullopt,
                                        Scalar current_play_viscous = Scalar(0))
       : Base(std::move(model)),
         threshold_(threshold),
-        play_(model::detail::nl::non_negative(current_play, "IdentifiedHammersteinWiener",
-                                              "current_play")),
+        play_(current_play),
         slide_(current_play_slide.value_or(play_)),
         viscous_(current_play_viscous) {
-    const bool slide_ok = std::isfinite(slide_) && slide_ >= Scalar(0) && slide_ <= play_;
-    if (!slide_ok || !std::isfinite(viscous_) ||
-        (play_ == Scalar(0) && (slide_ != Scalar(0) || viscous_ != Scalar(0)))) {
-      ENDOHAPTICS_THROW(
-          Error("IdentifiedHammersteinWiener: current_play_slide must be in [0, current_play] and "
-                "current_play_viscous finite, both only with a current play; got play " +
-                endohaptics::detail::format_number(static_cast<double>(play_)) + ", slide " +
-                endohaptics::detail::format_number(static_cast<double>(slide_)) + ", viscous " +
-                endohaptics::detail::format_number(static_cast<double>(viscous_))));
-    }
+    model::check_friction_play(static_cast<double>(play_),
+                               current_play_slide
+                                   ? std::optional<double>(static_cast<double>(*current_play_slide))
+                                   : std::nullopt,
+                               static_cast<double>(viscous_), "IdentifiedHammersteinWiener");
   }
 
   //! The model's force through the free-motion threshold.

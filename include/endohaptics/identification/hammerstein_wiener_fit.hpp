@@ -77,9 +77,12 @@ struct HammersteinWienerFit {
 //! 0 <= slide <= play, plus the viscous current viscous u_k1), from z = 0 and stuck
 //! (files::ModelFile::current_play, current_play_slide, current_play_viscous; the bridge's
 //! estimation::IdentifiedHammersteinWiener runs the same). played_input(u, play) when slide == play
-//! and viscous == 0; u itself when play is 0 or u has no column; a sample whose input is not finite
-//! passes and leaves the play as it was. Throws Error when viscous is not 0 and u has fewer than 2
-//! columns.
+//! and viscous == 0; u itself when play is 0 or u has no column; a sample whose current or
+//! viscous current (viscous u_k1: a non-finite velocity, or one so large the product overflows)
+//! is not finite passes unchanged and leaves the play as it was. The tick refuses such a sample
+//! instead (all or nothing, its state kept); a recorded run has no all-or-nothing step, and a NaN
+//! here would poison every later sample of a simulation. Throws Error when viscous is not 0 and u
+//! has fewer than 2 columns.
 [[nodiscard]] ENDOHAPTICS_DECL Eigen::MatrixXd played_input(const Eigen::MatrixXd& u, double play,
                                                             double slide, double viscous);
 

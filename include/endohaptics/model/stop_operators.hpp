@@ -9,9 +9,12 @@
 
 #include <Eigen/Core>
 #include <cmath>
+#include <optional>
 #include <string>
+#include <string_view>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/model/joint_model_bounds.hpp"
 
 namespace endohaptics::model {
 
@@ -53,6 +56,42 @@ template <typename Scalar>
     return load + slide;
   }
   return z;
+}
+
+//! The names a friction play's three constants go by where they are read (a model file's keys by
+//! default; identify's options; a constructor's parameters), for check_friction_play's messages.
+struct FrictionPlayNames {
+  std::string_view play = "current_play";             //!< the static half width K_s
+  std::string_view slide = "current_play_slide";      //!< the sliding half width K_c
+  std::string_view viscous = "current_play_viscous";  //!< the viscous coefficient
+};
+
+//! The one rule for a friction play's constants, checked by the model-file loader, identify's
+//! request and estimation::IdentifiedHammersteinWiener: the half width `play` in [0,
+//! max_joint_model_parameter] (A); the sliding half width `slide` (none: a plain play, the
+//! play's own) in [0, play]; the viscous coefficient finite and at most
+//! max_joint_model_parameter in size; a slide or a viscous term only with a play. Configuration
+//! time: throws Error naming the rule, after "`where`: " when `where` is not empty.
+inline void check_friction_play(double play, std::optional<double> slide, double viscous,
+                                std::string_view where, const FrictionPlayNames& names = {}) {
+  using endohaptics::detail::format_number;
+  const auto fail = [&](const std::string& what) {
+    ENDOHAPTICS_THROW(Error(where.empty() ? what : std::string(where) + ": " + what));
+  };
+  const std::string p(names.play), s(names.slide), v(names.viscous);
+  if (!(play >= 0.0 && play <= max_joint_model_parameter)) {
+    fail(p + " must be in [0, " + format_number(max_joint_model_parameter) +
+         "] (input 0's units), got " + format_number(play));
+  }
+  if (slide && !(*slide >= 0.0 && *slide <= play)) {
+    fail(s + " must be in [0, " + p + " = " + format_number(play) + "], got " +
+         format_number(*slide));
+  }
+  if (!(std::fabs(viscous) <= max_joint_model_parameter)) {
+    fail(v + " must be finite, at most " + format_number(max_joint_model_parameter) +
+         " in size, got " + format_number(viscous));
+  }
+  if (play == 0.0 && (slide || viscous != 0.0)) fail(s + " and " + v + " need a " + p);
 }
 
 //! N stop operators with increasing thresholds (see the file comment). Before the first motion

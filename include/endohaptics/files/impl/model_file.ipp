@@ -5,6 +5,8 @@
 
 #include "endohaptics/files/model_file.hpp"
 
+#include "endohaptics/model/stop_operators.hpp"
+
 namespace endohaptics::files {
 namespace detail::model_file {
 
@@ -41,23 +43,7 @@ ENDOHAPTICS_DECL void validate(const ModelFile& m, const std::string& where) {
          format_number(ModelFile::max_parameter) + "] (output units), got " +
          format_number(m.free_motion_threshold));
   }
-  if (!(m.current_play >= 0.0 && m.current_play <= ModelFile::max_parameter)) {
-    fail(where + ": current_play must be in [0, " + format_number(ModelFile::max_parameter) +
-         "] (input 0's units), got " + format_number(m.current_play));
-  }
-  if (m.current_play_slide &&
-      !(*m.current_play_slide >= 0.0 && *m.current_play_slide <= m.current_play)) {
-    fail(where + ": current_play_slide must be in [0, current_play = " +
-         format_number(m.current_play) + "], got " + format_number(*m.current_play_slide));
-  }
-  if (!(std::fabs(m.current_play_viscous) <= ModelFile::max_parameter)) {
-    fail(where + ": current_play_viscous must be finite, at most " +
-         format_number(ModelFile::max_parameter) + " in size, got " +
-         format_number(m.current_play_viscous));
-  }
-  if (m.current_play == 0.0 && (m.current_play_slide || m.current_play_viscous != 0.0)) {
-    fail(where + ": current_play_slide and current_play_viscous need a current_play");
-  }
+  model::check_friction_play(m.current_play, m.current_play_slide, m.current_play_viscous, where);
   if (m.current_play_viscous != 0.0 && m.inputs.size() < 2) {
     fail(where + ": current_play_viscous needs the velocity as input 1");
   }

@@ -6,6 +6,8 @@
 
 #include "endohaptics/workflow/identify_request.hpp"
 
+#include "endohaptics/model/stop_operators.hpp"
+
 namespace endohaptics::workflow {
 
 ENDOHAPTICS_DECL const WorkflowResult& IdentifyProgress::subspace_result() const {
@@ -143,11 +145,9 @@ ENDOHAPTICS_DECL IdentifyReport run_identify(const IdentifyRequest& request,
   }
   // The play on input 0: the subspace family is fitted and scored on the played input; the model
   // file carries the width (set below, after every score), and replay and the bridge apply it.
-  if (!(request.current_play >= 0.0 && request.current_play <= files::ModelFile::max_parameter)) {
-    ENDOHAPTICS_THROW(Error("--current-play must be in [0, " +
-                            detail::format_number(files::ModelFile::max_parameter) + "], got " +
-                            detail::format_number(request.current_play)));
-  }
+  model::check_friction_play(request.current_play, request.current_play_slide,
+                             request.current_play_viscous, "",
+                             {"--current-play", "--current-play-slide", "--current-play-viscous"});
   if (request.current_play > 0.0 && !r.subspace_family) {
     ENDOHAPTICS_THROW(
         Error("--current-play: the method list has no subspace family, the only "
@@ -155,19 +155,6 @@ ENDOHAPTICS_DECL IdentifyReport run_identify(const IdentifyRequest& request,
               "friction)"));
   }
   const double slide = request.current_play_slide.value_or(request.current_play);
-  if (!(slide >= 0.0 && slide <= request.current_play) ||
-      !(std::fabs(request.current_play_viscous) <= files::ModelFile::max_parameter)) {
-    ENDOHAPTICS_THROW(Error("--current-play-slide must be in [0, --current-play = " +
-                            detail::format_number(request.current_play) +
-                            "] and --current-play-viscous finite, got " +
-                            detail::format_number(slide) + " and " +
-                            detail::format_number(request.current_play_viscous)));
-  }
-  if (request.current_play == 0.0 &&
-      (request.current_play_slide || request.current_play_viscous != 0.0)) {
-    ENDOHAPTICS_THROW(
-        Error("--current-play-slide and --current-play-viscous need a --current-play"));
-  }
   if (request.current_play > 0.0) {
     for (auto* logs : {&r.fit_logs, &r.score_logs}) {
       for (PreparedLog& log : *logs) {
