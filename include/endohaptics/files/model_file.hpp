@@ -46,6 +46,7 @@
 #include "endohaptics/model/state_space.hpp"
 #include "endohaptics/model/static_map.hpp"
 #include "endohaptics/model/static_nonlinearity.hpp"
+#include "endohaptics/model/stop_operators.hpp"
 
 namespace endohaptics::files {
 

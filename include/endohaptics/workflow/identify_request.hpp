@@ -17,6 +17,7 @@
 #include "endohaptics/core/separate_compilation.hpp"
 
 #include "endohaptics/files/model_file.hpp"
+#include "endohaptics/model/stop_operators.hpp"
 #include "endohaptics/workflow/method.hpp"
 #include "endohaptics/workflow/model_comparison.hpp"
 #include "endohaptics/workflow/prepared_log.hpp"

@@ -5,8 +5,6 @@
 
 #include "endohaptics/files/model_file.hpp"
 
-#include "endohaptics/model/stop_operators.hpp"
-
 namespace endohaptics::files {
 namespace detail::model_file {
 

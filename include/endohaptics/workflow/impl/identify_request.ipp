@@ -6,8 +6,6 @@
 
 #include "endohaptics/workflow/identify_request.hpp"
 
-#include "endohaptics/model/stop_operators.hpp"
-
 namespace endohaptics::workflow {
 
 ENDOHAPTICS_DECL const WorkflowResult& IdentifyProgress::subspace_result() const {
