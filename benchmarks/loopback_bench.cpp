@@ -77,7 +77,8 @@ void report(benchmark::State& st, const tp::LoopStats& s) {
 // fifo: SCHED_FIFO for the loop (80) and the emulator (70) when permitted (root); the
 // `fifo_applied` counter says whether it was. V2: protocol v2 on both sides.
 template <bool V2 = false>
-void run_loop(benchmark::State& st, nanoseconds period, nanoseconds busy_tail, bool fifo = false) {
+void run_loop(benchmark::State& st, nanoseconds period, nanoseconds busy_tail, bool fifo = false,
+              nanoseconds spin = nanoseconds(0)) {
   const auto ticks = static_cast<std::uint64_t>(st.range(0));
   const auto rt = tp::apply_realtime({.fifo_priority = fifo ? 80 : 0, .timer_slack_ns = 1});
   for (auto _ : st) {
@@ -86,7 +87,8 @@ void run_loop(benchmark::State& st, nanoseconds period, nanoseconds busy_tail, b
         std::make_unique<EmulatorThread<V2>>(sim::Environment::tissue, rt.fifo ? 70 : 0);
     transport::UdpTransport udp({.local_address = "127.0.0.1",
                                  .remote_address = "127.0.0.1",
-                                 .remote_port = emulator->port()});
+                                 .remote_port = emulator->port(),
+                                 .receive_spin = spin});
     std::optional<ClientV2> v2;
     if constexpr (V2) {
       v2.emplace(udp, protocol::SecureInitiator<4>(bench_key(), console_config()));
@@ -308,6 +310,16 @@ void BM_Loopback_max_rate_one_cpu(benchmark::State& st) {
   const OneCpu pin;
   run_loop(st, nanoseconds(0), nanoseconds(0));
 }
+// The same two placements with the loop's transport spinning 50 us before it blocks
+// (UdpConfig::receive_spin: non-blocking reads, yielding between them): what the spin buys where
+// the wake-up of a blocked thread is what costs.
+void BM_Loopback_max_rate_one_cpu_spin(benchmark::State& st) {
+  const OneCpu pin;
+  run_loop(st, nanoseconds(0), nanoseconds(0), false, std::chrono::microseconds(50));
+}
+void BM_Loopback_max_rate_spin(benchmark::State& st) {
+  run_loop(st, nanoseconds(0), nanoseconds(0), false, std::chrono::microseconds(50));
+}
 void BM_Baseline_udp_ping_pong_ppoll(benchmark::State& st) { ping_pong(st, Wait::ppoll); }
 void BM_Baseline_udp_ping_pong_transport_wait(benchmark::State& st) {
   ping_pong(st, Wait::transport);
@@ -381,6 +393,16 @@ BENCHMARK(BM_Loopback_max_rate)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 BENCHMARK(BM_Baseline_udp_ping_pong_one_cpu)
+    ->Arg(run_ticks(60000))
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_Loopback_max_rate_one_cpu_spin)
+    ->Arg(run_ticks(60000))
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_Loopback_max_rate_spin)
     ->Arg(run_ticks(60000))
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond)
