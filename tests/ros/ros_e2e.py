@@ -42,6 +42,10 @@ STARTED = []
 FIFO = ["--fifo-priority", "80"] + (["--cpu", str(max(os.sched_getaffinity(0)))]
                                     if len(os.sched_getaffinity(0)) > 1 else [])
 
+LOOP_CPU = max(os.sched_getaffinity(0))
+# ROS_E2E_P99_COUNTS=1: print the loop CPU's interrupt, IPI and softirq counts of each p99 run.
+COUNTS = os.environ.get("ROS_E2E_P99_COUNTS") == "1"
+
 
 def fail(message):
     print("FAIL: " + message)
@@ -422,6 +426,23 @@ def p99_error(text):
     return number(r"period err\s+mean\s+[0-9.]+ us\s+p99\s+([0-9.]+) us", text, "p99 period error")
 
 
+def cpu_counts(cpu):
+    """Per-CPU interrupt/IPI and softirq counts of one CPU (from /proc/interrupts, /proc/softirqs)."""
+    counts = {}
+    for path in ("/proc/interrupts", "/proc/softirqs"):
+        lines = open(path).read().splitlines()
+        ncpu = len(lines[0].split())
+        for line in lines[1:]:
+            parts = line.split()
+            if len(parts) > cpu + 1 and parts[cpu + 1].isdigit() and len(parts) >= ncpu + 1:
+                counts[parts[0].rstrip(":")] = int(parts[cpu + 1])
+    return counts
+
+
+def counts_diff(before, after):
+    return {k: after[k] - before.get(k, 0) for k in after if after[k] - before.get(k, 0)}
+
+
 def case_p99(work):
     port = start_roscore(work)
     env = ros_env(work, "127.0.0.1", port, "127.0.0.1")
@@ -435,13 +456,19 @@ def case_p99(work):
     runs = int(os.environ.get("ROS_E2E_P99_RUNS", "3"))
     seconds = os.environ.get("ROS_E2E_P99_SECONDS", "1.5")
     for _ in range(runs):  # interleaved, so both see the same machine load; the median of each
+        before = cpu_counts(LOOP_CPU)
         code, plain = run([os.path.join(BIN, "endohaptics-bridge"), "--sbrio",
                            f"127.0.0.1:{sbrio}", "--key", key, "--duration", seconds, *FIFO],
                           env)
+        if COUNTS:
+            print("loop CPU counts without ROS:", counts_diff(before, cpu_counts(LOOP_CPU)))
         if code != 0:
             fail("endohaptics-bridge: " + plain)
         results["without ROS"].append(p99_error(plain))
+        before = cpu_counts(LOOP_CPU)
         code, ros = run(bridge_args(sbrio, key, duration=float(seconds), extra=FIFO), env)
+        if COUNTS:
+            print("loop CPU counts with ROS:   ", counts_diff(before, cpu_counts(LOOP_CPU)))
         if code != 0:
             fail("endohaptics-ros-bridge: " + ros)
         results["with ROS"].append(p99_error(ros))
