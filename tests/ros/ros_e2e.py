@@ -456,7 +456,7 @@ def case_p99(work):
     runs = int(os.environ.get("ROS_E2E_P99_RUNS", "3"))
     seconds = os.environ.get("ROS_E2E_P99_SECONDS", "1.5")
     for _ in range(runs):  # interleaved, so both see the same machine load; the median of each
-        before = cpu_counts(LOOP_CPU)
+        before = cpu_counts(LOOP_CPU) if COUNTS else {}
         code, plain = run([os.path.join(BIN, "endohaptics-bridge"), "--sbrio",
                            f"127.0.0.1:{sbrio}", "--key", key, "--duration", seconds, *FIFO],
                           env)
@@ -465,7 +465,7 @@ def case_p99(work):
         if code != 0:
             fail("endohaptics-bridge: " + plain)
         results["without ROS"].append(p99_error(plain))
-        before = cpu_counts(LOOP_CPU)
+        before = cpu_counts(LOOP_CPU) if COUNTS else {}
         code, ros = run(bridge_args(sbrio, key, duration=float(seconds), extra=FIFO), env)
         if COUNTS:
             print("loop CPU counts with ROS:   ", counts_diff(before, cpu_counts(LOOP_CPU)))
