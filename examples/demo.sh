@@ -52,12 +52,14 @@ emulator_options=()
 run() {
   local name=$1 port=""
   shift
+  # Emptied here, before the emulator starts: a file left by an earlier demo in the same folder
+  # would otherwise give the previous run's port to the first read below.
+  : >"$out/$name.emulator.out"
   "$bin/endohaptics-sbrio-emulator" --bind 127.0.0.1 --port 0 --environment "$environment" \
     --key "$key" --truth-log "$out/$name.truth.csv" --quiet ${emulator_options[@]+"${emulator_options[@]}"} \
-    >"$out/$name.emulator.out" 2>&1 &
+    >>"$out/$name.emulator.out" 2>&1 &
   emulator=$!
   for _ in $(seq 100); do
-    # (the background job may not have created the file yet: not an error under set -e)
     port=$(sed -n 's/.*listening on 127.0.0.1:\([0-9]*\).*/\1/p' "$out/$name.emulator.out" 2>/dev/null || true)
     [[ -n $port ]] && break
     sleep 0.05

@@ -18,15 +18,21 @@ key="$work/link.key"
 "$bin/endohaptics-bridge" --generate-key "$key" >/dev/null || fail "cannot generate a key"
 
 # Starts the emulator on $1 (0: any port; further arguments are the emulator's) and sets
-# emulator_pid and port.
+# emulator_pid and port. Each start writes its own file, created empty by this shell before the
+# emulator runs: a reused name could still hold the previous emulator's "listening on" line
+# when it is first read, and the bridge would then talk to a port nobody listens on.
+emulator_starts=0
 start_emulator() {
+  emulator_starts=$((emulator_starts + 1))
+  local out="$work/emulator.$emulator_starts.out"
+  : >"$out"
   "$bin/endohaptics-sbrio-emulator" --bind 127.0.0.1 --port "$1" --key "$key" --quiet "${@:2}" \
-    >"$work/emulator.$1.out" 2>&1 &
+    >>"$out" 2>&1 &
   emulator_pid=$!
   for _ in $(seq 100); do
-    port=$(sed -n 's/.*listening on 127.0.0.1:\([0-9]*\).*/\1/p' "$work/emulator.$1.out" 2>/dev/null || true)
+    port=$(sed -n 's/.*listening on 127.0.0.1:\([0-9]*\).*/\1/p' "$out" 2>/dev/null || true)
     [[ -n $port ]] && return 0
-    kill -0 "$emulator_pid" 2>/dev/null || fail "emulator died: $(cat "$work/emulator.$1.out")"
+    kill -0 "$emulator_pid" 2>/dev/null || fail "emulator died: $(cat "$out")"
     sleep 0.05
   done
   fail "emulator did not report its port"
