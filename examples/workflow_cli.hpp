@@ -1,4 +1,5 @@
-// The command-line option groups endohaptics-identify and endohaptics-replay share (CLI11): the
+// The command-line option groups endohaptics-identify and endohaptics-replay share (CLI11; included
+// by their options.cpp only, examples/program_options.hpp): the
 // logs and their signals, the grid and preprocessing, the causal score's settings. One
 // declaration of each option (name, variable, check, range); where the option means something
 // else in the two programs (replay takes the preprocessing the model file records unless told
@@ -7,29 +8,13 @@
 
 #include <CLI/CLI.hpp>
 #include <endohaptics/workflow/command_line.hpp>
-#include <endohaptics/workflow/model_comparison.hpp>
-#include <endohaptics/workflow/preprocessing.hpp>
 #include <string>
 #include <vector>
 
 #include "cli_numbers.hpp"
+#include "workflow_options.hpp"
 
 namespace examples {
-
-//! The program the options are added to: their help texts differ where their meaning does.
-enum class Tool { identify, replay };
-
-//! The settings the shared option groups fill.
-struct LogWorkflowOptions {
-  std::vector<std::string> logs, inputs, outputs;
-  std::string format = "endowrist-2016";
-  double ts = 0.0;  // s; 0: not given
-  endohaptics::workflow::Preprocessing pre;
-  std::string offset = "none", input_offset = "none";
-  bool drop_non_finite = false;
-  std::string x0 = "steady";
-  double warmup = endohaptics::workflow::ScoringOptions{}.warmup;
-};
 
 //! --log, --format, --input, --output.
 inline void add_signal_options(CLI::App& app, Tool tool, LogWorkflowOptions& o) {
@@ -110,8 +95,5 @@ inline void add_preprocessing_options(CLI::App& app, Tool tool, LogWorkflowOptio
   app.add_flag("--drop-non-finite", o.drop_non_finite,
                "drop rows holding NaN/Inf instead of failing");
 }
-
-//! Whether `name` was given on the command line.
-inline bool given(const CLI::App& app, const std::string& name) { return app.count(name) > 0; }
 
 }  // namespace examples

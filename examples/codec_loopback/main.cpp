@@ -3,15 +3,17 @@
 // sends, waits for the answer, decodes and prints both packets.
 #include <fmt/format.h>
 #include <fmt/ranges.h>
-#include <CLI/CLI.hpp>
+#include <utility>  // before Asio: its awaitable.hpp uses std::exchange without it
+
 #include <boost/asio.hpp>
 #include <chrono>
 #include <endohaptics/protocol/packet_codec.hpp>
 #include <endohaptics/workflow/command_line.hpp>
+#include <exception>
 #include <string>
 #include <thread>
 
-#include "../cli_numbers.hpp"
+#include "options.hpp"
 
 using Codec = endohaptics::protocol::PacketCodec<4>;
 using boost::asio::ip::udp;
@@ -41,10 +43,10 @@ void fake_sbrio(udp::socket& socket, int count) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"endohaptics codec round trip over UDP loopback"};
-  int count = 5;
-  app.add_option("--count", count, "number of round trips")->check(examples::number_in(1, 1000000));
-  CLI11_PARSE(app, argc, argv);
+  codec_loopback::Options options;
+  const examples::Parsed parsed = codec_loopback::parse_options(argc, argv, options);
+  if (parsed.exit_code) return *parsed.exit_code;
+  const int count = options.count;
 
   boost::asio::io_context io;
   udp::socket sbrio(io, udp::endpoint(boost::asio::ip::make_address("127.0.0.1"), 0));

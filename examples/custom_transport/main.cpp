@@ -2,14 +2,13 @@
 // noexcept member functions satisfies the concepts (no base classes, no virtuals). Here the
 // "transport" is an in-process mailbox served by a toy sbRIO, and the "device" a scripted hand.
 #include <fmt/format.h>
-#include <CLI/CLI.hpp>
 #include <array>
 #include <cmath>
 #include <endohaptics/kinematics/cylindrical_mapper.hpp>
 #include <endohaptics/teleop/teleop_loop.hpp>
 #include <endohaptics/workflow/command_line.hpp>
 
-#include "../cli_numbers.hpp"
+#include "options.hpp"
 
 namespace tp = endohaptics::teleop;
 namespace transport = endohaptics::transport;
@@ -62,11 +61,10 @@ struct ScriptedHand {
 static_assert(tp::HapticDevice<ScriptedHand>);
 
 int main(int argc, char** argv) {
-  CLI::App app{"endohaptics: a TeleopLoop over a user-defined transport and device"};
-  int ticks = 2000;
-  app.add_option("--ticks", ticks, "ticks to run (simulated 1 kHz)")
-      ->check(examples::number_in(1, 10000000));
-  CLI11_PARSE(app, argc, argv);
+  custom_transport::Options options;
+  const examples::Parsed parsed = custom_transport::parse_options(argc, argv, options);
+  if (parsed.exit_code) return *parsed.exit_code;
+  const int ticks = options.ticks;
 
   MailboxTransport transport;
   ScriptedHand hand;

@@ -6,7 +6,6 @@
 // plots are workflow/force_report.hpp's.
 #include <fmt/format.h>
 
-#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <endohaptics/files/bridge_config.hpp>
 #include <endohaptics/files/tick_log.hpp>
@@ -18,49 +17,17 @@
 #include <utility>
 #include <vector>
 
-#include "../cli_numbers.hpp"
+#include "options.hpp"
 
 namespace files = endohaptics::files;
 namespace wf = endohaptics::workflow;
 
 int main(int argc, char** argv) {
-  CLI::App app{"endohaptics force report: bridge log vs emulator truth"};
-  std::vector<std::string> truth_paths, log_paths, labels, config_paths, free_paths;
-  std::string plot_dir;
-  int joint = 2;
-  double skip = 0.5;
-  bool all_joints = false;
-  app.add_option("--truth", truth_paths, "emulator truth log (--truth-log); repeat per run")
-      ->required()
-      ->check(CLI::ExistingFile);
-  app.add_option("--log", log_paths, "bridge tick log (--log); repeat per run, same order")
-      ->required()
-      ->check(CLI::ExistingFile);
-  app.add_option("--label", labels, "name of each run in the summary lines (default: run N)");
-  app.add_option("--joint", joint, "motor slot to compare (0 roll, 1 pitch, 2 clamp1, 3 clamp2)")
-      ->check(examples::number_in(0, 3))
-      ->capture_default_str();
-  app.add_option("--skip", skip, "seconds at the start of the bridge log to leave out (start-up)")
-      ->check(examples::number_in(0.0, 1e7))
-      ->capture_default_str();
-  app.add_option("--plot-dir", plot_dir,
-                 "write forces.png (every run) and period.png (the last) here (needs gnuplot; "
-                 "a plot that fails is an error)");
-  CLI::Option* all = app.add_flag("--all-joints", all_joints,
-                                  "end with every rendered joint's line and the stylus line of "
-                                  "each run (the stylus force against the ideal one) instead "
-                                  "of the --joint line");
-  app.add_option("--config", config_paths,
-                 "the bridge's --config of the runs (one for all, or one per run; default: the "
-                 "default configuration): the mapping of the ideal stylus force")
-      ->check(CLI::ExistingFile)
-      ->needs(all);
-  app.add_option("--free-log", free_paths,
-                 "bridge tick log of a run in free space (emulator --environment free), one per "
-                 "run: the free-motion RMS (default: the run's ticks without contact)")
-      ->check(CLI::ExistingFile)
-      ->needs(all);
-  CLI11_PARSE(app, argc, argv);
+  force_report::Options o;
+  const examples::Parsed parsed = force_report::parse_options(argc, argv, o);
+  if (parsed.exit_code) return *parsed.exit_code;
+  const auto& [truth_paths, log_paths, labels, config_paths, free_paths, plot_dir, joint, skip,
+               all_joints] = o;
 
   try {
     wf::check_run_options(truth_paths.size(), log_paths.size(), labels.size(), config_paths.size(),

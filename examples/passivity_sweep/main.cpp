@@ -5,11 +5,10 @@
 // FILE: one run's samples as CSV (for the plots). --transparency: felt vs true stiffness up to a
 // 1 s round trip. --force-source sensor|identified|preset-2016: what the loop feeds back (the
 // ideal sensor, the clamp model identified on training runs (identify_training.hpp) or
-// read with --model FILE, the 2016 preset). This program parses (sweep_options.hpp) and prints
-// (sweep_print.hpp).
+// read with --model FILE, the 2016 preset). This program parses (options.cpp, sweep_options.hpp)
+// and prints (sweep_print.hpp).
 #include <fmt/format.h>
 
-#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <endohaptics/sim/passivity_sweep.hpp>
 #include <endohaptics/workflow/command_line.hpp>
@@ -22,10 +21,9 @@ namespace sim = endohaptics::sim;
 namespace tp = endohaptics::teleop;
 
 int main(int argc, char** argv) {
-  CLI::App app{"endohaptics: press-and-hold with a simulated operator, with and without TDPA"};
   sweep_options::Options o;
-  sweep_options::add(app, o);
-  CLI11_PARSE(app, argc, argv);
+  const examples::Parsed parsed = sweep_options::parse_options(argc, argv, o);
+  if (parsed.exit_code) return *parsed.exit_code;
   const auto contact =
       o.contact_name == "soft" ? sim::ContactKind::soft_tissue : sim::ContactKind::stiff_stop;
   // "off" runs the observer only: the loop renders exactly what it renders with the layer off
@@ -38,10 +36,6 @@ int main(int argc, char** argv) {
     if (!o.trace_path.empty()) {
       sweep_print::trace(o.trace_path, src.scenario(o.round_trip_ms, o.loss, contact, mode),
                          o.seconds);
-    }
-    if (!o.do_table && !o.do_transparency && o.trace_path.empty()) {
-      fmt::print("{}", app.help());
-      return 2;
     }
     endohaptics::workflow::require_written(stdout, "standard output");  // no false success
   } catch (const std::exception& e) {

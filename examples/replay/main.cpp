@@ -8,52 +8,25 @@
 // prints (replay_print.hpp).
 #include <fmt/format.h>
 
-#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <endohaptics/workflow/command_line.hpp>
 #include <endohaptics/workflow/replay_request.hpp>
 #include <exception>
 #include <string>
 
-#include "../workflow_cli.hpp"
+#include "options.hpp"
 #include "replay_print.hpp"
 
 namespace wf = endohaptics::workflow;
 
 int main(int argc, char** argv) {
-  CLI::App app{"endohaptics replay: a model on logs, fit as MATLAB compare"};
-  examples::LogWorkflowOptions o;
-  wf::ReplayRequest q;
-  std::string plot_path;
-  app.add_option("--model", q.model,
-                 "model file (JSON), preset:yaw2016, preset:pitch2016 or preset:clamp2016-as-run")
-      ->required();
-  examples::add_signal_options(app, examples::Tool::replay, o);
-  examples::add_scoring_options(app, examples::Tool::replay, o);
-  // Preprocessing: default what the model file records (identify writes it), else none.
-  examples::add_preprocessing_options(app, examples::Tool::replay, o);
-  app.add_option("--plot", plot_path, "measured vs simulated as PNG (gnuplot pngcairo)");
-  CLI11_PARSE(app, argc, argv);
+  replay::Options opt;
+  const examples::Parsed parsed = replay::parse_options(argc, argv, opt);
+  if (parsed.exit_code) return *parsed.exit_code;
+  const wf::ReplayRequest& q = opt.request;
+  const std::string& plot_path = opt.plot_path;
 
   try {
-    using examples::given;
-    q.logs = o.logs;
-    q.format = o.format;
-    q.inputs = o.inputs;
-    q.outputs = o.outputs;
-    q.x0 = o.x0;
-    q.warmup = o.warmup;
-    if (o.ts > 0.0) q.csv_row_time = o.ts;  // > 0 when given
-    if (given(app, "--lowpass")) q.lowpass = o.pre.cutoff;
-    if (given(app, "--filter-order")) q.filter_order = o.pre.filter_order;
-    if (given(app, "--offset-window")) q.offset_window = o.pre.offset_duration;
-    if (given(app, "--detrend")) q.detrend = o.pre.detrend;
-    if (given(app, "--max-gap")) q.max_gap = o.pre.max_gap;
-    if (given(app, "--min-segment")) q.min_segment = o.pre.min_segment;
-    if (given(app, "--offset")) q.offset = o.offset;
-    if (given(app, "--input-offset")) q.input_offset = o.input_offset;
-    q.drop_non_finite = o.drop_non_finite;
-
     const wf::ReplayReport report = wf::run_replay(
         q, {.resolved = replay_print::resolved,
             .prepared = [](const wf::PreparedLog& log) { fmt::print("{}", wf::summary(log)); },

@@ -6,44 +6,29 @@
 #include <endohaptics/core/error.hpp>
 
 #include "../teleop_bridge/bridge_app.hpp"
+#include "options.hpp"
 #include "ros1_node.hpp"
 
 int main(int argc, char** argv) {
-  CLI::App app{
-      "endohaptics ROS bridge: a ROS stylus <-> sbRIO teleoperation with sensorless force "
-      "feedback; joint states, setpoints, forces and loop figures on ROS topics"};
-  bridge::Options opt;
-  bridge::add_link_options(app, opt);
-  std::string input = "crtk";
-  double input_timeout_ms = 100.0;
-  ros_bridge::StylusConfig stylus_config;
-  app.add_option("--input", input,
-                 "stylus: crtk (<touch>/measured_cp, geometry_msgs/PoseStamped, Touch frame) or "
-                 "phantom-omni (the 2016 driver: TF base -> tip, /omni1_joint_states)")
-      ->check(CLI::IsMember({"crtk", "phantom-omni"}))
-      ->capture_default_str();
-  app.add_option("--input-timeout", input_timeout_ms,
-                 "ms: a stylus older than this is a lost operator (the setpoint is held, the "
-                 "motors released per safety.policy)")
-      ->check(examples::number_in(1.0, 500.0))
-      ->capture_default_str();
-  app.add_option("--input-frame", stylus_config.frame,
-                 "crtk: the frame_id measured_cp must carry (default: any)");
-  app.add_option("--touch-namespace", stylus_config.topics.touch, "the CRTK stylus's namespace")
-      ->capture_default_str();
-  app.add_option("--robot-namespace", stylus_config.topics.robot,
-                 "the namespace of the EndoWrist's topics")
-      ->capture_default_str();
   // ROS remappings (name:=other) and __ns/__name/__ip/__master are ROS's, not ours.
   std::vector<std::string> args;
   int ros_argc = argc;
   ros::removeROSArgs(argc, argv, args);
-  std::vector<char*> cli;
-  for (auto& a : args) cli.push_back(a.data());
-  CLI11_PARSE(app, static_cast<int>(cli.size()), cli.data());
+  std::vector<const char*> cli;
+  for (const auto& a : args) cli.push_back(a.c_str());
+  ros_bridge::Options ros_opt;
+  const examples::Parsed parsed =
+      ros_bridge::parse_options(static_cast<int>(cli.size()), cli.data(), ros_opt);
+  if (parsed.exit_code) return *parsed.exit_code;
+  bridge::Options& opt = ros_opt.link;
+  const std::string& input = ros_opt.input;
+  const double input_timeout_ms = ros_opt.input_timeout_ms;
+  ros_bridge::StylusConfig stylus_config;
+  stylus_config.frame = ros_opt.frame;
+  stylus_config.topics = ros_opt.topics;
 
   try {
-    if (bridge::check_options(app, opt)) return 0;
+    if (bridge::check_options(parsed, opt)) return 0;
     stylus_config.kind =
         input == "crtk" ? ros_bridge::InputKind::crtk : ros_bridge::InputKind::phantom_omni;
     stylus_config.timeout = std::chrono::duration_cast<std::chrono::nanoseconds>(

@@ -70,11 +70,13 @@ target_include_directories(endohaptics_ros SYSTEM BEFORE INTERFACE "${ros_gen}")
 target_include_directories(endohaptics_ros SYSTEM INTERFACE ${roscpp_INCLUDE_DIRS})
 target_link_libraries(endohaptics_ros INTERFACE ${roscpp_LIBRARIES})
 
+target_sources(endohaptics_program_options PRIVATE ros_bridge/options.cpp
+  ros_bridge/standin_options.cpp)
 endohaptics_add_example(endohaptics-ros-bridge ros_bridge endohaptics::model_files
   endohaptics::secure_protocol endohaptics_ros)
 add_executable(endohaptics-ros-touch-standin ros_bridge/touch_standin.cpp)
-target_link_libraries(endohaptics-ros-touch-standin PRIVATE endohaptics::endohaptics
-  endohaptics_warnings CLI11::CLI11 fmt::fmt Threads::Threads endohaptics_ros)
+target_link_libraries(endohaptics-ros-touch-standin PRIVATE endohaptics_program_options
+  endohaptics::endohaptics endohaptics_warnings fmt::fmt Threads::Threads endohaptics_ros)
 # A stand-in for the Touch's driver (tests and docs/ros.md): a 1 kHz publisher with nothing to
 # gain from -O3, which cost it 3 s of GCC's optimiser (15.8 -> 12.9 s of CPU at -O1).
 target_compile_options(endohaptics-ros-touch-standin PRIVATE -O1)

@@ -6,7 +6,6 @@
 // refused messages (NaN, wrong frame). docs/ros.md.
 #include <fmt/format.h>
 
-#include <CLI/CLI.hpp>
 #include <atomic>
 #include <csignal>
 #include <endohaptics/core/clock.hpp>
@@ -14,9 +13,9 @@
 #include <limits>
 #include <optional>
 
-#include "../cli_numbers.hpp"
 #include "../teleop_bridge/touch_frame.hpp"
 #include "ros1_node.hpp"
+#include "standin_options.hpp"
 
 namespace {
 
@@ -36,39 +35,18 @@ struct ForceInbox {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"endohaptics ROS touch stand-in: a scripted operator on ROS topics"};
-  std::string mode = "crtk";
-  double rate = 1000.0;
-  double duration = 0.0;
-  double stop_after = 0.0;
-  int bad_every = 0;
-  std::string frame = "touch";
-  ros_bridge::Topics topics;
-  ros_bridge::PhantomOmniTopics omni;
-  app.add_option("--mode", mode, "crtk or phantom-omni")
-      ->check(CLI::IsMember({"crtk", "phantom-omni"}))
-      ->capture_default_str();
-  app.add_option("--rate", rate, "Hz")
-      ->check(examples::number_in(1.0, 5000.0))
-      ->capture_default_str();
-  app.add_option("--duration", duration, "s (0: until SIGINT)")
-      ->check(examples::number_in(0.0, 1e7));
-  app.add_option("--stop-after", stop_after,
-                 "s after the first subscriber connected: stop publishing the stylus then (0: "
-                 "never)")
-      ->check(examples::number_in(0.0, 1e7));
-  app.add_option(
-         "--bad-every", bad_every,
-         "every Nth stylus message NaN, every Nth (shifted by N/2) in a wrong frame (0: none)")
-      ->check(examples::number_in(0, 1000000));
-  app.add_option("--frame", frame, "crtk: frame_id of measured_cp")->capture_default_str();
-  app.add_option("--touch-namespace", topics.touch, "the CRTK namespace")->capture_default_str();
+  // ROS remappings (name:=other) and __ns/__name/__ip/__master are ROS's, not ours.
   std::vector<std::string> args;
   int ros_argc = argc;
   ros::removeROSArgs(argc, argv, args);
-  std::vector<char*> cli;
-  for (auto& a : args) cli.push_back(a.data());
-  CLI11_PARSE(app, static_cast<int>(cli.size()), cli.data());
+  std::vector<const char*> cli;
+  for (const auto& a : args) cli.push_back(a.c_str());
+  touch_standin::Options o;
+  const examples::Parsed parsed =
+      touch_standin::parse_options(static_cast<int>(cli.size()), cli.data(), o);
+  if (parsed.exit_code) return *parsed.exit_code;
+  const auto& [mode, rate, duration, stop_after, bad_every, frame, topics] = o;
+  const ros_bridge::PhantomOmniTopics omni;
 
   try {
     ros::init(ros_argc, argv, "touch_standin",

@@ -7,7 +7,6 @@
 #include <fmt/format.h>
 #include <fmt/os.h>
 
-#include <CLI/CLI.hpp>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -29,7 +28,7 @@
 #include <utility>
 #include <vector>
 
-#include "../cli_numbers.hpp"
+#include "options.hpp"
 
 namespace emulator {
 
@@ -195,90 +194,6 @@ int serve(Transport& transport, Delayed& delayed, transport::UdpServerTransport&
   }
   endohaptics::workflow::require_written(stdout, "standard output");
   return 0;
-}
-
-//! The command line's settings (in the order run() unpacks them).
-struct Options {
-  std::string bind = "0.0.0.0";
-  std::uint16_t port = 61556;
-  int motors = 4;
-  std::string environment = "tissue";
-  std::string truth_path;
-  double truth_period_ms = 1.0;
-  double duration = 0.0;
-  double watchdog_ms = 100.0;
-  bool quiet = false;
-  double delay_ms = 0.0;
-  double jitter_ms = 0.0;
-  double loss = 0.0;
-  std::string wire = "2";              // --protocol: "2" (v2, authenticated) or "2016" (legacy)
-  std::vector<std::string> key_paths;  // v2: the key in use, and its successor during a change
-  std::string rig_name = std::string(protocol::default_rig_name);
-  std::string generate_key;
-  std::string peer;              // --peer: 2016 mode, the only console obeyed
-  double max_round_trip_ms = 0;  // --max-round-trip: v2 binding (0: derived)
-};
-
-//! The emulator's options.
-inline void add_options(CLI::App& app, Options& o) {
-  app.add_option("--bind", o.bind, "address to listen on")->capture_default_str();
-  app.add_option("--port", o.port, "UDP port to listen on (0: any free port, printed)")
-      ->check(examples::number_in<std::uint16_t>(0, 65535))
-      ->capture_default_str();
-  app.add_option("--motors", o.motors, "number of motors (the EndoWrist has 4)")
-      ->check(examples::number_in(4, 4))
-      ->capture_default_str();
-  app.add_option("--environment", o.environment, "what the tool touches: free|loadcell|tissue")
-      ->check(CLI::IsMember({"free", "loadcell", "tissue"}))
-      ->capture_default_str();
-  app.add_option(
-      "--truth-log", o.truth_path,
-      "CSV: time, setpoints, positions, velocities, currents, true external forces (N, along "
-      "+setpoint)");
-  app.add_option("--truth-period-ms", o.truth_period_ms,
-                 "truth log row period (rows on an exact grid of the emulator's time)")
-      ->check(examples::number_in(0.01, 1000.0))
-      ->capture_default_str();
-  app.add_option("--duration", o.duration, "seconds to run (0: until SIGINT/SIGTERM)")
-      ->check(examples::number_in(0.0, 1e7))
-      ->capture_default_str();
-  app.add_option("--watchdog-ms", o.watchdog_ms,
-                 "disable the motors after this long without packets")
-      ->check(examples::number_in(1.0, 10000.0))
-      ->capture_default_str();
-  app.add_flag("--quiet", o.quiet, "print only the final summary");
-  app.add_option("--delay", o.delay_ms, "ms every answer is held on the send path (one way)")
-      ->check(examples::number_in(0.0, 5000.0))
-      ->capture_default_str();
-  app.add_option("--jitter", o.jitter_ms, "ms of extra uniform delay per answer, [0, jitter]")
-      ->check(examples::number_in(0.0, 5000.0))
-      ->capture_default_str();
-  app.add_option("--loss", o.loss, "probability an answer is lost on the send path")
-      ->check(examples::number_in(0.0, 1.0))
-      ->capture_default_str();
-  app.add_option("--protocol", o.wire,
-                 "wire protocol: 2 (authenticated, needs --key) or 2016 (unauthenticated; the "
-                 "first peer's address and port are pinned)")
-      ->check(CLI::IsMember({"2", "2016"}))
-      ->capture_default_str();
-  app.add_option("--key", o.key_paths,
-                 "protocol v2: the 32-byte key file (mode 0600); give it twice while a key is "
-                 "changed over (the key in use and its successor)");
-  app.add_option("--rig", o.rig_name,
-                 "protocol v2: this robot side's name (1-16 printable characters), bound into "
-                 "every session key: a console for another rig is refused")
-      ->capture_default_str();
-  app.add_option("--peer", o.peer,
-                 "protocol 2016: obey only the console at HOST:PORT (default: the first one "
-                 "heard, released after --watchdog-ms of its silence)");
-  app.add_option("--max-round-trip", o.max_round_trip_ms,
-                 "protocol v2: the longest round trip granted, ms: a setpoint is obeyed only "
-                 "if the state it acknowledges answered a setpoint received at most this long "
-                 "ago (0: the watchdog + --delay + --jitter)")
-      ->check(examples::number_in(0.0, 10000.0))
-      ->capture_default_str();
-  app.add_option("--generate-key", o.generate_key,
-                 "write a new random key file (mode 0600; refuses an existing file) and exit");
 }
 
 //! Refuses options that cannot apply, then serves setpoints until --duration or SIGINT/SIGTERM

@@ -1,15 +1,14 @@
 //! @file
 //! The bridge's link and loop, shared by endohaptics-bridge and endohaptics-ros-bridge: the
-//! options for the sbRIO link and the loop (--sbrio, --key, --protocol, --rate, --duration,
-//! --config, --log, ...), their checks, and the loop itself (UDP or protocol v2 transport, the
-//! force estimator, the mapping, per-second figures, the verdict). A program adds its own device
-//! and, optionally, a tick observer (`on_tick(result, now, loop)`, called on the loop thread:
-//! noexcept, no allocation, no lock).
+//! options' checks for the sbRIO link and the loop (--sbrio, --key, --protocol, --rate, --duration,
+//! --config, --log, ...: options.hpp, link_options.hpp), and the loop itself (UDP or protocol v2
+//! transport, the force estimator, the mapping, per-second figures, the verdict). A program adds
+//! its own device and, optionally, a tick observer (`on_tick(result, now, loop)`, called on the
+//! loop thread: noexcept, no allocation, no lock).
 #pragma once
 
 #include <fmt/format.h>
 
-#include <CLI/CLI.hpp>
 #include <atomic>
 #include <boost/lockfree/spsc_queue.hpp>
 #include <chrono>
@@ -35,7 +34,7 @@
 #include <thread>
 #include <tuple>
 
-#include "../cli_numbers.hpp"
+#include "options.hpp"
 
 namespace bridge {
 
@@ -54,28 +53,6 @@ struct NoTickObserver {
 
 inline std::atomic<bool> g_stop{false};
 extern "C" inline void on_signal(int) { g_stop.store(true); }
-
-struct Options {
-  std::string sbrio = "169.254.4.42:61556";
-  std::string local;  // --local HOST:PORT: where the bridge sends from (empty: any free port)
-  std::string rate = "1000";
-  double duration = 0.0;
-  std::string device = "sim";
-  std::string passivity = "off";      // --passivity: off or tdpa (docs/passivity.md)
-  double passivity_round_trip = 0.0;  // ms, --passivity-round-trip
-  std::string config_path;
-  std::string instrument;  // --instrument: whose model set (estimator.model_sets) to run
-  std::string log_path;
-  bool stats = false;
-  int fifo_priority = 0;
-  int cpu = -1;
-  double busy_wait_us = 0.0;
-  std::string protocol = "2";  // "2": v2 (authenticated, docs/protocol.md); "2016": legacy
-  std::string key_path;        // v2: the pre-shared key file
-  std::string rig = std::string(protocol::default_rig_name);  // v2: the robot side's name
-  std::string generate_key;                                   // write a new key file and exit
-  int max_answer_lag = 0;  // v2: a state may answer a setpoint this many older than the newest
-};
 
 // The end of one second of the loop: a ~100-byte copy made on the loop thread (no allocation,
 // no LoopStats of its own); the printer thread turns two of them into the second's figures.
@@ -104,13 +81,6 @@ inline tp::LinkEvidence evidence(bool v2, const protocol::SecureCounters& c, std
           .enable_mask = enabled,
           .last_active = active};
 }
-
-// Ranges of the numeric options (stated in --help; examples::number_in refuses the rest).
-constexpr double min_rate_hz = endohaptics::workflow::bridge_min_rate_hz;
-constexpr double max_rate_hz = endohaptics::workflow::bridge_max_rate_hz;
-constexpr double max_duration_s = 1e7;  // ~116 days; 0 runs until SIGINT
-// Setpoints a v2 answer may lag: what the session layer can look back over (16 s at 1 kHz).
-constexpr int max_answer_lag = static_cast<int>(protocol::packet_history) - 1;
 
 // The longest an answer may take on this link (workflow::bridge_answer_allowance).
 inline double answer_allowance_s(const Options& opt, double tick_s) {
@@ -363,75 +333,24 @@ int run_bridge(Device& device, endohaptics::SteadyClock& clock, const Options& o
   return run_loop(secure, device, clock, opt, cfg, host, port, observer);
 }
 
-//! Declares the link and loop options shared by the bridges on `app`, writing into `opt`.
-inline void add_link_options(CLI::App& app, Options& opt) {
-  app.add_option("--sbrio", opt.sbrio, "sbRIO address HOST:PORT")->capture_default_str();
-  app.add_option("--local", opt.local,
-                 "send from this HOST:PORT (default: any free port; give it when the robot side "
-                 "obeys one console, e.g. the emulator's --peer)");
-  app.add_option("--rate", opt.rate, "loop rate in Hz, or 'max' (as fast as the link allows)")
-      ->check(examples::number_in(min_rate_hz, max_rate_hz, {"max"}))
-      ->capture_default_str();
-  app.add_option("--duration", opt.duration, "seconds to run (0: until SIGINT)")
-      ->check(examples::number_in(0.0, max_duration_s))
-      ->capture_default_str();
-  app.add_option("--passivity", opt.passivity, "time-domain passivity: off or tdpa")
-      ->check(CLI::IsMember({"off", "tdpa"}))
-      ->capture_default_str();
-  app.add_option("--passivity-round-trip", opt.passivity_round_trip,
-                 "ms, the link's round trip, for --passivity tdpa")
-      ->check(examples::number_in(0.0, 1000.0))
-      ->capture_default_str();
-  app.add_option("--config", opt.config_path, "JSON: mapping, safety, estimator, operator, loop")
-      ->check(CLI::ExistingFile);
-  app.add_option("--instrument", opt.instrument,
-                 "run this instrument's model set (NAME.json or NAME/ in the --config's "
-                 "estimator.model_sets)");
-  app.add_option("--log", opt.log_path, "per-tick CSV log");
-  app.add_flag("--stats", opt.stats, "print table-3.1 figures every second");
-  app.add_option("--fifo-priority", opt.fifo_priority, "SCHED_FIFO priority 1..99 (0: off)")
-      ->check(examples::number_in(0, 99));
-  app.add_option("--cpu", opt.cpu, "pin the loop thread to this CPU (-1: no pinning)")
-      ->check(examples::number_in(-1, 1023));
-  app.add_option("--busy-wait-us", opt.busy_wait_us,
-                 "spin the last microseconds of each period (lower jitter, one busy core)")
-      ->check(examples::number_in(0.0, 1000.0));
-  app.add_option("--protocol", opt.protocol,
-                 "wire protocol: 2 (authenticated, needs --key) or 2016 (unauthenticated)")
-      ->check(CLI::IsMember({"2", "2016"}))
-      ->capture_default_str();
-  app.add_option("--key", opt.key_path, "protocol v2: the 32-byte key file (mode 0600)");
-  app.add_option("--rig", opt.rig,
-                 "protocol v2: the robot side's name (its --rig), bound into every session key")
-      ->capture_default_str();
-  app.add_option("--max-answer-lag", opt.max_answer_lag,
-                 "protocol v2: accept a state answering a setpoint up to N older than the newest "
-                 "(0: only the newest; raise it on a link slower than one period, e.g. the "
-                 "emulator's --delay: N >= the round trip in periods)")
-      ->check(examples::number_in(0, max_answer_lag))
-      ->capture_default_str();
-  app.add_option("--generate-key", opt.generate_key,
-                 "write a new random key file (mode 0600; refuses an existing file) and exit");
-}
-
 //! Refuses options that cannot apply, with the reason; writes a key file and returns true when
 //! --generate-key asked for one (the program then exits 0).
-inline bool check_options(const CLI::App& app, const Options& opt) {
+inline bool check_options(const examples::Parsed& parsed, const Options& opt) {
   // Options that cannot apply are refused with the reason, never ignored.
   if (opt.protocol == "2016" && !opt.key_path.empty()) {
     throw endohaptics::Error("--key applies to protocol v2; --protocol 2016 has no key");
   }
-  if (opt.protocol == "2016" && app.count("--max-answer-lag") > 0) {
+  if (opt.protocol == "2016" && parsed.was_given("--max-answer-lag")) {
     throw endohaptics::Error(
         "--max-answer-lag applies to protocol v2 (its states name the setpoint they answer); "
         "the 2016 wire cannot tell");
   }
-  if (opt.protocol == "2016" && app.count("--rig") > 0) {
+  if (opt.protocol == "2016" && parsed.was_given("--rig")) {
     throw endohaptics::Error(
         "--rig applies to protocol v2 (the session keys bind the robot side's name); the 2016 "
         "wire has no session");
   }
-  if (opt.passivity != "tdpa" && app.count("--passivity-round-trip") > 0) {
+  if (opt.passivity != "tdpa" && parsed.was_given("--passivity-round-trip")) {
     throw endohaptics::Error("--passivity-round-trip applies to --passivity tdpa only");
   }
   if (!opt.generate_key.empty()) {

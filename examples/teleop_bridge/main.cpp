@@ -15,19 +15,12 @@
 namespace files = endohaptics::files;
 
 int main(int argc, char** argv) {
-  CLI::App app{"endohaptics bridge: stylus <-> sbRIO teleoperation with sensorless force feedback"};
   bridge::Options opt;
-  bridge::add_link_options(app, opt);
-  app.add_option("--device", opt.device,
-                 "haptic device: sim (scripted operator), arm-model (the table 5.1 arm holding a "
-                 "simulated stylus, pressing clamp 1 into the emulator's contact and holding) or "
-                 "openhaptics")
-      ->check(CLI::IsMember({"sim", "arm-model", "openhaptics"}))
-      ->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+  const examples::Parsed parsed = bridge::parse_options(argc, argv, opt);
+  if (parsed.exit_code) return *parsed.exit_code;
 
   try {
-    if (bridge::check_options(app, opt)) return 0;
+    if (bridge::check_options(parsed, opt)) return 0;
     bridge::stop_on_signals();
     const files::BridgeConfig cfg = bridge::load_config(opt);
     endohaptics::SteadyClock clock;
