@@ -18,6 +18,7 @@ namespace examples {
     parsed.exit_code = app.exit(e);
     return parsed;
   }
+  parsed.help = app.help();  // after the parse: it names the program as argv[0] does
   for (const CLI::Option* option : app.get_options()) {
     if (option->count() > 0) parsed.given.push_back(option->get_name());
   }

@@ -18,8 +18,11 @@ struct Parsed {
   //! Set when the program must exit now with this status: --help printed (0), or the command
   //! line refused with the reason on stderr (CLI11's non-zero codes).
   std::optional<int> exit_code;
-  //! The options given on the command line, by their long name ("--rig").
+  //! The options given on the command line, by their long name ("--rig"). Options are declared
+  //! with a long name and neither hidden nor in an option group (CLI11 names those differently).
   std::vector<std::string> given;
+  //! The program's --help text, for a program that finds later that nothing was asked of it.
+  std::string help;
 
   //! Whether option `name` ("--rig") was on the command line.
   [[nodiscard]] bool was_given(std::string_view name) const {

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "cli_numbers.hpp"
-#include "workflow_options.hpp"
+#include "log_workflow_options.hpp"
 
 namespace examples {
 

@@ -37,6 +37,10 @@ int main(int argc, char** argv) {
       sweep_print::trace(o.trace_path, src.scenario(o.round_trip_ms, o.loss, contact, mode),
                          o.seconds);
     }
+    if (!o.do_table && !o.do_transparency && o.trace_path.empty()) {
+      fmt::print("{}", parsed.help);
+      return 2;
+    }
     endohaptics::workflow::require_written(stdout, "standard output");  // no false success
   } catch (const std::exception& e) {
     fmt::print(stderr, "endohaptics-passivity-sweep: {}\n", e.what());

@@ -1,8 +1,6 @@
 // endohaptics-passivity-sweep's options (examples/program_options.hpp).
 #include "options.hpp"
 
-#include <fmt/format.h>
-
 #include <endohaptics/teleop/passivity.hpp>
 
 #include "../cli_numbers.hpp"
@@ -92,12 +90,7 @@ void add(CLI::App& app, Options& o) {
 examples::Parsed parse_options(int argc, const char* const* argv, Options& o) {
   CLI::App app{"endohaptics: press-and-hold with a simulated operator, with and without TDPA"};
   add(app, o);
-  examples::Parsed parsed = examples::parse_command_line(app, argc, argv);
-  if (!parsed.exit_code && !o.do_table && !o.do_transparency && o.trace_path.empty()) {
-    fmt::print("{}", app.help());
-    parsed.exit_code = 2;
-  }
-  return parsed;
+  return examples::parse_command_line(app, argc, argv);
 }
 
 }  // namespace sweep_options

@@ -26,8 +26,7 @@ struct Options {
   std::string stiction;
 };
 
-//! Reads the command line into `o`. No action asked for (--table, --transparency, --trace): the
-//! help is printed and the exit status is 2.
+//! Reads the command line into `o`.
 [[nodiscard]] examples::Parsed parse_options(int argc, const char* const* argv, Options& o);
 
 }  // namespace sweep_options

@@ -1,8 +1,8 @@
-// endohaptics-ros-bridge: endohaptics-bridge's loop (the same link options, bridge_app.hpp) with
-// the operator and the observers on ROS 1: the stylus from a CRTK device (<touch>/measured_cp) or
-// the 2016 phantom_omni driver (TF base -> tip), the EndoWrist's joint states, setpoints,
-// estimated forces, operating state and loop figures published, the stylus force on
-// <touch>/servo_cf (and omni1_force_feedback for the 2016 driver). docs/ros.md.
+// endohaptics-ros-bridge: endohaptics-bridge's loop (bridge_app.hpp; the same link options,
+// link_options.hpp) with the operator and the observers on ROS 1: the stylus from a CRTK device
+// (<touch>/measured_cp) or the 2016 phantom_omni driver (TF base -> tip), the EndoWrist's joint
+// states, setpoints, estimated forces, operating state and loop figures published, the stylus
+// force on <touch>/servo_cf (and omni1_force_feedback for the 2016 driver). docs/ros.md.
 #include <endohaptics/core/error.hpp>
 
 #include "../teleop_bridge/bridge_app.hpp"

@@ -2,7 +2,7 @@
 // transport, a haptic device (a scripted operator, or a Geomagic Touch through OpenHaptics), the
 // 2016 force estimator and the cylindrical mapping into a TeleopLoop, then prints table-3.1
 // figures. SIGINT/SIGTERM: zero force, motors disabled, final statistics, exit 0. The link and
-// the loop are shared with endohaptics-ros-bridge (bridge_app.hpp).
+// the loop are shared with endohaptics-ros-bridge (link_options.hpp, bridge_app.hpp).
 #include <endohaptics/sim/haptic_device_model.hpp>
 #include <endohaptics/sim/scripted_operator.hpp>
 #include <endohaptics/sim/simulated_rig.hpp>
