@@ -4,13 +4,16 @@
 // (examples/ros_bridge/ros1_node.hpp, RosPublisher::on_tick and run). Each hand-off is timed alone
 // on the steady clock: handoff_mean_ns, handoff_p99_ns, handoff_max_ns.
 //
-// Baseline (`BM_Baseline_ros_handoff_same_thread`): the same hand-off with the queue drained by
-// this thread after each timed push, so no other CPU ever touches the queue's or the messages'
-// cache lines. `BM_RosHandoff_consumer_other_cpu`: a consumer thread on another CPU drains and
-// reads every message once a millisecond, as the publisher does; the producer stays on the last
-// CPU it may use (the loop's CPU in the ROS tests). The difference between the two is what the
-// publisher's reading costs the loop (cache lines moving between CPUs), the one suspect of the ROS
-// bridge's p99 period error docs/ros.md had not timed.
+// `BM_RosHandoff_consumer_other_cpu`: the loop thread on the last CPU the process may use, a
+// publisher thread on the first, draining once a millisecond and doing with each message what the
+// publisher does in kind (six messages filled with heap-allocated vectors and a name, serialized
+// into a buffer), so the queue's and the messages' cache lines move between CPUs as in the
+// bridge. `BM_Baseline_ros_handoff_same_thread`: the same hand-off and the same publishing work,
+// done by the loop's own thread after each timed push (untimed), so no other CPU touches those
+// lines. `_unmapped_ring`: the bridge's arrangement with the ring's pages first touched by the
+// timed pushes, as before RosPublisher prefaulted it (teleop::prefault_ring). The counters
+// loop_cpu and publisher_cpu show where the threads ran. Run with
+// --benchmark_enable_random_interleaving=true so that the repetitions of the two alternate.
 #include <benchmark/benchmark.h>
 
 #include <sched.h>
@@ -22,9 +25,13 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
+#include <string>
 #include <string_view>
 #include <thread>
 #include <vector>
+
+#include <endohaptics/teleop/realtime.hpp>
 
 #include "../examples/ros_bridge/ros_conversion.hpp"
 
@@ -69,35 +76,59 @@ bool hand_off(Queue& queue, const tp::TickResult& r, std::chrono::nanoseconds no
   return queue.push(m);
 }
 
-// What a publisher reads of each message before it serializes it.
-double read_message(const ros_bridge::TickMessage& m) noexcept {
-  double sum = m.record.time + static_cast<double>(m.wall_ns) + m.record.force_scale;
-  for (int j = 0; j < tp::loop_motors; ++j) {
-    sum += m.record.setpoint[j] + m.record.motor_force[j] + m.record.position[j] +
-           m.record.velocity[j] + m.record.current[j];
+// What the publisher does with a message, in kind: six messages filled (heap-allocated vectors
+// and a name, as roscpp's message types hold them) and serialized into `wire`. Returns the bytes.
+std::size_t publish_like(const ros_bridge::TickMessage& m, std::vector<std::uint8_t>& wire) {
+  std::size_t bytes = 0;
+  for (int k = 0; k < 6; ++k) {
+    std::vector<double> fields;
+    fields.reserve(24);
+    fields.push_back(m.record.time);
+    fields.push_back(static_cast<double>(m.wall_ns));
+    for (int j = 0; j < tp::loop_motors; ++j) {
+      fields.push_back(m.record.setpoint[j]);
+      fields.push_back(m.record.position[j]);
+      fields.push_back(m.record.velocity[j]);
+      fields.push_back(m.record.current[j]);
+      fields.push_back(m.record.motor_force[j]);
+    }
+    const std::string name = "/EW/topic_" + std::to_string(k);
+    wire.resize(fields.size() * sizeof(double) + name.size());
+    std::memcpy(wire.data(), fields.data(), fields.size() * sizeof(double));
+    std::memcpy(wire.data() + fields.size() * sizeof(double), name.data(), name.size());
+    bytes += wire.size();
   }
-  return sum;
+  return bytes;
 }
 
-// Pins the calling thread to one CPU of those it may use (the last or the first); restores the
-// old mask at the end. Does nothing on a one-CPU machine.
+// The first and the last CPU the process may use, read once before any thread pins itself (a
+// thread inherits the mask of the thread that starts it).
+struct Cpus {
+  int first = -1;
+  int last = -1;
+};
+Cpus allowed_cpus() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  Cpus cpus;
+  if (::sched_getaffinity(0, sizeof set, &set) != 0) return cpus;
+  for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu) {
+    if (!CPU_ISSET(static_cast<unsigned>(cpu), &set)) continue;
+    if (cpus.first < 0) cpus.first = cpu;
+    cpus.last = cpu;
+  }
+  return cpus;
+}
+
+// Pins the calling thread to `cpu` (nothing for -1) and restores its old mask at the end.
 class PinnedTo {
  public:
-  explicit PinnedTo(bool last) {
-    (void)::sched_getaffinity(0, sizeof saved_, &saved_);
-    if (CPU_COUNT(&saved_) < 2) return;
-    int chosen = -1;
-    for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu) {
-      if (CPU_ISSET(static_cast<unsigned>(cpu), &saved_)) {
-        chosen = cpu;
-        if (!last) break;
-      }
-    }
+  explicit PinnedTo(int cpu) {
+    if (cpu < 0 || ::sched_getaffinity(0, sizeof saved_, &saved_) != 0) return;
     cpu_set_t one;
     CPU_ZERO(&one);
-    CPU_SET(static_cast<unsigned>(chosen), &one);
-    (void)::sched_setaffinity(0, sizeof one, &one);
-    pinned_ = true;
+    CPU_SET(static_cast<unsigned>(cpu), &one);
+    pinned_ = ::sched_setaffinity(0, sizeof one, &one) == 0;
   }
   ~PinnedTo() {
     if (pinned_) (void)::sched_setaffinity(0, sizeof saved_, &saved_);
@@ -135,6 +166,7 @@ void paced_handoffs(benchmark::State& st, Queue& queue, After&& after) {
       after();
     }
   }
+  st.counters["loop_cpu"] = ::sched_getcpu();
   std::sort(took.begin(), took.end());
   double sum = 0;
   for (const auto t : took) sum += static_cast<double>(t);
@@ -147,30 +179,50 @@ void paced_handoffs(benchmark::State& st, Queue& queue, After&& after) {
 }
 
 void BM_Baseline_ros_handoff_same_thread(benchmark::State& st) {
-  const PinnedTo loop_cpu(/*last=*/true);
+  const Cpus cpus = allowed_cpus();
+  const PinnedTo loop_cpu(cpus.last);
   Queue queue(4096);
-  double sink = 0;
-  paced_handoffs(st, queue,
-                 [&] { queue.consume_all([&](const auto& m) { sink += read_message(m); }); });
-  benchmark::DoNotOptimize(sink);
+  tp::prefault_ring(queue, ros_bridge::TickMessage{});  // as RosPublisher does
+  std::vector<std::uint8_t> wire;
+  std::size_t bytes = 0;
+  paced_handoffs(st, queue, [&] {
+    queue.consume_all([&](const auto& m) { bytes += publish_like(m, wire); });
+  });
+  st.counters["publisher_cpu"] = ::sched_getcpu();
+  benchmark::DoNotOptimize(bytes);
 }
 
-void BM_RosHandoff_consumer_other_cpu(benchmark::State& st) {
-  const PinnedTo loop_cpu(/*last=*/true);
+// The bridge's arrangement; `mapped`: the ring prefaulted as RosPublisher does (false: as it was
+// before, its pages first touched by the timed pushes).
+void consumer_other_cpu(benchmark::State& st, bool mapped) {
+  const Cpus cpus = allowed_cpus();  // before this thread pins itself
   Queue queue(4096);
+  if (mapped) tp::prefault_ring(queue, ros_bridge::TickMessage{});
   std::atomic<bool> done{false};
-  double sink = 0;
+  std::atomic<int> publisher_cpu{-1};
+  std::size_t bytes = 0;
   std::thread publisher([&] {
-    const PinnedTo other(/*last=*/false);
+    const PinnedTo other(cpus.first);
+    publisher_cpu.store(::sched_getcpu());
+    std::vector<std::uint8_t> wire;
     while (!done.load(std::memory_order_relaxed)) {
-      queue.consume_all([&](const auto& m) { sink += read_message(m); });
+      queue.consume_all([&](const auto& m) { bytes += publish_like(m, wire); });
       std::this_thread::sleep_for(std::chrono::milliseconds(1));  // a batch per wake-up
     }
   });
-  paced_handoffs(st, queue, [] {});
+  {
+    const PinnedTo loop_cpu(cpus.last);
+    paced_handoffs(st, queue, [] {});
+  }
   done.store(true);
   publisher.join();
-  benchmark::DoNotOptimize(sink);
+  st.counters["publisher_cpu"] = publisher_cpu.load();
+  benchmark::DoNotOptimize(bytes);
+}
+
+void BM_RosHandoff_consumer_other_cpu(benchmark::State& st) { consumer_other_cpu(st, true); }
+void BM_RosHandoff_consumer_other_cpu_unmapped_ring(benchmark::State& st) {
+  consumer_other_cpu(st, false);
 }
 
 }  // namespace
@@ -181,6 +233,12 @@ BENCHMARK(BM_Baseline_ros_handoff_same_thread)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 BENCHMARK(BM_RosHandoff_consumer_other_cpu)
+    ->Arg(run_ticks(3000))
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+BENCHMARK(BM_RosHandoff_consumer_other_cpu_unmapped_ring)
     ->Arg(run_ticks(3000))
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond)

@@ -29,6 +29,7 @@
 #include <endohaptics/teleop/haptic_device.hpp>
 #include <endohaptics/teleop/latest_value.hpp>
 #include <endohaptics/teleop/loop_stats.hpp>
+#include <endohaptics/teleop/realtime.hpp>
 #include <string>
 #include <thread>
 
@@ -241,6 +242,7 @@ class RosPublisher {
   RosPublisher(ros::NodeHandle& nh, Topics topics, bool omni_feedback,
                const PhantomOmniTopics& omni = {}, std::size_t ring = 4096)
       : topics_(std::move(topics)), queue_(ring) {
+    endohaptics::teleop::prefault_ring(queue_, TickMessage{});  // no page fault in on_tick
     measured_js_ = nh.advertise<sensor_msgs::JointState>(topics_.measured_js(), 100);
     setpoint_js_ = nh.advertise<sensor_msgs::JointState>(topics_.setpoint_js(), 100);
     measured_jf_ = nh.advertise<sensor_msgs::JointState>(topics_.measured_jf(), 100);

@@ -18,6 +18,7 @@
 #include <string_view>
 
 #include "endohaptics/core/error.hpp"
+#include "endohaptics/teleop/realtime.hpp"
 #include "endohaptics/teleop/teleop_loop.hpp"
 
 namespace endohaptics::teleop {
@@ -110,8 +111,11 @@ struct TickRecord {
 //! allocated once, at construction.
 class TickRecorder {
  public:
-  //! A ring of `capacity` records.
-  explicit TickRecorder(std::size_t capacity = std::size_t{1} << 16) : queue_(capacity) {}
+  //! A ring of `capacity` records, its memory mapped here (prefault_ring): the loop's pushes take
+  //! no page fault.
+  explicit TickRecorder(std::size_t capacity = std::size_t{1} << 16) : queue_(capacity) {
+    prefault_ring(queue_, TickRecord{});
+  }
 
   //! Loop thread: wait-free, allocation-free. False (and counted) when the ring is full.
   bool push(const TickRecord& record) noexcept {
