@@ -23,6 +23,8 @@
 #include <random>
 #include <string_view>
 
+#include "smoke_pass.hpp"
+
 namespace identification_scaling_bench {
 
 namespace {
@@ -33,12 +35,8 @@ using Eigen::Index;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
-// A hundredth of the samples under the sanitized smoke pass (ENDOHAPTICS_BENCH_SMOKE,
-// benchmarks/CMakeLists.txt): it checks that the benchmark runs, not how fast.
-Index run_samples(Index full) {
-  const char* smoke = std::getenv("ENDOHAPTICS_BENCH_SMOKE");
-  return smoke != nullptr && std::string_view(smoke) == "1" ? full / 100 : full;
-}
+// A hundredth of the samples under the smoke pass (smoke_pass.hpp).
+Index run_samples(Index full) { return bench::smoke_scaled<Index>(full, 100); }
 
 // Order 2 (poles 0.875 +- 0.198i), inputs white, 5 % output noise.
 id::DataSet make_data(Index samples) {

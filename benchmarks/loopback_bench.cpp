@@ -39,6 +39,7 @@
 #include <type_traits>
 
 #include "loopback_emulator.hpp"
+#include "smoke_pass.hpp"
 
 namespace loopback_bench {
 
@@ -56,13 +57,8 @@ using loopback_emulator::EmulatorThread;
 using loopback_emulator::robot_config;
 using std::chrono::nanoseconds;
 
-// Ticks per run: `full`, or a tenth of it when ENDOHAPTICS_BENCH_SMOKE=1 (the CTest smoke pass,
-// benchmarks/CMakeLists.txt, which checks that every benchmark runs, not how well: the runs'
-// names show the count actually run).
-std::int64_t run_ticks(std::int64_t full) {
-  const char* smoke = std::getenv("ENDOHAPTICS_BENCH_SMOKE");
-  return smoke != nullptr && std::string_view(smoke) == "1" ? full / 10 : full;
-}
+// Ticks per run: a tenth under the smoke pass (smoke_pass.hpp; the runs' names show the count).
+std::int64_t run_ticks(std::int64_t full) { return bench::smoke_scaled<std::int64_t>(full, 10); }
 
 // The loop's figures as the benchmark's counters.
 void report(benchmark::State& st, const tp::LoopStats& s) {

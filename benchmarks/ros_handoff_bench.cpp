@@ -34,6 +34,7 @@
 #include <endohaptics/teleop/realtime.hpp>
 
 #include "../examples/ros_bridge/ros_conversion.hpp"
+#include "smoke_pass.hpp"
 
 namespace ros_handoff_bench {
 
@@ -43,11 +44,8 @@ namespace tp = endohaptics::teleop;
 using Clock = std::chrono::steady_clock;
 using Queue = boost::lockfree::spsc_queue<ros_bridge::TickMessage>;
 
-// Ticks per run (a tenth under the CTest smoke pass, as loopback_bench.cpp does).
-std::int64_t run_ticks(std::int64_t full) {
-  const char* smoke = std::getenv("ENDOHAPTICS_BENCH_SMOKE");
-  return smoke != nullptr && std::string_view(smoke) == "1" ? full / 10 : full;
-}
+// Ticks per run: a tenth under the smoke pass (smoke_pass.hpp).
+std::int64_t run_ticks(std::int64_t full) { return bench::smoke_scaled<std::int64_t>(full, 10); }
 
 // A tick as the loop produces it with the link up: every field the record copies set.
 tp::TickResult sample_tick() {

@@ -9,6 +9,8 @@
 #include <endohaptics/model/presets_2016.hpp>
 #include <random>
 
+#include "smoke_pass.hpp"
+
 namespace subspace_bench {
 
 namespace {
@@ -22,7 +24,8 @@ struct Data {
 
 const Data& yaw_data() {
   static const Data data = [] {
-    constexpr int samples = 10000;
+    // A tenth under the smoke pass (smoke_pass.hpp; the `samples` counter shows it).
+    const int samples = bench::smoke_scaled(10000, 10);
     std::mt19937 rng(2016);
     std::normal_distribution<double> normal(0.0, 1.0);
     Data d;
@@ -52,6 +55,7 @@ void run(benchmark::State& state, id::Weighting weighting, int order) {
     benchmark::DoNotOptimize(m.state_space.A().data());
   }
   state.counters["order"] = chosen;
+  state.counters["samples"] = static_cast<double>(d.u.rows());
 }
 
 void BM_Subspace_identify_order6_2in_10k(benchmark::State& state) {
