@@ -24,4 +24,19 @@ struct LogWorkflowOptions {
   double warmup = endohaptics::workflow::ScoringOptions{}.warmup;
 };
 
+//! The settings both programs' requests take as given (identify's IdentifyRequest, replay's
+//! ReplayRequest): the logs and their signals, the causal score's initial state and warm-up, and
+//! what to do with non-finite rows. The preprocessing differs between them (identify shows its
+//! defaults, replay takes the model file's): each program sets that itself.
+template <typename Request>
+void copy_shared_settings(const LogWorkflowOptions& o, Request& q) {
+  q.logs = o.logs;
+  q.format = o.format;
+  q.inputs = o.inputs;
+  q.outputs = o.outputs;
+  q.x0 = o.x0;
+  q.warmup = o.warmup;
+  q.drop_non_finite = o.drop_non_finite;
+}
+
 }  // namespace examples

@@ -76,10 +76,7 @@ examples::Parsed parse_options(int argc, const char* const* argv, Options& opt) 
   app.add_option("--out", opt.out_path, "write the model here (JSON)");
   examples::Parsed parsed = examples::parse_command_line(app, argc, argv);
   // The request: what was given, and for the rest the request's own defaults (the format's).
-  q.logs = o.logs;
-  q.format = o.format;
-  q.inputs = o.inputs;
-  q.outputs = o.outputs;
+  examples::copy_shared_settings(o, q);
   if (parsed.was_given("--order")) q.order = order;
   if (parsed.was_given("--method")) q.method = method;
   if (parsed.was_given("--deadzone")) q.deadzone = deadzone;
@@ -88,10 +85,7 @@ examples::Parsed parse_options(int argc, const char* const* argv, Options& opt) 
   if (parsed.was_given("--lowpass")) q.lowpass = o.pre.cutoff;
   q.offset = o.offset;
   q.input_offset = o.input_offset;
-  q.x0 = o.x0;
-  q.warmup = o.warmup;
   if (parsed.was_given("--max-time-constant")) q.max_time_constant = max_time_constant;
-  q.drop_non_finite = o.drop_non_finite;
   return parsed;
 }
 

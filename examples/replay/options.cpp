@@ -22,12 +22,7 @@ examples::Parsed parse_options(int argc, const char* const* argv, Options& opt) 
   app.add_option("--plot", opt.plot_path, "measured vs simulated as PNG (gnuplot pngcairo)");
   examples::Parsed parsed = examples::parse_command_line(app, argc, argv);
   // The request: preprocessing the model file records unless an option says otherwise.
-  q.logs = o.logs;
-  q.format = o.format;
-  q.inputs = o.inputs;
-  q.outputs = o.outputs;
-  q.x0 = o.x0;
-  q.warmup = o.warmup;
+  examples::copy_shared_settings(o, q);
   if (o.ts > 0.0) q.csv_row_time = o.ts;  // > 0 when given
   if (parsed.was_given("--lowpass")) q.lowpass = o.pre.cutoff;
   if (parsed.was_given("--filter-order")) q.filter_order = o.pre.filter_order;
@@ -37,7 +32,6 @@ examples::Parsed parse_options(int argc, const char* const* argv, Options& opt) 
   if (parsed.was_given("--min-segment")) q.min_segment = o.pre.min_segment;
   if (parsed.was_given("--offset")) q.offset = o.offset;
   if (parsed.was_given("--input-offset")) q.input_offset = o.input_offset;
-  q.drop_non_finite = o.drop_non_finite;
   return parsed;
 }
 
