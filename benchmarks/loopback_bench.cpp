@@ -320,6 +320,12 @@ void BM_Baseline_udp_ping_pong_ppoll(benchmark::State& st) { ping_pong(st, Wait:
 void BM_Baseline_udp_ping_pong_transport_wait(benchmark::State& st) {
   ping_pong(st, Wait::transport);
 }
+// Both ends waiting as the transports do, on one CPU: the wire with the loop's wait and none of
+// its work, beside BM_Loopback_max_rate_one_cpu.
+void BM_Baseline_udp_ping_pong_transport_wait_one_cpu(benchmark::State& st) {
+  const OneCpu pin;
+  ping_pong(st, Wait::transport);
+}
 
 // The floor: a bare absolute-deadline clock_nanosleep loop at 1 kHz on the same machine, its
 // period error measured the same way (LoopStats).
@@ -389,6 +395,11 @@ BENCHMARK(BM_Loopback_max_rate)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 BENCHMARK(BM_Baseline_udp_ping_pong_one_cpu)
+    ->Arg(run_ticks(60000))
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_Baseline_udp_ping_pong_transport_wait_one_cpu)
     ->Arg(run_ticks(60000))
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond)
