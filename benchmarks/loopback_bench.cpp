@@ -38,6 +38,7 @@
 #include <thread>
 #include <type_traits>
 
+#include "cpu_pinning.hpp"
 #include "loopback_emulator.hpp"
 #include "smoke_pass.hpp"
 
@@ -270,47 +271,26 @@ void ping_pong(benchmark::State& st, Wait wait) {
   st.SetItemsProcessed(done);
 }
 
-// Both ends on one CPU: the calling thread is pinned to the first CPU it may use, the other end's
-// thread (started inside) inherits that, and the old mask comes back at the end. Where the two
-// ends run decides a loopback rate more than anything they do (docs/performance.md: a wake-up on
-// another virtual CPU costs an inter-processor interrupt), so the _one_cpu pair compares the loop
-// with the wire placed alike.
-class OneCpu {
- public:
-  OneCpu() {
-    (void)::sched_getaffinity(0, sizeof saved_, &saved_);
-    cpu_set_t one;
-    CPU_ZERO(&one);
-    for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu) {
-      if (CPU_ISSET(static_cast<unsigned>(cpu), &saved_)) {
-        CPU_SET(static_cast<unsigned>(cpu), &one);
-        break;
-      }
-    }
-    (void)::sched_setaffinity(0, sizeof one, &one);
-  }
-  ~OneCpu() { (void)::sched_setaffinity(0, sizeof saved_, &saved_); }
-  OneCpu(const OneCpu&) = delete;
-  OneCpu& operator=(const OneCpu&) = delete;
-
- private:
-  cpu_set_t saved_{};
-};
+// Both ends on one CPU (the _one_cpu variants): the calling thread is pinned to the first CPU it
+// may use, the other end's thread (started inside) inherits that, and the old mask comes back at
+// the end. Where the two ends run decides a loopback rate more than anything they do
+// (docs/performance.md: a wake-up on another virtual CPU costs an inter-processor interrupt), so
+// the _one_cpu pair compares the loop with the wire placed alike.
 
 void BM_Baseline_udp_ping_pong(benchmark::State& st) { ping_pong(st, Wait::blocking); }
 void BM_Baseline_udp_ping_pong_one_cpu(benchmark::State& st) {
-  const OneCpu pin;
+  const bench::PinnedTo pin(bench::allowed_cpus().first);
   ping_pong(st, Wait::blocking);
 }
 void BM_Loopback_max_rate_one_cpu(benchmark::State& st) {
-  const OneCpu pin;
+  const bench::PinnedTo pin(bench::allowed_cpus().first);
   run_loop(st, nanoseconds(0), nanoseconds(0));
 }
 // The same two placements with the loop's transport spinning 50 us before it blocks
 // (UdpConfig::receive_spin: non-blocking reads, yielding between them): what the spin buys where
 // the wake-up of a blocked thread is what costs.
 void BM_Loopback_max_rate_one_cpu_spin(benchmark::State& st) {
-  const OneCpu pin;
+  const bench::PinnedTo pin(bench::allowed_cpus().first);
   run_loop(st, nanoseconds(0), nanoseconds(0), false, std::chrono::microseconds(50));
 }
 void BM_Loopback_max_rate_spin(benchmark::State& st) {
@@ -323,7 +303,7 @@ void BM_Baseline_udp_ping_pong_transport_wait(benchmark::State& st) {
 // Both ends waiting as the transports do, on one CPU: the wire with the loop's wait and none of
 // its work, beside BM_Loopback_max_rate_one_cpu.
 void BM_Baseline_udp_ping_pong_transport_wait_one_cpu(benchmark::State& st) {
-  const OneCpu pin;
+  const bench::PinnedTo pin(bench::allowed_cpus().first);
   ping_pong(st, Wait::transport);
 }
 

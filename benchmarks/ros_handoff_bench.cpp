@@ -34,6 +34,7 @@
 #include <endohaptics/teleop/realtime.hpp>
 
 #include "../examples/ros_bridge/ros_conversion.hpp"
+#include "cpu_pinning.hpp"
 #include "smoke_pass.hpp"
 
 namespace ros_handoff_bench {
@@ -61,17 +62,11 @@ tp::TickResult sample_tick() {
   return r;
 }
 
-// The loop thread's hand-off, as RosPublisher::on_tick does it (the once-a-second figures aside).
+// The loop thread's hand-off, as RosPublisher::on_tick does it (the once-a-second figures aside):
+// the message built by ros_bridge::tick_message, then pushed.
 bool hand_off(Queue& queue, const tp::TickResult& r, std::chrono::nanoseconds now) noexcept {
-  ros_bridge::TickMessage m;
-  m.record = tp::TickRecord::from(r, now);
-  m.wall_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
-                  std::chrono::system_clock::now().time_since_epoch())
-                  .count();
-  m.input_stamp_ns = m.wall_ns - 200'000;
-  m.input_fresh = true;
-  m.valid_state = true;
-  return queue.push(m);
+  // The stylus message's stamp is the device's stored value in the bridge: a constant here.
+  return queue.push(ros_bridge::tick_message(r, now, /*input_stamp_ns=*/1, /*input_fresh=*/true));
 }
 
 // What the publisher does with a message, in kind: six messages filled (heap-allocated vectors
@@ -98,46 +93,6 @@ std::size_t publish_like(const ros_bridge::TickMessage& m, std::vector<std::uint
   }
   return bytes;
 }
-
-// The first and the last CPU the process may use, read once before any thread pins itself (a
-// thread inherits the mask of the thread that starts it).
-struct Cpus {
-  int first = -1;
-  int last = -1;
-};
-Cpus allowed_cpus() {
-  cpu_set_t set;
-  CPU_ZERO(&set);
-  Cpus cpus;
-  if (::sched_getaffinity(0, sizeof set, &set) != 0) return cpus;
-  for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu) {
-    if (!CPU_ISSET(static_cast<unsigned>(cpu), &set)) continue;
-    if (cpus.first < 0) cpus.first = cpu;
-    cpus.last = cpu;
-  }
-  return cpus;
-}
-
-// Pins the calling thread to `cpu` (nothing for -1) and restores its old mask at the end.
-class PinnedTo {
- public:
-  explicit PinnedTo(int cpu) {
-    if (cpu < 0 || ::sched_getaffinity(0, sizeof saved_, &saved_) != 0) return;
-    cpu_set_t one;
-    CPU_ZERO(&one);
-    CPU_SET(static_cast<unsigned>(cpu), &one);
-    pinned_ = ::sched_setaffinity(0, sizeof one, &one) == 0;
-  }
-  ~PinnedTo() {
-    if (pinned_) (void)::sched_setaffinity(0, sizeof saved_, &saved_);
-  }
-  PinnedTo(const PinnedTo&) = delete;
-  PinnedTo& operator=(const PinnedTo&) = delete;
-
- private:
-  cpu_set_t saved_{};
-  bool pinned_ = false;
-};
 
 // Runs `ticks` hand-offs paced at 1 kHz (absolute deadlines), each timed alone; `after` runs
 // untimed after each one (the same-thread drain, or nothing).
@@ -177,8 +132,8 @@ void paced_handoffs(benchmark::State& st, Queue& queue, After&& after) {
 }
 
 void BM_Baseline_ros_handoff_same_thread(benchmark::State& st) {
-  const Cpus cpus = allowed_cpus();
-  const PinnedTo loop_cpu(cpus.last);
+  const bench::Cpus cpus = bench::allowed_cpus();
+  const bench::PinnedTo loop_cpu(cpus.last);
   Queue queue(4096);
   tp::prefault_ring(queue, ros_bridge::TickMessage{});  // as RosPublisher does
   std::vector<std::uint8_t> wire;
@@ -193,14 +148,14 @@ void BM_Baseline_ros_handoff_same_thread(benchmark::State& st) {
 // The bridge's arrangement; `mapped`: the ring prefaulted as RosPublisher does (false: as it was
 // before, its pages first touched by the timed pushes).
 void consumer_other_cpu(benchmark::State& st, bool mapped) {
-  const Cpus cpus = allowed_cpus();  // before this thread pins itself
+  const bench::Cpus cpus = bench::allowed_cpus();  // before this thread pins itself
   Queue queue(4096);
   if (mapped) tp::prefault_ring(queue, ros_bridge::TickMessage{});
   std::atomic<bool> done{false};
   std::atomic<int> publisher_cpu{-1};
   std::size_t bytes = 0;
   std::thread publisher([&] {
-    const PinnedTo other(cpus.first);
+    const bench::PinnedTo other(cpus.first);
     publisher_cpu.store(::sched_getcpu());
     std::vector<std::uint8_t> wire;
     while (!done.load(std::memory_order_relaxed)) {
@@ -209,7 +164,7 @@ void consumer_other_cpu(benchmark::State& st, bool mapped) {
     }
   });
   {
-    const PinnedTo loop_cpu(cpus.last);
+    const bench::PinnedTo loop_cpu(cpus.last);
     paced_handoffs(st, queue, [] {});
   }
   done.store(true);

@@ -264,15 +264,7 @@ class RosPublisher {
   template <typename Loop>
   void on_tick(const endohaptics::teleop::TickResult& r, nanoseconds now, const Loop& loop,
                const RosStylus& stylus) noexcept {
-    TickMessage m;
-    m.record = endohaptics::teleop::TickRecord::from(r, now);
-    m.wall_ns =
-        std::chrono::duration_cast<nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
-            .count();
-    m.input_stamp_ns = stylus.used_stamp();
-    m.input_fresh = stylus.used_fresh();
-    m.valid_state = r.link != endohaptics::teleop::LinkState::waiting &&
-                    r.link != endohaptics::teleop::LinkState::lost;
+    const TickMessage m = tick_message(r, now, stylus.used_stamp(), stylus.used_fresh());
     if (!queue_.push(m)) dropped_.fetch_add(1, std::memory_order_relaxed);
     if (now >= next_second_) {
       if (next_second_.count() == 0) {

@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <endohaptics/protocol/motor_order.hpp>
@@ -66,6 +67,23 @@ struct TickMessage {
   bool input_fresh = false;         //!< that message was first used in this tick
   bool valid_state = false;         //!< the loop has a valid state (false: measured stamp 0)
 };
+
+//! The message for tick result `r`, stamped `now` on the loop clock and with the system time at
+//! the call; `input_stamp_ns` and `input_fresh` say which stylus message the tick used. Loop
+//! thread: noexcept, no allocation.
+[[nodiscard]] inline TickMessage tick_message(const tp::TickResult& r, std::chrono::nanoseconds now,
+                                              std::int64_t input_stamp_ns,
+                                              bool input_fresh) noexcept {
+  TickMessage m;
+  m.record = tp::TickRecord::from(r, now);
+  m.wall_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                  std::chrono::system_clock::now().time_since_epoch())
+                  .count();
+  m.input_stamp_ns = input_stamp_ns;
+  m.input_fresh = input_fresh;
+  m.valid_state = r.link != tp::LinkState::waiting && r.link != tp::LinkState::lost;
+  return m;
+}
 
 //! The operating state published on `operating_state`: "waiting" before the first valid state,
 //! "link up" (up, degraded, recovering), "link lost" while the lost link holds the motors,

@@ -2,9 +2,11 @@
 
 #include <doctest/doctest.h>
 
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "ros_conversion.hpp"  // examples/ros_bridge: no ROS in it, so tested without ROS
@@ -165,6 +167,32 @@ TEST_CASE("the operating state says waiting, link up, link lost or safe") {
   CHECK(rb::operating_state(r) == "safe");
   r.link = tp::LinkState::up;  // a lost operator: released with the link up
   CHECK(rb::operating_state(r) == "safe");
+}
+
+TEST_CASE("the tick's message: its record, the stylus message it used, a valid state or not") {
+  tp::TickResult r;
+  r.status = tp::TickStatus::ok;
+  r.setpoint << 0.1, -0.2, 0.3, -0.3;
+  rb::TickMessage m;
+  const long allocations = endohaptics::test::allocations_during(
+      [&] { m = rb::tick_message(r, std::chrono::milliseconds(2500), 1234, true); });
+  CHECK(allocations == 0);
+  CHECK(m.record.time == doctest::Approx(2.5));
+  CHECK(m.record.setpoint[2] == 0.3);
+  CHECK(m.input_stamp_ns == 1234);
+  CHECK(m.input_fresh);
+  CHECK(m.wall_ns > 0);  // the system time, for the published stamps
+  // Valid while the link is up, degraded or recovering; not before the first state or when lost.
+  const std::pair<tp::LinkState, bool> cases[] = {{tp::LinkState::waiting, false},
+                                                  {tp::LinkState::up, true},
+                                                  {tp::LinkState::degraded, true},
+                                                  {tp::LinkState::lost, false},
+                                                  {tp::LinkState::recovering, true}};
+  for (const auto& c : cases) {
+    r.link = c.first;
+    CAPTURE(tp::to_string(c.first));
+    CHECK(rb::tick_message(r, std::chrono::milliseconds(1), 0, false).valid_state == c.second);
+  }
 }
 
 }  // namespace ros_conversion_test

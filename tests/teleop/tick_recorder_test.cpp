@@ -121,7 +121,8 @@ long minor_faults() {
 }
 
 TEST_CASE("the ring is mapped at construction: the loop's first pass takes no page fault") {
-  // 20000 records of about 300 bytes cross some 1500 pages the first time they are written.
+  // 20000 records of 256 bytes cross some 1250 pages the first time they are written (1407 minor
+  // faults measured without the mapping, under ASan).
   tp::TickRecorder recorder;
   tp::TickResult r;
   r.status = tp::TickStatus::ok;

@@ -133,7 +133,7 @@ inline RealtimeReport apply_realtime(const RealtimeOptions& options) {
 //! `write_available`, `push` and `consume_all`), at configuration time and before its consumer
 //! runs: every slot is written once with `value`, then the ring is emptied. Such a ring's storage
 //! is allocated uninitialized, so without this the loop thread's first pass over it takes a
-//! first-touch page fault every few pushes (microseconds each: one push in about 13 for a
+//! first-touch page fault every few pushes (microseconds each: one push in 16 for a 256-byte
 //! TickRecord). mlockall (RealtimeOptions::lock_memory) maps the whole process instead, when the
 //! system allows it.
 template <typename Ring, typename T>
