@@ -166,31 +166,51 @@ TEST_CASE("passivity sweep: 200 ms round trip, TDPA stable at every loss and con
 }
 
 // The sensorless estimate (docs/passivity.md, "With the sensorless estimate"): a clamp model
-// identified once per test process (the identification is most of these cases' time), the
-// current through a play of the clamp's static friction. With TDPA every case meets every
-// criterion, the hold felt (felt / true >= 0.5) up to 100 ms; without TDPA the identified loop is
-// stable at the stiff stop at 20 ms and unstable from 50 ms.
-TEST_CASE("passivity sweep: identified with TDPA, 0 and 20 ms, every criterion") {
-  for (const int ms : {0, 20}) check_identified_row(ms);
-  const sim::PressReport without =
-      run(scenario(20, 0.0, sim::ContactKind::stiff_stop, tp::PassivityMode::observe,
-                   sim::ForceSource::identified, identified_clamp()),
-          seconds_without);
-  CHECK(sim::press_stable_without(without));
-}
-TEST_CASE("passivity sweep: identified with TDPA, 50 ms, every criterion") {
-  check_identified_row(50);
-  const sim::PressReport without =
-      run(scenario(50, 0.0, sim::ContactKind::stiff_stop, tp::PassivityMode::observe,
-                   sim::ForceSource::identified, identified_clamp()),
-          seconds_without);
-  CHECK_FALSE(sim::press_stable_without(without));
-}
-TEST_CASE("passivity sweep: identified with TDPA, 100 ms, every criterion") {
-  check_identified_row(100);
-}
-TEST_CASE("passivity sweep: identified with TDPA, 200 ms, every criterion") {
-  check_identified_row(200);
+// identified on the training presses, the current through a play of the clamp's static friction.
+// With TDPA every case meets every criterion, the hold felt (felt / true >= 0.5) up to 100 ms;
+// without TDPA the identified loop is stable at the stiff stop at 20 ms and unstable from 50 ms.
+// One test case with a subcase per round trip: the model is identified once per process (3.3 s
+// of the sanitized build's CPU, most of each case's time; five cases identified it five times).
+TEST_CASE("passivity sweep: identified with TDPA, every round trip, every criterion") {
+  SUBCASE("the identified model's current play is the clamp's static friction") {
+    // K_s of the simulated clamp in the current domain (docs/models/sim.md: clamp 1 0.21 A), the
+    // demo's play for the emulator's clamp 1 (examples/demo.sh); the request the sweep identifies
+    // with is the demo's for pitch and the clamps.
+    CHECK(sim::clamp_current_play() == doctest::Approx(0.21));
+    const auto r = sweep_identify::training_request({"a.csv"});
+    CHECK(r.current_play == sim::clamp_current_play());
+    CHECK(r.order == "auto");
+    CHECK(r.max_order == 4);
+    CHECK(r.deadzone == "0,auto");
+    // The model identified so: its play and its free-motion error bound on the training presses,
+    // the tolerance the sweep's scenarios use.
+    const auto* hw =
+        identified_model().get<endohaptics::estimation::IdentifiedHammersteinWiener<double>>();
+    REQUIRE(hw != nullptr);
+    CHECK(hw->current_play() == sim::clamp_current_play());
+    // Measured on the training presses (0.014 N when the sweep's table was recorded): within the
+    // stylus's free-motion goal of 0.05 N, and the bound the scenarios carry.
+    CHECK(identified_clamp().free_motion_error > 0.0);
+    CHECK(identified_clamp().free_motion_error < 0.05);
+  }
+  SUBCASE("0 and 20 ms") {
+    for (const int ms : {0, 20}) check_identified_row(ms);
+    const sim::PressReport without =
+        run(scenario(20, 0.0, sim::ContactKind::stiff_stop, tp::PassivityMode::observe,
+                     sim::ForceSource::identified, identified_clamp()),
+            seconds_without);
+    CHECK(sim::press_stable_without(without));
+  }
+  SUBCASE("50 ms") {
+    check_identified_row(50);
+    const sim::PressReport without =
+        run(scenario(50, 0.0, sim::ContactKind::stiff_stop, tp::PassivityMode::observe,
+                     sim::ForceSource::identified, identified_clamp()),
+            seconds_without);
+    CHECK_FALSE(sim::press_stable_without(without));
+  }
+  SUBCASE("100 ms") { check_identified_row(100); }
+  SUBCASE("200 ms") { check_identified_row(200); }
 }
 
 // What the play replaces: the model with a current dead zone (order 2, as before the play) reads
@@ -250,28 +270,6 @@ TEST_CASE("passivity closed loop: the stiction memory's settings are the instrum
   CHECK_FALSE(scenario(0, 0.0, sim::ContactKind::soft_tissue, tp::PassivityMode::tdpa,
                        sim::ForceSource::preset_2016)
                   .stiction_memory);
-}
-
-TEST_CASE("passivity sweep: the identified model's current play is the clamp's static friction") {
-  // K_s of the simulated clamp in the current domain (docs/models/sim.md: clamp 1 0.21 A), the
-  // demo's play for the emulator's clamp 1 (examples/demo.sh); the request the sweep identifies
-  // with is the demo's for pitch and the clamps.
-  CHECK(sim::clamp_current_play() == doctest::Approx(0.21));
-  const auto r = sweep_identify::training_request({"a.csv"});
-  CHECK(r.current_play == sim::clamp_current_play());
-  CHECK(r.order == "auto");
-  CHECK(r.max_order == 4);
-  CHECK(r.deadzone == "0,auto");
-  // The model identified so: its play and its free-motion error bound on the training presses,
-  // the tolerance the sweep's scenarios use.
-  const auto* hw =
-      identified_model().get<endohaptics::estimation::IdentifiedHammersteinWiener<double>>();
-  REQUIRE(hw != nullptr);
-  CHECK(hw->current_play() == sim::clamp_current_play());
-  // Measured on the training presses (0.014 N when the sweep's table was recorded): within the
-  // stylus's free-motion goal of 0.05 N, and the bound the scenarios carry.
-  CHECK(identified_clamp().free_motion_error > 0.0);
-  CHECK(identified_clamp().free_motion_error < 0.05);
 }
 
 TEST_CASE("passivity closed loop: the stiction hold keeps a stuck joint's force through zero") {
