@@ -1,8 +1,17 @@
-// Built against an installed endohaptics: includes the umbrella header and round-trips a packet,
-// then (component model_files) round-trips the appendix C yaw model through its JSON form, and
-// (component secure_protocol, when the consumer links it: ENDOHAPTICS_CONSUMER_SECURE_PROTOCOL)
+// Built against an installed endohaptics (or one added with add_subdirectory): round-trips a
+// packet, then (component model_files) round-trips the appendix C yaw model through its JSON form,
+// and (component secure_protocol, when the consumer links it: ENDOHAPTICS_CONSUMER_SECURE_PROTOCOL)
 // seals and opens a protocol v2 setpoint (libsodium).
+// The find_package consumer includes the umbrella header (the whole library, its offline layers in
+// header-only form: 11 s of clang's time); the add_subdirectory consumer
+// (ENDOHAPTICS_CONSUMER_COMPONENT_HEADERS) the headers it uses, which is what it tests (the
+// targets and their include paths through add_subdirectory), in 3 s.
+#if defined(ENDOHAPTICS_CONSUMER_COMPONENT_HEADERS)
+#include <endohaptics/model/presets_2016.hpp>
+#include <endohaptics/protocol/packet_codec.hpp>
+#else
 #include <endohaptics/endohaptics.hpp>
+#endif
 #include <endohaptics/files/model_file.hpp>
 #if defined(ENDOHAPTICS_CONSUMER_SECURE_PROTOCOL)
 #include <endohaptics/protocol/secure_codec.hpp>
