@@ -355,21 +355,23 @@ def case_drop_in(work):
     if worst > 1.0 + 1e-6:
         problems.append(f"a setpoint step beyond 4 rad/s (largest step {max_step} rad)")
     # The setpoint held through each loss: while the operator is lost the loop follows no input.
-    # One change is allowed, to where the tool is: a link that recovers during the loss restarts
-    # the rate limiter from the measured position (of the tick before or this one; the motors are
-    # released, so it moves nothing). A loaded machine can lose the operator more than once.
+    # One change is allowed, to where the tool is, on the tick after the link recovered (link state
+    # 3 lost -> 4 recovering) during the loss: the recovery restarts the rate limiter from that
+    # tick's measured position (the motors are released, so it moves nothing). The loss itself is
+    # counted below: the stand-in stops once, so one loss, one status-4 stretch in the tick log.
     episodes = 0
-    for a, b in zip([None] + rows, rows):
+    for i, b in enumerate(rows):
         if int(b["status"]) != 4:
             continue
+        a = rows[i - 1] if i > 0 else None
         if a is None or int(a["status"]) != 4:
             episodes += 1
             continue
         if all(a[f"setpoint{j}"] == b[f"setpoint{j}"] for j in range(4)):
             continue
-        restarted = any(
-            all(abs(float(b[f"setpoint{j}"]) - float(r[f"position{j}"])) <= 1e-6 for j in range(4))
-            for r in (a, b))
+        restarted = (i >= 2 and int(a["link"]) == 4 and int(rows[i - 2]["link"]) == 3 and
+                     all(abs(float(b[f"setpoint{j}"]) - float(a[f"position{j}"])) <= 1e-6
+                         for j in range(4)))
         if not restarted:
             problems.append(f"the setpoint moved while the operator was lost (t = {b['time']})")
             break
