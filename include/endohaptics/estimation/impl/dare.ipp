@@ -9,8 +9,10 @@ namespace endohaptics::estimation::detail {
 template DareSolution<Eigen::Dynamic, double> solve_filter_dare_dynamic<double>(
     const DynamicMatrix<double>&, const DynamicMatrix<double>&, const DynamicMatrix<double>&,
     const DynamicMatrix<double>&, const DareOptions<double>&, double);
-template DynamicMatrix<double> filter_riccati_defect<double>(
-    const DynamicMatrix<double>&, const DynamicMatrix<double>&, const DynamicMatrix<double>&,
-    const DynamicMatrix<double>&, const DynamicMatrix<double>&);
+template DynamicMatrix<double> filter_riccati_defect<double>(const DynamicMatrix<double>&,
+                                                             const DynamicMatrix<double>&,
+                                                             const DynamicMatrix<double>&,
+                                                             const DynamicMatrix<double>&,
+                                                             const DynamicMatrix<double>&);
 
 }  // namespace endohaptics::estimation::detail
