@@ -4,6 +4,7 @@
 
 #include "../cli_numbers.hpp"
 #include "../parse_command_line.hpp"
+#include "../robot_side_options.hpp"
 
 namespace emulator {
 
@@ -51,22 +52,11 @@ void add_options(CLI::App& app, Options& o) {
                  "first peer's address and port are pinned)")
       ->check(CLI::IsMember({"2", "2016"}))
       ->capture_default_str();
-  app.add_option("--key", o.key_paths,
-                 "protocol v2: the 32-byte key file (mode 0600); give it twice while a key is "
-                 "changed over (the key in use and its successor)");
-  app.add_option("--rig", o.rig_name,
-                 "protocol v2: this robot side's name (1-16 printable characters), bound into "
-                 "every session key: a console for another rig is refused")
-      ->capture_default_str();
+  examples::add_robot_side_v2_options(app, o.key_paths, o.rig_name, o.max_round_trip_ms,
+                                      "protocol v2: ", "the watchdog + --delay + --jitter");
   app.add_option("--peer", o.peer,
                  "protocol 2016: obey only the console at HOST:PORT (default: the first one "
                  "heard, released after --watchdog-ms of its silence)");
-  app.add_option("--max-round-trip", o.max_round_trip_ms,
-                 "protocol v2: the longest round trip granted, ms: a setpoint is obeyed only "
-                 "if the state it acknowledges answered a setpoint received at most this long "
-                 "ago (0: the watchdog + --delay + --jitter)")
-      ->check(examples::number_in(0.0, 10000.0))
-      ->capture_default_str();
   app.add_option("--generate-key", o.generate_key,
                  "write a new random key file (mode 0600; refuses an existing file) and exit");
 }

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "../cli_numbers.hpp"
+#include "../robot_side_options.hpp"
 
 namespace gateway {
 
@@ -66,24 +67,13 @@ inline void add_options(CLI::App& app, Options& o) {
                  "HOST:PORT of the sbRIO on the point-to-point link (plain 2016 wire; only its "
                  "datagrams are taken)")
       ->capture_default_str();
-  app.add_option("--key", o.key_paths,
-                 "the 32-byte key file (mode 0600) the console holds; give it twice while a key "
-                 "is changed over (the key in use and its successor)");
-  app.add_option("--rig", o.rig_name,
-                 "this robot side's name (1-16 printable characters), bound into every session "
-                 "key: a console for another rig is refused")
-      ->capture_default_str();
   app.add_option("--watchdog-ms", o.watchdog_ms,
                  "no setpoint relayed for this long: send the sbRIO the all-disabled setpoint, "
                  "once a millisecond")
       ->check(examples::number_in(1.0, 10000.0))
       ->capture_default_str();
-  app.add_option("--max-round-trip", o.max_round_trip_ms,
-                 "the longest round trip granted, ms: a setpoint is obeyed only if the state it "
-                 "acknowledges answered a setpoint received at most this long ago (0: the "
-                 "watchdog)")
-      ->check(examples::number_in(0.0, 10000.0))
-      ->capture_default_str();
+  examples::add_robot_side_v2_options(app, o.key_paths, o.rig_name, o.max_round_trip_ms, "",
+                                      "the watchdog");
   app.add_option("--joint-range", o.joint_range,
                  "rad: every relayed position is kept in [-this, this] on every motor, whatever "
                  "the console sends (the robot side's own envelope)")
