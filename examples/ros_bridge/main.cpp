@@ -10,15 +10,10 @@
 #include "ros1_node.hpp"
 
 int main(int argc, char** argv) {
-  // ROS remappings (name:=other) and __ns/__name/__ip/__master are ROS's, not ours.
-  std::vector<std::string> args;
-  int ros_argc = argc;
-  ros::removeROSArgs(argc, argv, args);
-  std::vector<const char*> cli;
-  for (const auto& a : args) cli.push_back(a.c_str());
+  int ros_argc = argc;  // ros::init takes it by reference
+  const ros_bridge::ProgramArguments cli = ros_bridge::program_arguments(argc, argv);
   ros_bridge::Options ros_opt;
-  const examples::Parsed parsed =
-      ros_bridge::parse_options(static_cast<int>(cli.size()), cli.data(), ros_opt);
+  const examples::Parsed parsed = ros_bridge::parse_options(cli.argc(), cli.argv(), ros_opt);
   if (parsed.exit_code) return *parsed.exit_code;
   bridge::Options& opt = ros_opt.link;
   const std::string& input = ros_opt.input;

@@ -32,6 +32,7 @@
 #include <endohaptics/teleop/realtime.hpp>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "../teleop_bridge/touch_frame.hpp"
 #include "ros_conversion.hpp"
@@ -39,6 +40,23 @@
 namespace ros_bridge {
 
 using std::chrono::nanoseconds;
+
+//! A ROS program's own command line: argv without ROS's arguments (remappings `name:=value`,
+//! `__name:=...`; ros::removeROSArgs), for its option parser. argv() points into `args`.
+struct ProgramArguments {
+  std::vector<std::string> args;      //!< the arguments left for the program
+  std::vector<const char*> pointers;  //!< their C strings, for argv()
+  [[nodiscard]] int argc() const noexcept { return static_cast<int>(pointers.size()); }
+  [[nodiscard]] const char* const* argv() const noexcept { return pointers.data(); }
+};
+
+//! argv without ROS's arguments. ros::init later takes the whole command line.
+inline ProgramArguments program_arguments(int argc, const char* const* argv) {
+  ProgramArguments p;
+  ros::removeROSArgs(argc, argv, p.args);
+  for (const auto& a : p.args) p.pointers.push_back(a.c_str());
+  return p;
+}
 
 //! Where the stylus comes from.
 enum class InputKind : std::uint8_t {

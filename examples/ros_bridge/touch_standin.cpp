@@ -35,15 +35,10 @@ struct ForceInbox {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // ROS remappings (name:=other) and __ns/__name/__ip/__master are ROS's, not ours.
-  std::vector<std::string> args;
-  int ros_argc = argc;
-  ros::removeROSArgs(argc, argv, args);
-  std::vector<const char*> cli;
-  for (const auto& a : args) cli.push_back(a.c_str());
+  int ros_argc = argc;  // ros::init takes it by reference
+  const ros_bridge::ProgramArguments cli = ros_bridge::program_arguments(argc, argv);
   touch_standin::Options o;
-  const examples::Parsed parsed =
-      touch_standin::parse_options(static_cast<int>(cli.size()), cli.data(), o);
+  const examples::Parsed parsed = touch_standin::parse_options(cli.argc(), cli.argv(), o);
   if (parsed.exit_code) return *parsed.exit_code;
   const auto& [mode, rate, duration, stop_after, bad_every, frame, topics] = o;
   const ros_bridge::PhantomOmniTopics omni;
