@@ -8,6 +8,7 @@
 #include <unistd.h>
 #include <algorithm>
 #include <cmath>
+#include <endohaptics/model/stop_operators.hpp>
 #include <endohaptics/workflow/identify_request.hpp>
 #include <functional>
 #include <string>
@@ -135,7 +136,8 @@ inline void chosen(const wf::IdentifyReport& r) {
                  r.request.current_play, sel.inputs[0]);
       if (r.request.current_play_slide || r.request.current_play_viscous != 0.0) {
         fmt::print("  sliding half width {:.4g}, viscous current {:.4g} x {}\n",
-                   r.request.current_play_slide.value_or(r.request.current_play),
+                   endohaptics::model::friction_play_slide(r.request.current_play,
+                                                           r.request.current_play_slide),
                    r.request.current_play_viscous, sel.inputs.size() > 1 ? sel.inputs[1] : "-");
       }
     }

@@ -161,4 +161,22 @@ TEST_CASE("friction play: one rule for its constants, worded with the reader's n
         }) == "--slide and --viscous need a --play");
 }
 
+TEST_CASE("friction play: without a sliding half width it slides at its own, and is the play") {
+  CHECK(md::friction_play_slide(0.13, std::optional<double>()) == 0.13);
+  CHECK(md::friction_play_slide(0.13, std::optional<double>(0.05)) == 0.05);
+  CHECK(md::friction_play_slide(0.13, std::optional<double>(0.0)) == 0.0);  // a given 0 is kept
+  // With the default slide and no viscous term the friction play is play(), sample by sample.
+  const double stick = 0.13;
+  const double slide = md::friction_play_slide(stick, std::optional<double>());
+  double z = 0.0;
+  double sliding = 0.0;
+  double z_play = 0.0;
+  for (const double q : {0.0, 0.1, 0.2, 0.35, 0.3, 0.1, -0.05, -0.2, -0.1, 0.05, 0.3}) {
+    CAPTURE(q);
+    z = md::friction_play(z, sliding, q, stick, slide);
+    z_play = md::play(z_play, q, stick);
+    CHECK(z == doctest::Approx(z_play));
+  }
+}
+
 }  // namespace model_stop_operators_test

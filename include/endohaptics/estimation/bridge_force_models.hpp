@@ -69,7 +69,7 @@ class IdentifiedHammersteinWiener : public ClampModel2016<Scalar> {
       : Base(std::move(model)),
         threshold_(threshold),
         play_(current_play),
-        slide_(current_play_slide.value_or(play_)),
+        slide_(model::friction_play_slide(play_, current_play_slide)),
         viscous_(current_play_viscous) {
     model::check_friction_play(static_cast<double>(play_),
                                current_play_slide

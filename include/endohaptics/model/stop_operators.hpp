@@ -58,6 +58,15 @@ template <typename Scalar>
   return z;
 }
 
+//! The sliding half width a friction play runs with: `slide` when given, else the play's own
+//! half width `stick` (no Coulomb drop: friction_play is then play()). The one place that default
+//! is decided, for the model files, identify's request and the bridge's force models.
+template <typename Scalar>
+[[nodiscard]] constexpr Scalar friction_play_slide(Scalar stick,
+                                                   std::optional<Scalar> slide) noexcept {
+  return slide ? *slide : stick;
+}
+
 //! The names a friction play's three constants go by where they are read (a model file's keys by
 //! default; identify's options; a constructor's parameters), for check_friction_play's messages.
 struct FrictionPlayNames {

@@ -4,6 +4,7 @@
 //! (core/separate_compilation.hpp).
 #pragma once
 
+#include "endohaptics/model/stop_operators.hpp"
 #include "endohaptics/workflow/identify_request.hpp"
 
 namespace endohaptics::workflow {
@@ -152,7 +153,7 @@ ENDOHAPTICS_DECL IdentifyReport run_identify(const IdentifyRequest& request,
               "one whose input the play is (the joint models hold their own "
               "friction)"));
   }
-  const double slide = request.current_play_slide.value_or(request.current_play);
+  const double slide = model::friction_play_slide(request.current_play, request.current_play_slide);
   if (request.current_play > 0.0) {
     for (auto* logs : {&r.fit_logs, &r.score_logs}) {
       for (PreparedLog& log : *logs) {

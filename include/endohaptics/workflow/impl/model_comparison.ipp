@@ -6,6 +6,7 @@
 
 #include <utility>
 
+#include "endohaptics/model/stop_operators.hpp"
 #include "endohaptics/workflow/model_comparison.hpp"
 
 namespace endohaptics::workflow {
@@ -92,10 +93,10 @@ ENDOHAPTICS_DECL FileComparison compare_log(const files::ModelFile& model, const
                                [&] { return Eigen::MatrixXd(simulate_joint_model(model, d.u)); });
     } else {
       const Eigen::MatrixXd u = apply_maps(
-          in_maps,
-          identification::played_input(d.u, model.current_play,
-                                       model.current_play_slide.value_or(model.current_play),
-                                       model.current_play_viscous));
+          in_maps, identification::played_input(d.u, model.current_play,
+                                                endohaptics::model::friction_play_slide(
+                                                    model.current_play, model.current_play_slide),
+                                                model.current_play_viscous));
       Eigen::VectorXd x0 = Eigen::VectorXd::Zero(linear.state_size());
       switch (options.initial_state) {
         case InitialStateMode::oracle:
