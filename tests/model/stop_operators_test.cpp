@@ -162,12 +162,12 @@ TEST_CASE("friction play: one rule for its constants, worded with the reader's n
 }
 
 TEST_CASE("friction play: without a sliding half width it slides at its own, and is the play") {
-  CHECK(md::friction_play_slide(0.13, std::optional<double>()) == 0.13);
+  CHECK(md::friction_play_slide(0.13, std::nullopt) == 0.13);
   CHECK(md::friction_play_slide(0.13, std::optional<double>(0.05)) == 0.05);
   CHECK(md::friction_play_slide(0.13, std::optional<double>(0.0)) == 0.0);  // a given 0 is kept
   // With the default slide and no viscous term the friction play is play(), sample by sample.
   const double stick = 0.13;
-  const double slide = md::friction_play_slide(stick, std::optional<double>());
+  const double slide = md::friction_play_slide(stick, std::nullopt);
   double z = 0.0;
   double sliding = 0.0;
   double z_play = 0.0;

@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <type_traits>
 
 #include "endohaptics/core/error.hpp"
 #include "endohaptics/model/joint_model_bounds.hpp"
@@ -60,10 +61,11 @@ template <typename Scalar>
 
 //! The sliding half width a friction play runs with: `slide` when given, else the play's own
 //! half width `stick` (no Coulomb drop: friction_play is then play()). The one place that default
-//! is decided, for the model files, identify's request and the bridge's force models.
+//! is decided: identify's request and report, the model comparison and the bridge's force model
+//! (estimation::IdentifiedHammersteinWiener) call it.
 template <typename Scalar>
-[[nodiscard]] constexpr Scalar friction_play_slide(Scalar stick,
-                                                   std::optional<Scalar> slide) noexcept {
+[[nodiscard]] constexpr Scalar friction_play_slide(
+    Scalar stick, std::type_identity_t<std::optional<Scalar>> slide) noexcept {
   return slide ? *slide : stick;
 }
 
