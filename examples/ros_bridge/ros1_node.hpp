@@ -337,12 +337,13 @@ class RosPublisher {
         ros::Time wall;
         wall.fromNSec(static_cast<std::uint64_t>(m.wall_ns));
         const auto& r = m.record;
-        fill_joint_state(js, m.valid_state ? wall : ros::Time(), &r.position, &r.velocity,
+        fill_joint_state(js, m.valid_state() ? wall : ros::Time(), &r.position, &r.velocity,
                          &r.current);
         measured_js_.publish(js);
         fill_joint_state(sp, wall, &r.setpoint, nullptr, nullptr);
         setpoint_js_.publish(sp);
-        fill_joint_state(jf, m.valid_state ? wall : ros::Time(), nullptr, nullptr, &r.motor_force);
+        fill_joint_state(jf, m.valid_state() ? wall : ros::Time(), nullptr, nullptr,
+                         &r.motor_force);
         measured_jf_.publish(jf);
         const Eigen::Vector3d f_touch = bridge::mapping_to_touch_force(r.stylus_force);
         cf.header.stamp = wall;

@@ -65,7 +65,9 @@ struct TickMessage {
   std::int64_t wall_ns = 0;         //!< system time at the end of the tick (the stamps)
   std::int64_t input_stamp_ns = 0;  //!< stamp of the stylus message this tick used (0: none)
   bool input_fresh = false;         //!< that message was first used in this tick
-  bool valid_state = false;         //!< the loop has a valid state (false: measured stamp 0)
+
+  //! The loop has a valid state (false: the measured messages are stamped 0).
+  [[nodiscard]] bool valid_state() const noexcept { return tp::holds_valid_state(record.link); }
 };
 
 //! The message for tick result `r`, stamped `now` on the loop clock and with the system time at
@@ -81,7 +83,6 @@ struct TickMessage {
                   .count();
   m.input_stamp_ns = input_stamp_ns;
   m.input_fresh = input_fresh;
-  m.valid_state = r.link != tp::LinkState::waiting && r.link != tp::LinkState::lost;
   return m;
 }
 

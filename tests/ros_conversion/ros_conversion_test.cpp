@@ -191,7 +191,7 @@ TEST_CASE("the tick's message: its record, the stylus message it used, a valid s
   for (const auto& c : cases) {
     r.link = c.first;
     CAPTURE(tp::to_string(c.first));
-    CHECK(rb::tick_message(r, std::chrono::milliseconds(1), 0, false).valid_state == c.second);
+    CHECK(rb::tick_message(r, std::chrono::milliseconds(1), 0, false).valid_state() == c.second);
   }
 }
 

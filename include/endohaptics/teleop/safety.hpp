@@ -59,6 +59,12 @@ enum class LinkState : std::uint8_t {
   recovering,  //!< valid packets again after a loss: force ramps back in
 };
 
+//! Whether the link holds a valid state in `s`: up, degraded or recovering (not before the first
+//! valid state, not once it is lost).
+[[nodiscard]] constexpr bool holds_valid_state(LinkState s) noexcept {
+  return s != LinkState::waiting && s != LinkState::lost;
+}
+
 //! The state's name for logs ("waiting", "up", "degraded", "lost", "recovering").
 [[nodiscard]] constexpr std::string_view to_string(LinkState s) noexcept {
   switch (s) {
@@ -209,7 +215,7 @@ class Watchdog {
   LinkState fault() noexcept {
     if (misses_ < std::numeric_limits<int>::max()) ++misses_;
     ++total_misses_;
-    if (state_ != LinkState::waiting && state_ != LinkState::lost) {
+    if (holds_valid_state(state_)) {
       state_ = LinkState::lost;
       ++losses_;
     }
