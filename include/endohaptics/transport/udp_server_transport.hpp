@@ -42,7 +42,7 @@ struct UdpServerConfig {
   //! The only peer to obey, "HOST:PORT" (IPv4 or IPv6 literal; for IPv6 "[addr]:port" or
   //! "addr:port" with the last colon before the port); empty: pin per pin_first_peer. Datagrams
   //! from anyone else are counted (foreign_datagrams()) and never answered, from the start.
-  std::string peer;
+  std::string peer{};
   //! Each receive first polls the socket without blocking for up to this long, then blocks; 0
   //! (the default) blocks at once. In [0, max_receive_spin] (UdpConfig::receive_spin).
   std::chrono::nanoseconds receive_spin{0};
