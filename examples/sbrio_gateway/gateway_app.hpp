@@ -51,6 +51,8 @@ struct Options {
   double max_round_trip_ms = 0.0;
   double joint_range = protocol::endowrist_joint_range;
   double max_setpoint_rate = protocol::endowrist_max_joint_rate;
+  double jitter_ms =
+      std::chrono::duration<double, std::milli>(transport::GatewayConfig{}.jitter).count();
   double spin_us = 0.0;
   double listen_spin_us = 0.0;
   bool stats = false;
@@ -80,9 +82,16 @@ inline void add_options(CLI::App& app, Options& o) {
       ->check(examples::number_in(1e-3, 3.14159))
       ->capture_default_str();
   app.add_option("--max-setpoint-rate", o.max_setpoint_rate,
-                 "rad/s: a relayed position moves at most this fast from the one relayed before "
-                 "it (from the sbRIO's measured position after silence)")
+                 "rad/s: each motor's relayed positions move at most this fast, over any time "
+                 "ahead of the rate by one burst at most (rate x (1 ms + --jitter-ms)), from the "
+                 "sbRIO's measured position after silence")
       ->check(examples::number_in(1e-3, 1000.0))
+      ->capture_default_str();
+  app.add_option("--jitter-ms", o.jitter_ms,
+                 "ms the console's setpoints may run ahead of --max-setpoint-rate by their "
+                 "timing: its longest tick beyond 1 ms plus how much later one setpoint may "
+                 "arrive than another; at most --watchdog-ms")
+      ->check(examples::number_in(0.0, 10000.0))
       ->capture_default_str();
   app.add_option("--spin-us", o.spin_us,
                  "us each wait for the sbRIO's answer polls the link without blocking before it "
@@ -118,6 +127,7 @@ inline int run(const Options& o) {
   gateway_config.watchdog = from_ms(o.watchdog_ms);
   gateway_config.joint_range = o.joint_range;
   gateway_config.max_setpoint_rate = o.max_setpoint_rate;
+  gateway_config.jitter = from_ms(o.jitter_ms);
   gateway_config.validate();
   protocol::ResponderConfig session;
   session.rig = protocol::make_rig_id(o.rig_name);
@@ -151,10 +161,11 @@ inline int run(const Options& o) {
   const auto endpoint = network.local_endpoint();
   fmt::print(
       "sbrio-gateway: protocol v2 on {}:{} (rig '{}', keys {}; round trips up to {:.0f} ms) -> "
-      "2016 sbRIO {}:{}; watchdog {} ms; setpoints kept in +-{} rad, {} rad/s\n",
+      "2016 sbRIO {}:{}; watchdog {} ms; setpoints kept in +-{} rad, {} rad/s (bursts of "
+      "{:.1f} mrad)\n",
       endpoint.address().to_string(), endpoint.port(), o.rig_name, ids,
       std::chrono::duration<double, std::milli>(session.max_round_trip).count(), sbrio_host,
-      sbrio_port, o.watchdog_ms, o.joint_range, o.max_setpoint_rate);
+      sbrio_port, o.watchdog_ms, o.joint_range, o.max_setpoint_rate, gateway_config.burst() * 1e3);
   const bool spinning = o.spin_us > 0 || o.listen_spin_us > 0;
   if (spinning) {
     fmt::print(

@@ -13,6 +13,7 @@
 #include "alloc_counter.hpp"
 #include "endohaptics/protocol/packet_codec.hpp"
 #include "endohaptics/protocol/secure_session.hpp"
+#include "endohaptics/teleop/safety.hpp"
 #include "endohaptics/transport/in_memory_transport.hpp"
 #include "endohaptics/transport/secure_transport.hpp"
 
@@ -53,6 +54,9 @@ struct FakeSbrio {
   Legacy::State::Vector measured{0.4, -0.4, 0.2, 0.1};  // rad
   bool answer = true;
   bool junk = false;
+  // A send to the sbRIO that takes this long on `clock` (a slow host); none without a clock.
+  endohaptics::ManualClock* clock = nullptr;
+  std::chrono::nanoseconds send_takes{0};
 };
 struct SbrioResponder {
   FakeSbrio* sbrio;
@@ -60,6 +64,7 @@ struct SbrioResponder {
   void operator()(std::span<const std::byte> datagram, Reply& reply) noexcept {
     Legacy::Setpoint s;
     if (Legacy::decode_setpoint(datagram, s) != protocol::CodecStatus::ok) return;
+    if (sbrio->clock != nullptr) sbrio->clock->advance(sbrio->send_takes);
     sbrio->received.push_back(s);  // the test's own bookkeeping (reserved: no allocation)
     if (!sbrio->answer) return;
     if (sbrio->junk) {
@@ -301,75 +306,155 @@ TEST_CASE("V2Gateway: a step allocates nothing") {
 }
 
 TEST_CASE("V2Gateway: relayed setpoints stay in the joint range and the rate limit") {
-  // +-1.028 rad, 4 rad/s: 4 mrad per millisecond since the last setpoint, plus one period's 4
-  // mrad of slack for the console's timing.
+  // +-1.028 rad, 4 rad/s, a 1 ms period and 10 ms of jitter: each motor's token bucket holds
+  // 4 rad/s x 11 ms = 44 mrad (and the wire's 1 urad) and refills 4 mrad per millisecond.
   Rig rig(transport::GatewayConfig{});
-  rig.connect();  // the sbRIO answered the disabled setpoints: 0.4, -0.4, ...
+  REQUIRE(rig.gateway.config().burst() == doctest::Approx(0.044));
+  rig.connect();  // the sbRIO answered the disabled setpoints: 0.4, -0.4, 0.2, 0.1
   rig.sbrio.received.clear();
-  // The first setpoint moves one period's step (and the slack) from where the sbRIO measured the
-  // tool.
-  CHECK(rig.exchange(0x0F, 0.5));  // 0.5, -0.5, 0.25, 0.125
+  // The first setpoint moves one burst at most from where the sbRIO measured the tool.
+  CHECK(rig.exchange(0x0F, 0.51));  // 0.51, -0.51, 0.25, 0.125
   REQUIRE(rig.sbrio.received.size() == 1);
   const auto first = rig.sbrio.received[0].position;
-  CHECK(first[0] == doctest::Approx(0.408).epsilon(1e-6));
-  CHECK(first[1] == doctest::Approx(-0.408).epsilon(1e-6));
-  CHECK(first[2] == doctest::Approx(0.208).epsilon(1e-6));
-  CHECK(first[3] == doctest::Approx(0.108).epsilon(1e-6));
-  CHECK(rig.sbrio.received[0].enable_mask == 0x0F);  // the rest of the setpoint untouched
+  CHECK(first[0] == doctest::Approx(0.444).epsilon(1e-5));
+  CHECK(first[1] == doctest::Approx(-0.444).epsilon(1e-5));
+  CHECK(first[2] == doctest::Approx(0.244).epsilon(1e-5));
+  CHECK(first[3] == doctest::Approx(0.125).epsilon(1e-5));  // 25 mrad: inside the burst
+  CHECK(rig.sbrio.received[0].enable_mask == 0x0F);         // the rest of the setpoint untouched
   CHECK(rig.gateway.counters().limited == 1);
-  // 1 ms apart: 8 mrad each, motor 0's target reached at the 12th (0.408 + 11 * 8 mrad = 0.496
-  // short of 0.5), then relayed as sent: 11 more limited.
+  // 1 ms apart, the bucket empty: 4 mrad each, motor 0's 66 mrad reached at the 17th (16 limited).
   for (int i = 0; i < 30; ++i) {
     rig.clock.advance(1ms);
-    CHECK(rig.exchange(0x0F, 0.5));
+    CHECK(rig.exchange(0x0F, 0.51));
+    if (i == 15) CHECK(rig.sbrio.received.back().position[0] == doctest::Approx(0.508));
   }
-  CHECK(rig.sbrio.received.back().position[0] == doctest::Approx(0.5).epsilon(1e-6));
-  CHECK(rig.sbrio.received.back().position[3] == doctest::Approx(0.125).epsilon(1e-6));
-  const auto limited = rig.gateway.counters().limited;
-  CHECK(limited == 12);
+  CHECK(rig.sbrio.received.back().position[0] == doctest::Approx(0.51).epsilon(1e-5));
+  CHECK(rig.sbrio.received.back().position[3] == doctest::Approx(0.125).epsilon(1e-5));
+  CHECK(rig.gateway.counters().limited == 17);
   rig.clock.advance(1ms);
-  CHECK(rig.exchange(0x0F, 0.5));
-  CHECK(rig.gateway.counters().limited == limited);
-  // Three setpoints at once (a burst): each may still move the slack's step, no more.
+  CHECK(rig.exchange(0x0F, 0.51));
+  CHECK(rig.gateway.counters().limited == 17);
+  // The bucket is full again (13 ms at rest). Three setpoints at once (a burst) move one burst
+  // together, not one each.
   for (int i = 0; i < 3; ++i) CHECK(rig.exchange(0x0F, 0.4));
-  CHECK(rig.sbrio.received.back().position[0] == doctest::Approx(0.488).epsilon(1e-6));
+  CHECK(rig.sbrio.received.back().position[0] == doctest::Approx(0.466).epsilon(1e-5));
+  // Sending faster buys no speed: 200 setpoints 50 us apart (10 ms) towards -0.5 move 40 mrad,
+  // the rate's, after the burst spent above.
+  for (int i = 0; i < 200; ++i) {
+    rig.clock.advance(50us);
+    CHECK(rig.exchange(0x0F, -0.5));
+  }
+  CHECK(rig.sbrio.received.back().position[0] == doctest::Approx(0.426).epsilon(1e-5));
   // Beyond the range, however slowly: never past 1.028 rad.
   for (int i = 0; i < 400; ++i) {
     rig.clock.advance(1ms);
     (void)rig.exchange(0x0F, 50.0);
-    REQUIRE(rig.sbrio.received.back().position.maxCoeff() <= 1.028 + 1e-6);
+    REQUIRE(rig.sbrio.received.back().position.maxCoeff() <= 1.028);
   }
-  CHECK(rig.sbrio.received.back().position[0] == doctest::Approx(1.028).epsilon(1e-6));
+  CHECK(rig.sbrio.received.back().position[0] == doctest::Approx(1.028).epsilon(1e-5));
   // After silence the step is taken from the measured position again, not the last setpoint.
   rig.clock.advance(200ms);
   (void)rig.gateway.step(0ns);  // the disabled setpoint; the sbRIO answers 0.4, -0.4, ...
   REQUIRE(rig.gateway.silent());
   CHECK(rig.exchange(0x0F, -1.0));  // -1, +1, 0.25, 0.125
-  CHECK(rig.sbrio.received.back().position[0] == doctest::Approx(0.392).epsilon(1e-6));
-  CHECK(rig.sbrio.received.back().position[1] == doctest::Approx(-0.392).epsilon(1e-6));
+  CHECK(rig.sbrio.received.back().position[0] == doctest::Approx(0.356).epsilon(1e-5));
+  CHECK(rig.sbrio.received.back().position[1] == doctest::Approx(-0.356).epsilon(1e-5));
   // A tool measured outside the range (moved by hand while released, a narrower range than the
   // instrument's) is brought back at the rate, not by a jump to the range's edge.
   rig.sbrio.measured << 1.2, -1.2, 0.2, 0.1;
   rig.clock.advance(200ms);
   (void)rig.gateway.step(0ns);
   CHECK(rig.exchange(0x0F, 0.0));
-  CHECK(rig.sbrio.received.back().position[0] == doctest::Approx(1.192).epsilon(1e-6));
-  CHECK(rig.sbrio.received.back().position[1] == doctest::Approx(-1.192).epsilon(1e-6));
+  CHECK(rig.sbrio.received.back().position[0] == doctest::Approx(1.156).epsilon(1e-5));
+  CHECK(rig.sbrio.received.back().position[1] == doctest::Approx(-1.156).epsilon(1e-5));
   rig.clock.advance(1ms);
   CHECK(rig.exchange(0x0F, 2.0));  // further out: held where it is
-  CHECK(rig.sbrio.received.back().position[0] == doctest::Approx(1.192).epsilon(1e-6));
+  CHECK(rig.sbrio.received.back().position[0] == doctest::Approx(1.156).epsilon(1e-5));
+}
+
+TEST_CASE("V2Gateway: a console within the rate whose setpoints arrive late is never limited") {
+  // The bridge's own limit (SetpointRateLimiter, one period's step at most per tick) at the rate,
+  // always pushing against it (a target far away, reversed now and then), at 1 kHz with late
+  // ticks; the gateway sees each setpoint up to the jitter late (up to 9 ms on the way, at random;
+  // a queue: a setpoint sent after a late one waits behind it; and each send to the sbRIO takes
+  // 100 us, the setpoints queued meanwhile wait too), and of those that arrive together relays
+  // only the newest (the drain): some are never relayed. Before the token bucket, 1759 setpoints
+  // relayed after a late one were moved into the envelope; with a bucket that lost each send's
+  // time, the bucket emptied while the bridge moved at its rate.
+  transport::GatewayConfig config;
+  Rig rig(config);
+  rig.connect();
+  rig.sbrio.clock = &rig.clock;
+  rig.sbrio.send_takes = 100us;
+  std::uint64_t state = 20261128;
+  const auto next = [&state] {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<double>(state >> 11) / 9007199254740992.0;  // [0, 1)
+  };
+  endohaptics::teleop::SetpointRateLimiter<4> bridge(config.max_setpoint_rate);
+  bridge.initialize(rig.sbrio.measured);
+  struct InFlight {
+    std::chrono::nanoseconds arrives;
+    Legacy::SetpointBytes bytes;
+  };
+  std::vector<InFlight> flight;  // in order: a queue delays, it does not reorder
+  flight.reserve(64);
+  auto send_time = rig.clock.now();
+  auto last_arrival = send_time;
+  double target = 0.9;
+  std::size_t sent = 0;
+  for (int tick = 0; tick < 20000; ++tick) {
+    if (next() < 0.002) target = -target;
+    const auto gap = std::chrono::microseconds(
+        next() < 0.05 ? 1000 + static_cast<int>(next() * 4000) : 1000);  // late ticks
+    send_time += gap;
+    Legacy::Setpoint s;
+    (void)bridge.shape(Legacy::Setpoint::Vector::Constant(target),
+                       std::min(std::chrono::duration<double>(gap).count(), 1e-3), s.position);
+    s.enable_mask = 0x0F;
+    // Up to 9 ms late, never before the one sent before it.
+    last_arrival = std::max(last_arrival,
+                            send_time + std::chrono::microseconds(static_cast<int>(next() * 9000)));
+    InFlight f{last_arrival, {}};
+    REQUIRE(Legacy::encode_setpoint(s, f.bytes) == protocol::CodecStatus::ok);
+    flight.push_back(f);
+    // What arrives before the next tick reaches the gateway, which steps when the next arrives
+    // (or at once, still busy with a send): those queued by then it drains, relaying the newest.
+    while (!flight.empty() && flight.front().arrives <= send_time + 1ms) {
+      if (flight.front().arrives > rig.clock.now()) {
+        rig.clock.advance(flight.front().arrives - rig.clock.now());
+      }
+      const auto now = rig.clock.now();
+      while (!flight.empty() && flight.front().arrives <= now) {
+        REQUIRE(rig.console.send(flight.front().bytes) == TransportStatus::ok);
+        ++sent;
+        flight.erase(flight.begin());
+      }
+      (void)rig.gateway.step(0ns);
+      std::array<std::byte, Legacy::state_packet_size + 1> back{};
+      (void)rig.console.receive(back, 0ns);
+    }
+  }
+  CHECK(sent > 19000);
+  CHECK(rig.gateway.counters().relayed > 5000);
+  CHECK(rig.gateway.counters().relayed < sent);  // the drain skipped some
+  CHECK(rig.gateway.counters().limited == 0);
 }
 
 TEST_CASE("V2Gateway: property: no setpoint sequence leaves the envelope") {
   // Random and hostile setpoints (huge, sign flips, the largest floats, small steps) at random
-  // times, with silences and a sbRIO that measures anywhere, also outside the range: every
-  // relayed position lies in the range (or, from a tool measured outside it, no further out than
-  // the tool), within the rate times its time since the one relayed before
-  // plus one period's slack, for a motor enabled in that one, else within two periods' step of
-  // where the sbRIO measured it, to the float wire's rounding.
+  // times, bursts among them, with silences and a sbRIO that measures anywhere, also outside the
+  // range: every relayed position lies in the range (or, from a tool measured outside it, no
+  // further out than the tool); and each motor's path, from where the sbRIO measured it (after
+  // silence, or when the setpoint before released it) through the positions relayed since, runs
+  // ahead of the rate by at most one burst (and the wire's rounding tolerance, 1 urad) over every
+  // stretch of it, on the float wire.
   transport::GatewayConfig config;
   config.joint_range = 0.8;
   config.max_setpoint_rate = 3.0;
+  config.jitter = 4ms;
+  const double rate = config.max_setpoint_rate;
+  const double burst = config.burst();  // 15 mrad
   Rig rig(config);
   rig.connect();
   std::uint64_t state = 20161220;
@@ -377,13 +462,18 @@ TEST_CASE("V2Gateway: property: no setpoint sequence leaves the envelope") {
     state = state * 6364136223846793005ULL + 1442695040888963407ULL;
     return static_cast<double>(state >> 11) / 9007199254740992.0;  // [0, 1)
   };
-  const double wire = 1e-6;  // float32 rounding of positions near 1 rad
+  const double tolerance = 1e-12;  // double arithmetic on float32 values
   Legacy::Setpoint::Vector previous = Legacy::Setpoint::Vector::Zero();
   bool have_previous = false;
   std::uint8_t previous_mask = 0;
   double outside = rig.sbrio.measured.cwiseAbs().maxCoeff();  // where the tool was measured
-  auto previous_time = rig.clock.now();
+  // Per motor: the path since its reference (rad), and the least of path - rate x time over the
+  // stretch's points so far (the reference's included): path - rate x time may exceed it by at
+  // most one burst.
+  std::array<double, 4> path{};
+  std::array<double, 4> least{};
   std::uint64_t relayed = rig.gateway.counters().relayed;
+  double max_ahead = 0.0;
   for (int i = 0; i < 20000; ++i) {
     if (next() < 0.001) {
       rig.clock.advance(150ms);  // silence: the watchdog trips
@@ -391,6 +481,8 @@ TEST_CASE("V2Gateway: property: no setpoint sequence leaves the envelope") {
       (void)rig.gateway.step(0ns);
       have_previous = false;
       outside = rig.sbrio.measured.cwiseAbs().maxCoeff();
+    } else if (next() < 0.2) {
+      rig.clock.advance(std::chrono::microseconds(static_cast<int>(next() * 20)));  // a burst
     } else {
       rig.clock.advance(std::chrono::microseconds(static_cast<int>(next() * 3000)));
     }
@@ -411,28 +503,32 @@ TEST_CASE("V2Gateway: property: no setpoint sequence leaves the envelope") {
     if (rig.gateway.counters().relayed != relayed) {
       relayed = rig.gateway.counters().relayed;
       const auto& r = rig.sbrio.received.back();
-      REQUIRE(r.position.cwiseAbs().maxCoeff() <= std::max(config.joint_range, outside) + wire);
-      const auto now = rig.clock.now();
-      // The time since the setpoint before (at most the watchdog) and the period's slack.
-      const double dt =
-          std::clamp(std::chrono::duration<double>(now - previous_time).count(), 0.0, 0.1) + 1e-3;
-      for (int m = 0; m < 4; ++m) {
-        if (have_previous && ((previous_mask >> m) & 1u) != 0) {  // from the setpoint before
-          REQUIRE(std::abs(r.position[m] - previous[m]) <= config.max_setpoint_rate * dt + wire);
-        } else {  // after silence, or released before: a period (and the slack) from where it was
-          REQUIRE(std::abs(r.position[m] - rig.sbrio.measured[m]) <=
-                  config.max_setpoint_rate * 2e-3 + wire);
+      REQUIRE(r.position.cwiseAbs().maxCoeff() <= std::max(config.joint_range, outside) + 1e-6);
+      const double t = std::chrono::duration<double>(rig.clock.now()).count();
+      for (std::size_t m = 0; m < 4; ++m) {
+        const int j = static_cast<int>(m);
+        if (have_previous && ((previous_mask >> m) & 1u) != 0) {  // on from the setpoint before
+          path[m] += std::abs(r.position[j] - previous[j]);
+        } else {  // after silence, or released before: from where the sbRIO measured it (its
+                  // float on the wire)
+          const double measured = static_cast<float>(rig.sbrio.measured[j]);
+          path[m] = std::abs(r.position[j] - measured);
+          least[m] = -rate * t;
         }
+        const double ahead = path[m] - rate * t - least[m];
+        max_ahead = std::max(max_ahead, ahead);
+        REQUIRE(ahead <= burst + Gateway::wire_tolerance + tolerance);
+        least[m] = std::min(least[m], path[m] - rate * t);
       }
       previous = r.position;
       previous_mask = r.enable_mask;
-      previous_time = now;
       have_previous = true;
     }
     rig.sbrio.received.clear();
   }
   CHECK(rig.gateway.counters().relayed > 15000);
   CHECK(rig.gateway.counters().limited > 3000);
+  CHECK(max_ahead > 0.9 * burst);  // the bound is reached, not just respected from afar
 }
 
 TEST_CASE("GatewayConfig: out-of-range timing is refused naming the field") {
@@ -447,8 +543,19 @@ TEST_CASE("GatewayConfig: out-of-range timing is refused naming the field") {
   c = {};
   c.watchdog = 5ms;
   c.period = 10ms;
+  c.jitter = 0ms;
   CHECK_THROWS_WITH_AS(c.validate(), doctest::Contains("must not exceed watchdog"),
                        endohaptics::Error);
+  c = {};
+  c.watchdog = 5ms;  // the default 10 ms jitter is more than it
+  CHECK_THROWS_WITH_AS(
+      c.validate(),
+      doctest::Contains("jitter must be in [0, watchdog (5000000 ns)], got 10000000 ns"),
+      endohaptics::Error);
+  c.jitter = 5ms;
+  CHECK_NOTHROW(c.validate());
+  c.jitter = -1ns;
+  CHECK_THROWS_WITH_AS(c.validate(), doctest::Contains("jitter must be in"), endohaptics::Error);
   c = {};
   c.answer_timeout = -1ns;
   CHECK_THROWS_WITH_AS(c.validate(), doctest::Contains("answer_timeout"), endohaptics::Error);

@@ -6,9 +6,10 @@
 //! nothing but forgeries and replays, which never get through) it sends the 2016 "all disabled"
 //! setpoint to the sbRIO itself, once a period. Nothing from the network reaches the sbRIO unless
 //! the v2 layer accepted it, and nothing it relays leaves the robot side's own envelope: every
-//! position within the joint range, every step within the rate limit from the setpoint before
-//! (from the sbRIO's measured position after silence), behind the console's same limits (a
-//! console with the key but a bug, or a stolen key, still cannot command a jump). Every call of
+//! position within the joint range, and each motor's path a token bucket of the rate limit (over
+//! any time T, at most max_setpoint_rate x T plus one burst, from the sbRIO's measured position
+//! after silence), behind the console's same limits: a console with the key but a bug, or a
+//! stolen key, can command neither a jump nor, by sending faster, a faster motion. Every call of
 //! step() is noexcept and allocation-free.
 #pragma once
 
@@ -44,15 +45,28 @@ struct GatewayConfig {
   //! motor; a tool the sbRIO measures outside it is brought back at max_setpoint_rate, never
   //! further out); at most pi.
   double joint_range = protocol::endowrist_joint_range;
-  //! rad/s: a relayed position moves at most this fast from the setpoint relayed before it
-  //! (from the sbRIO's measured position after silence), with one `period` of slack per setpoint
-  //! for the console's timing (at 1 kHz a step of twice the rate's millisecond); in (0, 1000].
+  //! rad/s: each motor's relayed positions move at most this fast: over any time T their path
+  //! (the sum of the steps) is at most max_setpoint_rate x T plus one burst(); in (0, 1000].
   double max_setpoint_rate = protocol::endowrist_max_joint_rate;
+  //! How much a console's setpoints may run ahead of the rate by their timing alone: the
+  //! console's longest tick beyond one `period`, plus how much more one setpoint may take to
+  //! arrive than another (the network, the hosts' scheduling). A console within the same rate
+  //! whose timing stays within it is never limited; one that sends a burst (a key holder sending
+  //! faster than its rate allows) gets at most burst() ahead of the rate. In [0, watchdog].
+  std::chrono::nanoseconds jitter = std::chrono::milliseconds(10);
+
+  //! rad: the most a motor's path may run ahead of max_setpoint_rate x time, the token bucket's
+  //! size: the rate times (period + jitter). Also the first step after silence, from where the
+  //! sbRIO measured the motor (the bucket starts full).
+  [[nodiscard]] double burst() const noexcept {
+    return max_setpoint_rate * std::chrono::duration<double>(period + jitter).count();
+  }
 
   //! Throws Error naming the field, its value and its range.
   void validate() const {
     const auto check = [](std::chrono::nanoseconds v, std::chrono::nanoseconds lo,
-                          std::chrono::nanoseconds hi, const char* field, const char* range) {
+                          std::chrono::nanoseconds hi, const char* field,
+                          const std::string& range) {
       if (v < lo || v > hi) {
         ENDOHAPTICS_THROW(Error(std::string("GatewayConfig: ") + field + " must be in " + range +
                                 ", got " + std::to_string(v.count()) + " ns"));
@@ -63,6 +77,8 @@ struct GatewayConfig {
     check(watchdog, milliseconds(1), std::chrono::seconds(10), "watchdog", "[1 ms, 10 s]");
     check(period, microseconds(100), milliseconds(100), "period", "[0.1, 100] ms");
     check(answer_timeout, microseconds(10), milliseconds(100), "answer_timeout", "[0.01, 100] ms");
+    check(jitter, std::chrono::nanoseconds(0), watchdog, "jitter",
+          "[0, watchdog (" + std::to_string(watchdog.count()) + " ns)]");
     const auto check_number = [](double v, double lo, double hi, const char* field,
                                  const char* range) {
       if (!(v > lo && v <= hi)) {  // NaN fails too
@@ -180,6 +196,12 @@ class V2Gateway {
   //! The settings.
   [[nodiscard]] const GatewayConfig& config() const noexcept { return config_; }
 
+  //! rad: what a motor's bucket holds beyond GatewayConfig::burst(), for the float32 wire: a
+  //! console's path is rounded to floats (under 2.4e-7 rad apart below pi), so a console exactly
+  //! at its bound may be a few of them past it at a window's two ends. A fixed amount, not one
+  //! per setpoint: however fast setpoints come, it is never gained twice.
+  static constexpr double wire_tolerance = 1e-6;
+
  private:
   // The v2 side's payload filter: a decodable 2016 setpoint (bad payloads are counted there).
   struct SetpointFilter {
@@ -200,42 +222,53 @@ class V2Gateway {
     return !obeyed_ || now - last_obeyed_ >= config_.watchdog;
   }
 
-  // `setpoint` kept in the envelope at `now`, motor by motor: the joint range, and one step of
-  // max_setpoint_rate from a reference. The reference is the last relayed setpoint's position if
-  // the motor was enabled in it, the step the time since then (at most the watchdog); else
-  // (after silence, or a motor that was released) where the sbRIO measured it, the step one
-  // period; with neither (nothing relayed, nothing measured) the range alone. Every step has one
-  // period more: the console times its steps by its own clock, the gateway by when they arrive.
-  // A tool measured outside the range is brought back at the rate, never by a jump to the range's
-  // edge. True if a motor this setpoint enables was moved.
-  [[nodiscard]] bool limit(typename Codec::Setpoint& setpoint,
-                           std::chrono::nanoseconds now) const noexcept {
+  // Each motor's token bucket (rad): how far its next relayed position may move, before the time
+  // since the last relayed setpoint was limited refills it at the rate, up to burst().
+  using Budget = std::array<double, static_cast<std::size_t>(N)>;
+
+  // `setpoint` kept in the envelope at `now`, motor by motor, and each motor's bucket after it
+  // (`budget`): the joint range, and a step from a reference of at most what the bucket holds.
+  // The reference is the last relayed setpoint's position if the motor was enabled in it (the
+  // bucket: what the steps since left of it, refilled at the rate for the time since, at most
+  // burst()); else (after silence, or a motor that was released) where the sbRIO measured it,
+  // with a full bucket; with nothing measured, the last relayed position (its bucket refilled);
+  // with neither (nothing relayed, nothing measured) the range alone. A tool measured outside the
+  // range is brought back at the rate, never by a jump to the range's edge. True if a motor this
+  // setpoint enables was moved.
+  [[nodiscard]] bool limit(typename Codec::Setpoint& setpoint, std::chrono::nanoseconds now,
+                           Budget& budget) const noexcept {
     const bool fresh = !silent_at(now);
     const double range = config_.joint_range;
-    const double rate = config_.max_setpoint_rate;
-    const double period = std::chrono::duration<double>(config_.period).count();
-    const double since_last =
-        std::chrono::duration<double>(
-            std::clamp(now - last_obeyed_, std::chrono::nanoseconds(0), config_.watchdog))
+    const double burst = config_.burst() + wire_tolerance;
+    const double refill =
+        config_.max_setpoint_rate *
+        std::chrono::duration<double>(std::max(now - budget_at_, std::chrono::nanoseconds(0)))
             .count();
     bool moved = false;
     for (int i = 0; i < N; ++i) {
+      const auto m = static_cast<std::size_t>(i);
       const auto bit = static_cast<std::uint8_t>(1u << static_cast<unsigned>(i));
       double ref = 0.0;
       double step = 2.0 * range;  // no reference: the range alone
       if (fresh && (last_relayed_.enable_mask & bit) != 0) {
         ref = last_relayed_.position[i];
-        step = rate * (since_last + period);
+        step = std::min(burst, budget_[m] + refill);
       } else if (have_measured_) {
         ref = measured_[i];
-        step = rate * (period + period);
+        step = burst;
       } else if (obeyed_) {
         ref = last_relayed_.position[i];
-        step = rate * (since_last + period);
+        step = std::min(burst, budget_[m] + refill);
       }
-      const double kept =
-          std::clamp(setpoint.position[i], std::max(std::min(-range, ref), ref - step),
-                     std::min(std::max(range, ref), ref + step));
+      const double lo = std::max(std::min(-range, ref), ref - step);
+      const double hi = std::min(std::max(range, ref), ref + step);
+      // What the wire carries (float32), kept inside [lo, hi] itself: rounded out of it, it is
+      // taken one float towards the reference (a float, from the wire, inside [lo, hi]).
+      auto wire = static_cast<float>(std::clamp(setpoint.position[i], lo, hi));
+      if (wire < lo || wire > hi) wire = std::nextafter(wire, static_cast<float>(ref));
+      const double kept = wire;
+      // What the step left; a first setpoint (the range alone) leaves a full bucket.
+      budget[m] = (obeyed_ || have_measured_) ? std::max(step - std::abs(kept - ref), 0.0) : burst;
       if (kept != setpoint.position[i]) {
         setpoint.position[i] = kept;
         moved = moved || (setpoint.enable_mask & bit) != 0;
@@ -249,7 +282,9 @@ class V2Gateway {
         std::span<const std::byte>(setpoint_rx_.data(), Codec::setpoint_packet_size);
     typename Codec::Setpoint decoded;
     if (Codec::decode_setpoint(received, decoded) != protocol::CodecStatus::ok) return;  // filtered
-    const bool limited = limit(decoded, clock_->now());
+    Budget budget{};
+    const auto limited_at = clock_->now();
+    const bool limited = limit(decoded, limited_at, budget);
     // What is sent is what was kept (re-encoded: a released motor's position may have moved too).
     if (Codec::encode_setpoint(decoded, limited_tx_) != protocol::CodecStatus::ok) return;
     const auto bytes = std::span<const std::byte>(limited_tx_);
@@ -261,6 +296,8 @@ class V2Gateway {
     if (limited) ++counters_.limited;
     const auto now = clock_->now();
     last_relayed_ = decoded;
+    budget_ = budget;
+    budget_at_ = limited_at;  // the send's own time is refilled by the next setpoint, not lost
     ++counters_.relayed;
     obeyed_ = true;
     tripped_ = false;
@@ -336,6 +373,8 @@ class V2Gateway {
   std::chrono::nanoseconds relayed_at_{0};
   std::chrono::nanoseconds next_disabled_{0};
   typename Codec::Setpoint last_relayed_{};
+  Budget budget_{};  // each motor's token bucket after the last relayed setpoint (rad)
+  std::chrono::nanoseconds budget_at_{0};  // when budget_ was taken (the limit, before the send)
   typename Codec::Setpoint::Vector measured_ = Codec::Setpoint::Vector::Zero();
   // One byte longer than the packets: a longer datagram never decodes as its first bytes.
   std::array<std::byte, Codec::setpoint_packet_size + 1> setpoint_rx_{};
