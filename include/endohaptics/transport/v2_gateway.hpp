@@ -57,7 +57,7 @@ struct GatewayConfig {
 
   //! rad: the most a motor's path may run ahead of max_setpoint_rate x time, the token bucket's
   //! size: the rate times (period + jitter). Also the first step after silence, from where the
-  //! sbRIO measured the motor (the bucket starts full).
+  //! sbRIO measured the motor (the bucket full again after the rest).
   [[nodiscard]] double burst() const noexcept {
     return max_setpoint_rate * std::chrono::duration<double>(period + jitter).count();
   }
@@ -227,14 +227,14 @@ class V2Gateway {
   using Budget = std::array<double, static_cast<std::size_t>(N)>;
 
   // `setpoint` kept in the envelope at `now`, motor by motor, and each motor's bucket after it
-  // (`budget`): the joint range, and a step from a reference of at most what the bucket holds.
-  // The reference is the last relayed setpoint's position if the motor was enabled in it (the
-  // bucket: what the steps since left of it, refilled at the rate for the time since, at most
-  // burst()); else (after silence, or a motor that was released) where the sbRIO measured it,
-  // with a full bucket; with nothing measured, the last relayed position (its bucket refilled);
-  // with neither (nothing relayed, nothing measured) the range alone. A tool measured outside the
-  // range is brought back at the rate, never by a jump to the range's edge. True if a motor this
-  // setpoint enables was moved.
+  // (`budget`): the joint range, and a step from a reference of at most what the bucket holds
+  // (what the steps before left of it, refilled at the rate for the time since, at most
+  // burst()). The reference is the last relayed setpoint's position if the motor was enabled in
+  // it; else (after silence, or a motor that was released) where the sbRIO measured it; with
+  // nothing measured, the last relayed position; with neither (nothing relayed, nothing
+  // measured) the range alone. A motor the setpoint releases is sent where the sbRIO measured it
+  // (once anything was measured). A tool measured outside the range is brought back at the rate,
+  // never by a jump to the range's edge. True if a motor this setpoint enables was moved.
   [[nodiscard]] bool limit(typename Codec::Setpoint& setpoint, std::chrono::nanoseconds now,
                            Budget& budget) const noexcept {
     const bool fresh = !silent_at(now);
@@ -248,17 +248,26 @@ class V2Gateway {
     for (int i = 0; i < N; ++i) {
       const auto m = static_cast<std::size_t>(i);
       const auto bit = static_cast<std::uint8_t>(1u << static_cast<unsigned>(i));
+      // The bucket goes on through silences and releases (full again after a silence, as after
+      // any rest): a console that releases a motor between setpoints gains nothing by it.
+      double step = std::min(burst, budget_[m] + refill);
       double ref = 0.0;
-      double step = 2.0 * range;  // no reference: the range alone
       if (fresh && (last_relayed_.enable_mask & bit) != 0) {
         ref = last_relayed_.position[i];
-        step = std::min(burst, budget_[m] + refill);
       } else if (have_measured_) {
         ref = measured_[i];
-        step = burst;
       } else if (obeyed_) {
         ref = last_relayed_.position[i];
-        step = std::min(burst, budget_[m] + refill);
+      } else {
+        step = 2.0 * range;  // no reference: the range alone
+      }
+      if ((setpoint.enable_mask & bit) == 0 && have_measured_) {
+        // A motor this setpoint releases is held where the sbRIO measured it, as in the
+        // gateway's own disabled setpoint: what the console sends for it never reaches the sbRIO
+        // (whatever its loop does with a disabled motor's setpoint), and its bucket refills.
+        setpoint.position[i] = measured_[i];
+        budget[m] = step;
+        continue;
       }
       const double lo = std::max(std::min(-range, ref), ref - step);
       const double hi = std::min(std::max(range, ref), ref + step);
