@@ -89,9 +89,9 @@ inline void add_options(CLI::App& app, Options& o) {
       ->capture_default_str();
   app.add_option("--jitter-ms", o.jitter_ms,
                  "ms the console's setpoints may run ahead of --max-setpoint-rate by their "
-                 "timing: its longest tick beyond 1 ms plus how much later one setpoint may "
-                 "arrive than another; at most --watchdog-ms")
-      ->check(examples::number_in(0.0, 10000.0))
+                 "timing: its longest tick beyond 1 ms plus how much later one setpoint may be "
+                 "relayed than another (network, scheduling)")
+      ->check(examples::number_in(0.0, 100.0))
       ->capture_default_str();
   app.add_option("--spin-us", o.spin_us,
                  "us each wait for the sbRIO's answer polls the link without blocking before it "

@@ -49,15 +49,19 @@ struct GatewayConfig {
   //! (the sum of the steps) is at most max_setpoint_rate x T plus one burst(); in (0, 1000].
   double max_setpoint_rate = protocol::endowrist_max_joint_rate;
   //! How much a console's setpoints may run ahead of the rate by their timing alone: the
-  //! console's longest tick beyond one `period`, plus how much more one setpoint may take to
-  //! arrive than another (the network, the hosts' scheduling). A console within the same rate
-  //! whose timing stays within it is never limited; one that sends a burst (a key holder sending
-  //! faster than its rate allows) gets at most burst() ahead of the rate. In [0, watchdog].
+  //! console's longest tick beyond one `period`, plus how much more one setpoint may take to be
+  //! relayed than another (the network, the hosts' scheduling, the gateway's own waits: up to
+  //! answer_timeout for an sbRIO answer that does not come). A console within the same rate whose
+  //! timing stays within it is never limited; one that sends a burst (a key holder sending faster
+  //! than its rate allows) gets at most burst() ahead of the rate. In [0, 100 ms].
   std::chrono::nanoseconds jitter = std::chrono::milliseconds(10);
+  //! Largest jitter: a link whose latency varies more is no teleoperation link.
+  static constexpr std::chrono::nanoseconds max_jitter = std::chrono::milliseconds(100);
 
   //! rad: the most a motor's path may run ahead of max_setpoint_rate x time, the token bucket's
-  //! size: the rate times (period + jitter). Also the first step after silence, from where the
-  //! sbRIO measured the motor (the bucket full again after the rest).
+  //! size: the rate times (period + jitter). The bucket starts full, and a rest of period +
+  //! jitter fills it again (the first step after silence, from where the sbRIO measured the
+  //! motor, may take it all when the watchdog is at least that long).
   [[nodiscard]] double burst() const noexcept {
     return max_setpoint_rate * std::chrono::duration<double>(period + jitter).count();
   }
@@ -77,8 +81,7 @@ struct GatewayConfig {
     check(watchdog, milliseconds(1), std::chrono::seconds(10), "watchdog", "[1 ms, 10 s]");
     check(period, microseconds(100), milliseconds(100), "period", "[0.1, 100] ms");
     check(answer_timeout, microseconds(10), milliseconds(100), "answer_timeout", "[0.01, 100] ms");
-    check(jitter, std::chrono::nanoseconds(0), watchdog, "jitter",
-          "[0, watchdog (" + std::to_string(watchdog.count()) + " ns)]");
+    check(jitter, std::chrono::nanoseconds(0), max_jitter, "jitter", "[0, 100] ms");
     const auto check_number = [](double v, double lo, double hi, const char* field,
                                  const char* range) {
       if (!(v > lo && v <= hi)) {  // NaN fails too
@@ -137,7 +140,10 @@ class V2Gateway {
         link_(&link),
         clock_(&clock),
         config_((config.validate(), config)),
-        next_disabled_(clock.now()) {}
+        next_disabled_(clock.now()),
+        budget_at_(clock.now()) {
+    budget_.fill(config_.burst() + wire_tolerance);  // full: a rest before the first setpoint
+  }
 
   //! One round: waits up to `max_wait` (less while silent: the next disabled setpoint is due
   //! sooner) for a v2 setpoint and relays it; takes the sbRIO's answer (waiting up to the
@@ -232,9 +238,9 @@ class V2Gateway {
   // burst()). The reference is the last relayed setpoint's position if the motor was enabled in
   // it; else (after silence, or a motor that was released) where the sbRIO measured it; with
   // nothing measured, the last relayed position; with neither (nothing relayed, nothing
-  // measured) the range alone. A motor the setpoint releases is sent where the sbRIO measured it
-  // (once anything was measured). A tool measured outside the range is brought back at the rate,
-  // never by a jump to the range's edge. True if a motor this setpoint enables was moved.
+  // measured) the range alone. A motor the setpoint releases is sent at hold_position(), as in
+  // the gateway's own disabled setpoint. A tool measured outside the range is brought back at the
+  // rate, never by a jump to the range's edge. True if a motor this setpoint enables was moved.
   [[nodiscard]] bool limit(typename Codec::Setpoint& setpoint, std::chrono::nanoseconds now,
                            Budget& budget) const noexcept {
     const bool fresh = !silent_at(now);
@@ -244,12 +250,13 @@ class V2Gateway {
         config_.max_setpoint_rate *
         std::chrono::duration<double>(std::max(now - budget_at_, std::chrono::nanoseconds(0)))
             .count();
+    const typename Codec::Setpoint::Vector hold = hold_position();
     bool moved = false;
     for (int i = 0; i < N; ++i) {
       const auto m = static_cast<std::size_t>(i);
       const auto bit = static_cast<std::uint8_t>(1u << static_cast<unsigned>(i));
-      // The bucket goes on through silences and releases (full again after a silence, as after
-      // any rest): a console that releases a motor between setpoints gains nothing by it.
+      // The bucket goes on through silences and releases (refilled by a silence as by any rest):
+      // a console that releases a motor between setpoints gains nothing by it.
       double step = std::min(burst, budget_[m] + refill);
       double ref = 0.0;
       if (fresh && (last_relayed_.enable_mask & bit) != 0) {
@@ -261,12 +268,13 @@ class V2Gateway {
       } else {
         step = 2.0 * range;  // no reference: the range alone
       }
-      if ((setpoint.enable_mask & bit) == 0 && have_measured_) {
-        // A motor this setpoint releases is held where the sbRIO measured it, as in the
-        // gateway's own disabled setpoint: what the console sends for it never reaches the sbRIO
-        // (whatever its loop does with a disabled motor's setpoint), and its bucket refills.
-        setpoint.position[i] = measured_[i];
-        budget[m] = step;
+      if ((setpoint.enable_mask & bit) == 0) {
+        // A motor this setpoint releases is held where the gateway's own disabled setpoint holds
+        // it (hold_position(): where the sbRIO measured it): what the console sends for it never
+        // reaches the sbRIO (whatever its loop does with a disabled motor's setpoint), and its
+        // bucket refills.
+        setpoint.position[i] = hold[i];
+        budget[m] = std::min(step, burst);
         continue;
       }
       const double lo = std::max(std::min(-range, ref), ref - step);
@@ -306,7 +314,8 @@ class V2Gateway {
     const auto now = clock_->now();
     last_relayed_ = decoded;
     budget_ = budget;
-    budget_at_ = limited_at;  // the send's own time is refilled by the next setpoint, not lost
+    // The send's own time is refilled by the next setpoint, not lost; never back in time.
+    budget_at_ = std::max(budget_at_, limited_at);
     ++counters_.relayed;
     obeyed_ = true;
     tripped_ = false;
