@@ -91,7 +91,9 @@ inline void add_options(CLI::App& app, Options& o) {
                  "ms the console's setpoints may run ahead of --max-setpoint-rate by their "
                  "timing: its longest tick beyond 1 ms plus how much later one setpoint may be "
                  "relayed than another (network, scheduling)")
-      ->check(examples::number_in(0.0, 100.0))
+      ->check(examples::number_in(
+          0.0,
+          std::chrono::duration<double, std::milli>(transport::GatewayConfig::max_jitter).count()))
       ->capture_default_str();
   app.add_option("--spin-us", o.spin_us,
                  "us each wait for the sbRIO's answer polls the link without blocking before it "
